@@ -1,0 +1,98 @@
+// Stateful dynamic propagation (DESIGN §4): Euler equations I dw/dt = (I w) x w + T with the
+// kinematics dq/dt = 1/2 q (x) (0, w) (seed notes eqs. 9 and 10), driven by held torques or
+// torque-free, with the time policy of DESIGN §6.
+//
+// CONTRACT for the dynamics issue: the ROS wrapper programs against this API. Implement it in
+// src/core/dynamic_propagator.cpp; extend it, but keep what is here.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "attitude_propagator/integrator.h"
+#include "attitude_propagator/rigid_body.h"
+#include "attitude_propagator/time_policy.h"
+
+namespace attitude_propagator {
+
+/// Orientation and body rate of the user's body frame B.
+struct DynamicState {
+  Eigen::Quaterniond q_WB = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d w_B = Eigen::Vector3d::Zero();
+};
+
+enum class TorqueFrame { Body, Fixed };
+
+struct DynamicConfig {
+  RigidBody body = RigidBody::fromPrincipalMoments(Eigen::Vector3d::Ones());
+  /// Auto: Exact when !torque_input (sphere, symmetric top or triaxial, the cheapest exact
+  /// form), otherwise Rk4.
+  Integrator integrator = Integrator::Auto;
+  bool torque_input = false;
+  /// Fixed grid step (s). The state at a stamp t is the grid state at the last grid point
+  /// before t advanced by one partial step to t, so it does not depend on how the caller's
+  /// clock reached t.
+  double max_step = 0.01;
+  double tolerance = 1e-9;      ///< dopri5 absolute and relative tolerance
+  double torque_timeout = 0.0;  ///< s; a torque older than this counts as zero (0: held forever)
+  TimePolicy time_policy;
+  DynamicState initial;
+};
+
+class DynamicPropagator {
+ public:
+  /// Throws std::invalid_argument naming the problem (an integrator that is not dynamic,
+  /// `exact` with torque input, non-positive max_step or tolerance, non-finite initial state).
+  explicit DynamicPropagator(const DynamicConfig& config);
+  ~DynamicPropagator();
+  DynamicPropagator(DynamicPropagator&&) noexcept;
+  DynamicPropagator& operator=(DynamicPropagator&&) noexcept;
+
+  /// The integrator in use after resolving Auto.
+  Integrator integrator() const;
+  /// Which model runs: "exact_sphere", "exact_symmetric_top", "exact_triaxial", or
+  /// "numerical_<integrator name>". Logged at start and reported in AttitudeState.
+  std::string modelName() const;
+
+  /// Advances the state to time t under DESIGN §6: the first call anchors (the state at t is
+  /// the initial one), stale stamps do nothing, gaps over max_dt hold the state, a jump back
+  /// by more than the threshold resets to the initial state and anchors at t.
+  StampOutcome advanceTo(double t);
+
+  /// Torque tau (N m) from time t on, in the body or the fixed frame (T_B = Q^T t_W, notes
+  /// eq. 10), held until the next sample. Advances to t first. Non-finite input is rejected.
+  StampOutcome setTorque(double t, const Eigen::Vector3d& tau, TorqueFrame frame);
+
+  /// A measured body rate at t: advances to t, then sets w_B (the orientation is kept).
+  StampOutcome setRate(double t, const Eigen::Vector3d& w_B);
+
+  /// Pins the state at time t (a new anchor). Throws std::invalid_argument on non-finite
+  /// values or a zero quaternion.
+  void setState(double t, const DynamicState& state);
+
+  /// Back to the initial state, waiting for an anchoring stamp.
+  void reset();
+
+  bool anchored() const;
+  double time() const;
+  /// State at time(), in the user's body frame.
+  const DynamicState& state() const;
+  std::uint64_t steps() const;
+  /// |q| - 1 before the last renormalisation.
+  double normError() const;
+  double kineticEnergy() const;
+  Eigen::Vector3d angularMomentum_B() const;
+  /// Relative drift of the energy and of |M| since the anchor (zero by construction for
+  /// `exact`; meaningful only without torque).
+  double energyDrift() const;
+  double momentumDrift() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace attitude_propagator

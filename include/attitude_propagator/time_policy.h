@@ -1,0 +1,33 @@
+// The time policy of DESIGN §6, shared by the kinematic and the dynamic propagators so the node
+// only forwards stamps.
+#pragma once
+
+namespace attitude_propagator {
+
+/// What a propagator did with a stamped input.
+enum class StampOutcome {
+  Anchored,           // first input (or first after a reset): the state holds at this stamp
+  Advanced,           // integrated up to the stamp
+  DroppedStale,       // stamp at or before the last one (within the backward-jump threshold)
+  HeldGap,            // gap longer than max_dt: not integrated across, state held, re-anchored
+  ResetBackwardJump,  // time went back by more than the threshold: initial state, re-anchored
+  RejectedNonFinite,  // NaN or infinite value or stamp: ignored, state unchanged
+};
+
+/// Thresholds of the policy, in seconds.
+struct TimePolicy {
+  double max_dt = 1.0;         ///< largest gap integrated across
+  double backward_jump = 1.0;  ///< a step back by more than this resets (looped bag)
+};
+
+enum class StampClass { Forward, Stale, Gap, BackwardJump };
+
+/// Classifies stamp t against the last accepted stamp.
+StampClass classifyStamp(double last, double t, const TimePolicy& policy);
+
+/// True for the outcomes after which the propagator's state holds at the new stamp.
+bool stateHoldsAtStamp(StampOutcome outcome);
+
+const char* outcomeName(StampOutcome outcome);
+
+}  // namespace attitude_propagator

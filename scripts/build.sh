@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Builds the package in a catkin workspace outside the source tree (AP_WORKSPACE, default
+# ~/.cache/attitude_propagator_ws). Extra arguments go to catkin_make (e.g. a target).
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+source_ros
+
+mkdir -p "${WORKSPACE}/src"
+ln -sfn "$REPO_DIR" "${WORKSPACE}/src/attitude_propagator"
+cd "$WORKSPACE"
+catkin_make -DCMAKE_BUILD_TYPE=Release \
+  -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
+  -j"$(nproc)" "$@"

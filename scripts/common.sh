@@ -1,0 +1,44 @@
+# Shared by the scripts in this folder: paths, the environment and the package lists.
+# Sourced, not run.
+
+REPO_DIR="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# The catkin workspace lives outside the source tree; the package is linked into its src/.
+WORKSPACE="${AP_WORKSPACE:-${XDG_CACHE_HOME:-$HOME/.cache}/attitude_propagator_ws}"
+
+# ROS tools and matplotlib live in Debian's /usr/bin/python3, not in a python3 earlier on PATH.
+export PATH="/usr/bin:$PATH"
+
+# Debian 12 packages by name (Debian's own ROS 1 lives under /usr, no rosdep index).
+DEBIAN_PACKAGES=(
+  build-essential cmake catkin catkin-lint
+  ros-base-dev ros-message-generation ros-message-runtime
+  libroscpp-dev libstd-msgs-dev libstd-srvs-dev libgeometry-msgs-dev libsensor-msgs-dev
+  libdiagnostic-msgs-dev libdiagnostic-updater-dev
+  libtf2-ros-dev libtf2-eigen-dev libtf2-geometry-msgs-dev
+  libnodelet-dev pluginlib-dev libtopic-tools-dev
+  librostest-dev python3-rostest python3-rospy python3-roslaunch python3-rosnode
+  python3-rostopic python3-tf2-ros python3-tf2-msgs
+  libeigen3-dev libboost-dev libboost-math-dev
+  libgtest-dev googletest libbenchmark-dev python3-matplotlib
+)
+
+as_root() {
+  if [ "$(id -u)" = 0 ]; then "$@"; else sudo "$@"; fi
+}
+
+source_ros() {
+  # On Ubuntu + ROS Noetic the environment comes from /opt/ros; Debian's ROS needs none.
+  if [ -n "${ROS_DISTRO:-}" ] && [ -f "/opt/ros/${ROS_DISTRO}/setup.bash" ]; then
+    set +u
+    # shellcheck disable=SC1090
+    source "/opt/ros/${ROS_DISTRO}/setup.bash"
+    set -u
+  fi
+}
+
+source_workspace() {
+  set +u
+  # shellcheck disable=SC1091
+  source "${WORKSPACE}/devel/setup.bash"
+  set -u
+}

@@ -1,0 +1,50 @@
+#!/usr/bin/env python3
+"""Counts the JUnit XML results that catkin's run_tests wrote and prints the closing line
+"N passed, M failed" (a missing or unreadable result file counts as a failure)."""
+import argparse
+import pathlib
+import sys
+import xml.etree.ElementTree as ET
+
+
+def count(results_dir):
+    passed, failed, failures = 0, 0, []
+    files = sorted(pathlib.Path(results_dir).glob("**/*.xml"))
+    if not files:
+        return 0, 1, [f"no test results in {results_dir}"]
+    for path in files:
+        try:
+            root = ET.parse(path).getroot()
+        except ET.ParseError as err:
+            failed += 1
+            failures.append(f"{path.name}: unreadable ({err})")
+            continue
+        for case in root.iter("testcase"):
+            if case.find("skipped") is not None or case.get("status") == "notrun":
+                continue
+            bad = case.find("failure") is not None or case.find("error") is not None
+            if bad:
+                failed += 1
+                failures.append(f"{path.name}: {case.get('classname')}.{case.get('name')}")
+            else:
+                passed += 1
+    return passed, failed, failures
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("results_dir")
+    parser.add_argument("--extra-passed", type=int, default=0)
+    parser.add_argument("--extra-failed", type=int, default=0)
+    args = parser.parse_args()
+    passed, failed, failures = count(args.results_dir)
+    passed += args.extra_passed
+    failed += args.extra_failed
+    for line in failures:
+        print("FAILED:", line)
+    print(f"{passed} passed, {failed} failed")
+    return 0 if failed == 0 and passed > 0 else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,44 @@
+#include "attitude_propagator/time_policy.h"
+
+namespace attitude_propagator {
+
+StampClass classifyStamp(double last, double t, const TimePolicy& policy) {
+  if (t <= last) {
+    return last - t > policy.backward_jump ? StampClass::BackwardJump : StampClass::Stale;
+  }
+  return t - last > policy.max_dt ? StampClass::Gap : StampClass::Forward;
+}
+
+bool stateHoldsAtStamp(StampOutcome outcome) {
+  switch (outcome) {
+    case StampOutcome::Anchored:
+    case StampOutcome::Advanced:
+    case StampOutcome::HeldGap:
+    case StampOutcome::ResetBackwardJump:
+      return true;
+    case StampOutcome::DroppedStale:
+    case StampOutcome::RejectedNonFinite:
+      return false;
+  }
+  return false;
+}
+
+const char* outcomeName(StampOutcome outcome) {
+  switch (outcome) {
+    case StampOutcome::Anchored:
+      return "anchored";
+    case StampOutcome::Advanced:
+      return "advanced";
+    case StampOutcome::DroppedStale:
+      return "dropped_stale";
+    case StampOutcome::HeldGap:
+      return "held_gap";
+    case StampOutcome::ResetBackwardJump:
+      return "reset_backward_jump";
+    case StampOutcome::RejectedNonFinite:
+      return "rejected_non_finite";
+  }
+  return "unknown";
+}
+
+}  // namespace attitude_propagator
