@@ -36,10 +36,13 @@ class KinematicPropagator {
   void setState(double t, const Eigen::Quaterniond& q_WB, const Eigen::Vector3d& w_B);
 
   bool anchored() const { return anchored_; }
-  double time() const { return window_.newest().t; }
+  /// Stamp the state holds at (0 before the first sample).
+  double time() const { return window_.size() > 0 ? window_.newest().t : 0.0; }
   const Eigen::Quaterniond& orientation() const { return q_WB_; }
   /// Body rate of the newest sample.
-  const Eigen::Vector3d& rate() const { return window_.newest().w_B; }
+  Eigen::Vector3d rate() const {
+    return window_.size() > 0 ? window_.newest().w_B : Eigen::Vector3d::Zero();
+  }
   /// |q| - 1 of the last step before renormalisation.
   double normError() const { return norm_error_; }
   std::uint64_t steps() const { return steps_; }
@@ -47,9 +50,8 @@ class KinematicPropagator {
 
  private:
   void anchor(double t, const Eigen::Vector3d& w_B);
-  void integrateNewest();
-  void restartWithCubic();
-  void commit(const Eigen::Quaterniond& q_unnormalised);
+  StampOutcome integrate(const RateSample& sample);
+  Eigen::Quaterniond cf4FromAnchor(const RateWindow& window) const;
 
   Integrator integrator_;
   TimePolicy policy_;
