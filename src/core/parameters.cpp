@@ -142,6 +142,10 @@ std::string formatParameter(bool value) { return value ? "true" : "false"; }
 std::string formatParameter(double value) {
   // Shortest text that reads back to the same double, with a dot so YAML reads a double.
   char text[32];
+  if (std::isfinite(value) && value == std::round(value) && std::abs(value) < 1e15) {
+    std::snprintf(text, sizeof(text), "%.1f", value);  // whole numbers: "100.0", not "1e+02"
+    return text;
+  }
   for (int precision = 1; precision <= 17; ++precision) {
     std::snprintf(text, sizeof(text), "%.*g", precision, value);
     if (std::strtod(text, nullptr) == value) break;
@@ -211,7 +215,8 @@ NodeConfig validateParameters(const Parameters& p) {
     fail("inertia", "required by model dynamic; accepted: 3 principal moments [I1, I2, I3] or "
                     "6 values [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] (kg m^2)");
   }
-  DynamicConfig dynamic{makeBody(p.inertia)};
+  DynamicConfig dynamic;
+  dynamic.body = makeBody(p.inertia);
   dynamic.integrator = integrator;
   dynamic.torque_input = p.torque_input;
   dynamic.max_step = p.max_step > 0.0 ? p.max_step : 1.0 / p.publish_rate;

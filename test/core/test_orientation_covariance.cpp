@@ -68,7 +68,7 @@ TEST(OrientationCovariance, NoiseAlongTheAxisAccumulatesExactly) {
 // checked by finite differences, including across the small-angle branch.
 TEST(RightJacobian, MatchesFiniteDifferences) {
   const double d = 1e-7;
-  for (const Eigen::Vector3d phi :
+  for (const Eigen::Vector3d& phi :
        {Eigen::Vector3d(0.3, -1.2, 0.8), Eigen::Vector3d(1e-6, 2e-6, -1e-6),
         Eigen::Vector3d(2.5, 0.1, 0.0), Eigen::Vector3d::Zero().eval()}) {
     const Eigen::Matrix3d J = ap::rightJacobian(phi);

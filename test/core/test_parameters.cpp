@@ -76,7 +76,7 @@ TEST(Parameters, DefaultsAreKinematicOnImu) {
 
 TEST(Parameters, AutoModelIsDynamicWithInertia) {
   ap::Parameters p;
-  p.inertia = {2.0, 1.0, 2.0 / 3.0};
+  p.inertia = {1.0, 2.0, 2.5};
   p.publish_rate = 50.0;
   const ap::NodeConfig config = ap::validateParameters(p);
   EXPECT_EQ(config.model, ap::Model::Dynamic);
