@@ -262,7 +262,8 @@ void AttitudePropagatorRos::handleRate(const ros::Time& stamp, const Eigen::Vect
 void AttitudePropagatorRos::handleKinematicRate(const ros::Time& stamp, const Eigen::Vector3d& w_B,
                                                 const Eigen::Matrix3d& R_B,
                                                 const sensor_msgs::Imu* imu) {
-  const double t_before = kinematic_->time();
+  // time() is only defined once anchored (the window is empty before).
+  const double t_before = kinematic_->anchored() ? kinematic_->time() : 0.0;
   const Eigen::Quaterniond q_before = kinematic_->orientation();
   const double t = coreTime(stamp);
   const StampOutcome outcome = kinematic_->addSample(t, w_B);
