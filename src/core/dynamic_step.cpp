@@ -34,6 +34,15 @@ Eigen::Quaterniond halfProductWithRate(const Eigen::Quaterniond& q, const Eigen:
   return Eigen::Quaterniond(-0.5 * v.dot(w), r.x(), r.y(), r.z());
 }
 
+/// The Euler equations (notes eq. 10) in P: dw/dt = I^-1 ((I w) x w + T). Forced inline:
+/// GCC -O3 kept it out of line and the implicit midpoint step went from 55 to 103 ns.
+EIGEN_STRONG_INLINE Eigen::Vector3d angularAcceleration(const Eigen::Vector3d& I,
+                                                        const Eigen::Vector3d& I_inv,
+                                                        const Eigen::Vector3d& w,
+                                                        const Eigen::Vector3d& tau) {
+  return I_inv.cwiseProduct(Eigen::Vector3d(I.cwiseProduct(w)).cross(w) + tau);
+}
+
 /// q + s d, coefficient-wise.
 Eigen::Quaterniond axpy(const Eigen::Quaterniond& q, double s, const Eigen::Quaterniond& d) {
   Eigen::Quaterniond r;
@@ -107,8 +116,7 @@ struct EulerSystem {
     const Eigen::Quaterniond q(x[0], x[1], x[2], x[3]);
     const Eigen::Vector3d w(x[4], x[5], x[6]);
     const Eigen::Quaterniond dq = halfProductWithRate(q, w);
-    const Eigen::Vector3d M = I.cwiseProduct(w);
-    const Eigen::Vector3d dw = I_inv.cwiseProduct(M.cross(w) + torqueAt(torque, q));
+    const Eigen::Vector3d dw = angularAcceleration(I, I_inv, w, torqueAt(torque, q));
     dxdt = {dq.w(), dq.x(), dq.y(), dq.z(), dw.x(), dw.y(), dw.z()};
   }
 };
@@ -219,26 +227,22 @@ void DynamicStepper::rk4(PrincipalState& x, const PrincipalTorque& torque, doubl
   const double h2 = 0.5 * h;
 
   const Eigen::Quaterniond kq1 = halfProductWithRate(q0, w0);
-  const Eigen::Vector3d kw1 = I_inv_P_.cwiseProduct(
-      Eigen::Vector3d(I_P_.cwiseProduct(w0)).cross(w0) + torqueAt(torque, q0));
+  const Eigen::Vector3d kw1 = angularAcceleration(I_P_, I_inv_P_, w0, torqueAt(torque, q0));
 
   const Eigen::Quaterniond q2 = axpy(q0, h2, kq1);
   const Eigen::Vector3d w2 = w0 + h2 * kw1;
   const Eigen::Quaterniond kq2 = halfProductWithRate(q2, w2);
-  const Eigen::Vector3d kw2 = I_inv_P_.cwiseProduct(
-      Eigen::Vector3d(I_P_.cwiseProduct(w2)).cross(w2) + torqueAt(torque, q2));
+  const Eigen::Vector3d kw2 = angularAcceleration(I_P_, I_inv_P_, w2, torqueAt(torque, q2));
 
   const Eigen::Quaterniond q3 = axpy(q0, h2, kq2);
   const Eigen::Vector3d w3 = w0 + h2 * kw2;
   const Eigen::Quaterniond kq3 = halfProductWithRate(q3, w3);
-  const Eigen::Vector3d kw3 = I_inv_P_.cwiseProduct(
-      Eigen::Vector3d(I_P_.cwiseProduct(w3)).cross(w3) + torqueAt(torque, q3));
+  const Eigen::Vector3d kw3 = angularAcceleration(I_P_, I_inv_P_, w3, torqueAt(torque, q3));
 
   const Eigen::Quaterniond q4 = axpy(q0, h, kq3);
   const Eigen::Vector3d w4 = w0 + h * kw3;
   const Eigen::Quaterniond kq4 = halfProductWithRate(q4, w4);
-  const Eigen::Vector3d kw4 = I_inv_P_.cwiseProduct(
-      Eigen::Vector3d(I_P_.cwiseProduct(w4)).cross(w4) + torqueAt(torque, q4));
+  const Eigen::Vector3d kw4 = angularAcceleration(I_P_, I_inv_P_, w4, torqueAt(torque, q4));
 
   const double h6 = h / 6.0;
   x.q_WP.coeffs() =
@@ -271,8 +275,7 @@ void DynamicStepper::implicitMidpoint(PrincipalState& x, const PrincipalTorque& 
           (q0 * Eigen::Quaterniond(1.0, a.x(), a.y(), a.z())).normalized();
       tau = torque.inP(qm);
     }
-    const Eigen::Vector3d next =
-        w0 + h2 * I_inv_P_.cwiseProduct(Eigen::Vector3d(I_P_.cwiseProduct(wm)).cross(wm) + tau);
+    const Eigen::Vector3d next = w0 + h2 * angularAcceleration(I_P_, I_inv_P_, wm, tau);
     const double change = (next - wm).cwiseAbs().maxCoeff();
     wm = next;
     // Converged when the update is below one ulp of the rate, or once it stops shrinking

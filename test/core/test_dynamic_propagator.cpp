@@ -152,20 +152,16 @@ TEST(DynPropagator, StateAtStampIsIndependentOfIntermediateStamps) {
     ASSERT_EQ(direct.advanceTo(0.0), ap::StampOutcome::Anchored);
 
     std::uint64_t state = 42;
-    auto uniform = [&state]() {
-      state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-      return static_cast<double>(state >> 11) * 0x1.0p-53;
-    };
     double t = 0.0;
     while (t < 0.4) {
-      t += 0.0037 * uniform();
+      t += 0.0037 * uniformRandom(state);
       bursty.advanceTo(t);
     }
     bursty.setTorque(0.4123, Eigen::Vector3d(0.2, -0.1, 0.3), ap::TorqueFrame::Body);
     direct.setTorque(0.4123, Eigen::Vector3d(0.2, -0.1, 0.3), ap::TorqueFrame::Body);
     t = 0.4123;
     while (t < 0.9) {
-      t += 0.02 * uniform();
+      t += 0.02 * uniformRandom(state);
       bursty.advanceTo(t);
     }
     bursty.setTorque(0.91, Eigen::Vector3d(0.0, 0.5, 0.0), ap::TorqueFrame::Fixed);
@@ -179,7 +175,7 @@ TEST(DynPropagator, StateAtStampIsIndependentOfIntermediateStamps) {
     bursty.setTorque(1.3031, Eigen::Vector3d(-0.3, 0.0, 0.1), ap::TorqueFrame::Body);
     t = 1.3045;
     while (t < 2.5) {
-      t += 0.011 * uniform();
+      t += 0.011 * uniformRandom(state);
       bursty.advanceTo(t);
     }
     bursty.advanceTo(2.75);
@@ -434,13 +430,9 @@ TEST(DynPropagatorExact, StateAtStampIsIndependentOfIntermediateStamps) {
     ASSERT_EQ(bursty.advanceTo(0.5), ap::StampOutcome::Anchored);
     ASSERT_EQ(direct.advanceTo(0.5), ap::StampOutcome::Anchored);
     std::uint64_t state = 5;
-    auto uniform = [&state]() {
-      state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-      return static_cast<double>(state >> 11) * 0x1.0p-53;
-    };
     double t = 0.5;
     while (t < 3.1) {
-      t += 0.05 * uniform();
+      t += 0.05 * uniformRandom(state);
       bursty.advanceTo(t);
     }
     // The same rate sample for both, late for the bursty one.
@@ -448,7 +440,7 @@ TEST(DynPropagatorExact, StateAtStampIsIndependentOfIntermediateStamps) {
     direct.setRate(3.1, Eigen::Vector3d(0.2, 0.4, -0.6));
     t = bursty.time();
     while (t < 6.0) {
-      t += 0.07 * uniform();
+      t += 0.07 * uniformRandom(state);
       bursty.advanceTo(t);
     }
     bursty.advanceTo(6.25);
