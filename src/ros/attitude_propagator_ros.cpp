@@ -241,7 +241,7 @@ void AttitudePropagatorRos::onTorque(
     return;
   }
   const Eigen::Vector3d tau = q_B_torque * toEigen(*torque);
-  feedDynamic(stampOr(stamp, event.getReceiptTime()), last_torque_stamp_, "torque",
+  feedDynamic(stampOr(stamp, event.getReceiptTime()), "torque",
               [&](double t) { return dynamic_->setTorque(t, tau, frame); });
 }
 
@@ -254,7 +254,7 @@ void AttitudePropagatorRos::handleRate(const ros::Time& stamp, const Eigen::Vect
     return;
   }
   const char* input = imu ? "imu/data_raw" : "body_twist";
-  const bool holds = feedDynamic(stamp, last_rate_stamp_, input,
+  const bool holds = feedDynamic(stamp, input,
                                  [&](double t) { return dynamic_->setRate(t, w_B); });
   if (holds && imu) publishImu(*imu, stamp, *mountRotation(imu->header.frame_id));
 }
@@ -281,32 +281,14 @@ void AttitudePropagatorRos::handleKinematicRate(const ros::Time& stamp, const Ei
 }
 
 template <class Apply>
-bool AttitudePropagatorRos::feedDynamic(const ros::Time& stamp, ros::Time& last_stamp,
-                                        const char* input, Apply&& apply) {
-  if (!last_stamp.isZero() && stamp <= last_stamp) {
-    if ((last_stamp - stamp).toSec() > kBackwardJump) {
-      ROS_WARN("%s: stamps jumped back from %.3f to %.3f s (looped bag?): reset to the initial "
-               "state",
-               input, last_stamp.toSec(), stamp.toSec());
-      ++counters_.resets;
-      resetPropagator(true);
-    } else {
-      ++counters_.dropped_stale;
-      ROS_WARN_THROTTLE(kWarnPeriod,
-                        "%s: stamp %.6f at or before the last one: dropped (%lu so far)", input,
-                        stamp.toSec(), counters_.dropped_stale);
-      return false;
-    }
-  }
-  last_stamp = stamp;
-  double t = coreTime(stamp);
-  if (dynamic_->anchored() && t < dynamic_->time()) {
-    // The timer already advanced past this stamp (transport latency): the input acts from
-    // the propagator's time on, so it is late by at most one publish period, never lost.
-    ++counters_.late;
-    t = dynamic_->time();
-  }
-  return handleOutcome(apply(t), input, stamp.toSec());
+bool AttitudePropagatorRos::feedDynamic(const ros::Time& stamp, const char* input, Apply&& apply) {
+  const double t = coreTime(stamp);
+  // The core places an input that arrives after the timer passed its stamp (transport
+  // latency) at the last grid point, and drops one not newer than the stream's previous one.
+  const bool late = dynamic_->anchored() && t <= dynamic_->time();
+  const StampOutcome outcome = apply(t);
+  if (late && outcome == StampOutcome::Advanced) ++counters_.late;
+  return handleOutcome(outcome, input, stamp.toSec());
 }
 
 const Eigen::Quaterniond* AttitudePropagatorRos::mountRotation(const std::string& frame_id) {
@@ -395,7 +377,6 @@ bool AttitudePropagatorRos::handleOutcome(StampOutcome outcome, const char* inpu
                input, kBackwardJump, stamp_s);
       P_B_.setZero();
       last_published_ = ros::Time();
-      last_rate_stamp_ = last_torque_stamp_ = ros::Time();
       return true;
     case StampOutcome::DroppedStale:
       ++counters_.dropped_stale;
@@ -420,6 +401,11 @@ void AttitudePropagatorRos::checkRosTime() {
              last_ros_time_.toSec(), now.toSec());
     ++counters_.resets;
     resetPropagator(true);
+    last_ros_time_ = now;
+    // Publish the initial state now rather than one timer period later: roscpp restarts
+    // its timers a full period after a backward jump.
+    if (dynamic_) publishDynamic();
+    return;
   }
   last_ros_time_ = now;
 }
@@ -437,6 +423,10 @@ ros::Time AttitudePropagatorRos::gridStampAtOrBefore(const ros::Time& now) const
 
 void AttitudePropagatorRos::onDynamicTimer(const ros::TimerEvent&) {
   checkRosTime();
+  publishDynamic();
+}
+
+void AttitudePropagatorRos::publishDynamic() {
   const ros::Time now = ros::Time::now();
   if (now.isZero()) return;
   const ros::Time stamp = gridStampAtOrBefore(now);
@@ -473,7 +463,6 @@ void AttitudePropagatorRos::resetPropagator(bool forget_time) {
   P_B_.setZero();
   if (forget_time) {
     origin_ = last_published_ = ros::Time();
-    last_rate_stamp_ = last_torque_stamp_ = ros::Time();
   }
 }
 
@@ -632,6 +621,7 @@ void AttitudePropagatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
     status.add("kinetic_energy", dynamic_->kineticEnergy());
     status.add("energy_drift", dynamic_->energyDrift());
     status.add("momentum_drift", dynamic_->momentumDrift());
+    status.add("failed_steps", dynamic_->failedSteps());
   }
 }
 

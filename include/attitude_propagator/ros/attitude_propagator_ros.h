@@ -60,7 +60,7 @@ class AttitudePropagatorRos {
     std::uint64_t rejected_type = 0;        // a message type the topic does not take
     std::uint64_t dropped_stale = 0;        // stamp at or before the last one
     std::uint64_t dropped_no_tf = 0;        // frame not (yet) known to tf
-    std::uint64_t late = 0;                 // dynamic: applied at the propagator's time
+    std::uint64_t late = 0;                 // dynamic: arrived after the timer passed its stamp
     std::uint64_t gaps = 0;                 // longer than max_dt: state held
     std::uint64_t resets = 0;               // backward jumps and ~reset calls
   };
@@ -78,12 +78,10 @@ class AttitudePropagatorRos {
                   const sensor_msgs::Imu* imu);
   void handleKinematicRate(const ros::Time& stamp, const Eigen::Vector3d& w_B,
                            const Eigen::Matrix3d& R_B, const sensor_msgs::Imu* imu);
-  /// Dynamic model: checks stamp against the stream's last one (stale, backward jump), then
-  /// applies the input at its stamp, or at the propagator's time when it arrives after the
-  /// timer has moved past it. Returns whether the state holds at the input.
+  /// Dynamic model: applies an input at its stamp through the core (which places a late one
+  /// at its last grid point); counts late inputs. Returns whether the state holds.
   template <class Apply>
-  bool feedDynamic(const ros::Time& stamp, ros::Time& last_stamp, const char* input,
-                   Apply&& apply);
+  bool feedDynamic(const ros::Time& stamp, const char* input, Apply&& apply);
   /// Rotation from the frame of a rate message to the body frame; nullptr while tf does not
   /// know it yet. Looked up once per frame id and cached (a sensor mount is static).
   const Eigen::Quaterniond* mountRotation(const std::string& frame_id);
@@ -103,6 +101,8 @@ class AttitudePropagatorRos {
   /// Resets on ROS time (wall or /clock) going back by more than a second (looped bag).
   void checkRosTime();
   void onDynamicTimer(const ros::TimerEvent& event);
+  /// Dynamic model: advances to the latest grid stamp at or before now and publishes there.
+  void publishDynamic();
   void onWatchdog(const ros::WallTimerEvent& event);
   /// The latest multiple of 1/publish_rate at or before now.
   ros::Time gridStampAtOrBefore(const ros::Time& now) const;
@@ -134,8 +134,6 @@ class AttitudePropagatorRos {
   ros::Time origin_;          // zero: not yet set
   ros::Time last_published_;  // zero: nothing published since the last backward jump
   ros::Time last_ros_time_;
-  ros::Time last_rate_stamp_;    // dynamic model: per-stream stamp checks
-  ros::Time last_torque_stamp_;
 
   // Sensor mount (frame of the rate messages -> body), cached.
   std::string mount_frame_;
