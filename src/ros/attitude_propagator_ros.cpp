@@ -1,5 +1,6 @@
 #include "attitude_propagator/ros/attitude_propagator_ros.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -21,6 +22,9 @@ constexpr double kBackwardJump = 1.0;
 // Inputs are queued, not dropped, through a burst of this many messages (a bag played fast,
 // a load generator); outputs likewise for slow subscribers.
 constexpr std::uint32_t kQueueSize = 10000;
+// Dynamic model: inputs stamped ahead of the propagator wait for the timer; at most this many
+// (a stream stamped far in the future must not grow memory without bound).
+constexpr std::size_t kMaxPending = 4096;
 // Throttle period (s) of warnings about input that keeps coming bad.
 constexpr double kWarnPeriod = 5.0;
 // How often ROS time is checked for jumps while no input arrives (s).
@@ -70,6 +74,7 @@ AttitudePropagatorRos::AttitudePropagatorRos(ros::NodeHandle nh, ros::NodeHandle
   } else {
     kinematic_.emplace(config_.kinematic);
   }
+  pending_.reserve(kMaxPending);
   const double stddev = config_.parameters.angular_velocity_stddev;
   default_R_ = stddev * stddev * Eigen::Matrix3d::Identity();
 
@@ -137,6 +142,7 @@ void AttitudePropagatorRos::logModel() const {
 
 void AttitudePropagatorRos::onImu(const ros::MessageEvent<const sensor_msgs::Imu>& event) {
   checkRosTime();
+  ++counters_.received;
   const sensor_msgs::Imu& msg = *event.getConstMessage();
   if (msg.angular_velocity_covariance[0] == -1.0) {
     // REP-145: element 0 at -1 marks "this message carries no angular velocity".
@@ -161,12 +167,14 @@ void AttitudePropagatorRos::onImu(const ros::MessageEvent<const sensor_msgs::Imu
   const Eigen::Matrix3d R_I = covarianceFromMsg(msg.angular_velocity_covariance);
   const Eigen::Matrix3d R_B =
       R_I.isZero(0.0) ? default_R_ : rotateCovariance(R_I, q_BI->toRotationMatrix());
-  handleRate(stampOr(msg.header.stamp, event.getReceiptTime()), w_B, R_B, &msg);
+  handleRate(stampOr(msg.header.stamp, event.getReceiptTime()), w_B, R_B,
+             event.getConstMessage());
 }
 
 void AttitudePropagatorRos::onTwist(
     const ros::MessageEvent<const topic_tools::ShapeShifter>& event) {
   checkRosTime();
+  ++counters_.received;
   const topic_tools::ShapeShifter& msg = *event.getConstMessage();
   const geometry_msgs::Vector3* w = nullptr;
   ros::Time stamp;
@@ -196,12 +204,13 @@ void AttitudePropagatorRos::onTwist(
   static const std::string kBody;
   const Eigen::Quaterniond* q_BS = mountRotation(frame_id ? *frame_id : kBody);
   if (!q_BS) return;
-  handleRate(stampOr(stamp, event.getReceiptTime()), *q_BS * toEigen(*w), default_R_, nullptr);
+  handleRate(stampOr(stamp, event.getReceiptTime()), *q_BS * toEigen(*w), default_R_, {});
 }
 
 void AttitudePropagatorRos::onTorque(
     const ros::MessageEvent<const topic_tools::ShapeShifter>& event) {
   checkRosTime();
+  ++counters_.received;
   const topic_tools::ShapeShifter& msg = *event.getConstMessage();
   const geometry_msgs::Vector3* torque = nullptr;
   ros::Time stamp;
@@ -240,23 +249,29 @@ void AttitudePropagatorRos::onTorque(
                       counters_.rejected_non_finite);
     return;
   }
-  const Eigen::Vector3d tau = q_B_torque * toEigen(*torque);
-  feedDynamic(stampOr(stamp, event.getReceiptTime()), "torque",
-              [&](double t) { return dynamic_->setTorque(t, tau, frame); });
+  last_input_ = ros::WallTime::now();
+  DynamicInput input;
+  input.stamp = stampOr(stamp, event.getReceiptTime());
+  input.is_torque = true;
+  input.value = q_B_torque * toEigen(*torque);
+  input.frame = frame;
+  submitDynamic(input);
 }
 
 void AttitudePropagatorRos::handleRate(const ros::Time& stamp, const Eigen::Vector3d& w_B,
-                                       const Eigen::Matrix3d& R_B, const sensor_msgs::Imu* imu) {
+                                       const Eigen::Matrix3d& R_B,
+                                       const sensor_msgs::Imu::ConstPtr& imu) {
   if (stamp.isZero()) return;  // sim time before the first /clock: no time to put it at
   last_input_ = ros::WallTime::now();
   if (kinematic_) {
-    handleKinematicRate(stamp, w_B, R_B, imu);
+    handleKinematicRate(stamp, w_B, R_B, imu.get());
     return;
   }
-  const char* input = imu ? "imu/data_raw" : "body_twist";
-  const bool holds = feedDynamic(stamp, input,
-                                 [&](double t) { return dynamic_->setRate(t, w_B); });
-  if (holds && imu) publishImu(*imu, stamp, *mountRotation(imu->header.frame_id));
+  DynamicInput input;
+  input.stamp = stamp;
+  input.value = w_B;
+  input.imu = imu;
+  submitDynamic(input);
 }
 
 void AttitudePropagatorRos::handleKinematicRate(const ros::Time& stamp, const Eigen::Vector3d& w_B,
@@ -280,15 +295,44 @@ void AttitudePropagatorRos::handleKinematicRate(const ros::Time& stamp, const Ei
   if (imu) publishImu(*imu, stamp, *mountRotation(imu->header.frame_id));
 }
 
-template <class Apply>
-bool AttitudePropagatorRos::feedDynamic(const ros::Time& stamp, const char* input, Apply&& apply) {
-  const double t = coreTime(stamp);
+void AttitudePropagatorRos::submitDynamic(const DynamicInput& input) {
+  const double t = coreTime(input.stamp);
+  if (!dynamic_->anchored() || t <= dynamic_->time()) {
+    applyDynamic(input);  // anchors, or late (the core places it), or a jump back
+    return;
+  }
+  // Ahead of the propagator: held until the timer reaches its stamp, so the state published
+  // at a grid stamp sees exactly the inputs stamped up to it, and the timer is never left
+  // behind a propagator that inputs pushed past the grid.
+  if (pending_.size() >= kMaxPending) {
+    applyDynamic(pending_.front());
+    pending_.erase(pending_.begin());
+  }
+  const auto at = std::upper_bound(
+      pending_.begin(), pending_.end(), input.stamp,
+      [](const ros::Time& stamp, const DynamicInput& other) { return stamp < other.stamp; });
+  pending_.insert(at, input);
+}
+
+void AttitudePropagatorRos::applyDynamic(const DynamicInput& input) {
+  const double t = coreTime(input.stamp);
   // The core places an input that arrives after the timer passed its stamp (transport
   // latency) at the last grid point, and drops one not newer than the stream's previous one.
   const bool late = dynamic_->anchored() && t <= dynamic_->time();
-  const StampOutcome outcome = apply(t);
+  const StampOutcome outcome = input.is_torque ? dynamic_->setTorque(t, input.value, input.frame)
+                                               : dynamic_->setRate(t, input.value);
   if (late && outcome == StampOutcome::Advanced) ++counters_.late;
-  return handleOutcome(outcome, input, stamp.toSec());
+  const char* name = input.is_torque ? "torque" : input.imu ? "imu/data_raw" : "body_twist";
+  if (handleOutcome(outcome, name, input.stamp.toSec()) && input.imu) {
+    publishImu(*input.imu, input.stamp, *mountRotation(input.imu->header.frame_id));
+  }
+}
+
+void AttitudePropagatorRos::applyPendingUpTo(const ros::Time& stamp) {
+  std::size_t n = 0;
+  while (n < pending_.size() && pending_[n].stamp <= stamp) ++n;
+  for (std::size_t i = 0; i < n && i < pending_.size(); ++i) applyDynamic(pending_[i]);
+  pending_.erase(pending_.begin(), pending_.begin() + std::min(n, pending_.size()));
 }
 
 const Eigen::Quaterniond* AttitudePropagatorRos::mountRotation(const std::string& frame_id) {
@@ -430,24 +474,27 @@ void AttitudePropagatorRos::publishDynamic() {
   const ros::Time now = ros::Time::now();
   if (now.isZero()) return;
   const ros::Time stamp = gridStampAtOrBefore(now);
+  applyPendingUpTo(stamp);
   if (!last_published_.isZero() && stamp <= last_published_) return;
   const double t = coreTime(stamp);
-  if (dynamic_->anchored() && t <= dynamic_->time()) return;  // an input already went past it
-  const StampOutcome outcome = dynamic_->advanceTo(t);
-  if (outcome == StampOutcome::HeldGap) {
-    ++counters_.gaps;
-    ROS_WARN_THROTTLE(kWarnPeriod,
-                      "ROS time advanced by more than max_dt = %g s to %.3f: not integrated "
-                      "across, state held",
-                      config_.parameters.max_dt, stamp.toSec());
-  } else if (outcome == StampOutcome::ResetBackwardJump) {
-    ++counters_.resets;
-    ROS_WARN("ROS time went back to %.3f s: reset to the initial state", stamp.toSec());
-    last_published_ = ros::Time();
-  } else if (!stateHoldsAtStamp(outcome)) {
-    return;
+  if (dynamic_->anchored() && t < dynamic_->time()) return;  // set_state pinned a later time
+  if (!dynamic_->anchored() || t > dynamic_->time()) {
+    const StampOutcome outcome = dynamic_->advanceTo(t);
+    if (outcome == StampOutcome::HeldGap) {
+      ++counters_.gaps;
+      ROS_WARN_THROTTLE(kWarnPeriod,
+                        "ROS time advanced by more than max_dt = %g s to %.3f: not integrated "
+                        "across, state held",
+                        config_.parameters.max_dt, stamp.toSec());
+    } else if (outcome == StampOutcome::ResetBackwardJump) {
+      ++counters_.resets;
+      ROS_WARN("ROS time went back to %.3f s: reset to the initial state", stamp.toSec());
+      last_published_ = ros::Time();
+    } else if (!stateHoldsAtStamp(outcome)) {
+      return;
+    }
   }
-  publishState(stamp);
+  publishState(stamp);  // also when an input stamped exactly here brought the state to it
 }
 
 void AttitudePropagatorRos::onWatchdog(const ros::WallTimerEvent&) {
@@ -460,6 +507,7 @@ void AttitudePropagatorRos::onWatchdog(const ros::WallTimerEvent&) {
 void AttitudePropagatorRos::resetPropagator(bool forget_time) {
   if (kinematic_) kinematic_->reset();
   if (dynamic_) dynamic_->reset();
+  pending_.clear();
   P_B_.setZero();
   if (forget_time) {
     origin_ = last_published_ = ros::Time();
@@ -607,7 +655,9 @@ void AttitudePropagatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   status.add("integrator", integratorName(dynamic_ ? dynamic_->integrator()
                                                   : kinematic_->integrator()));
   status.add("input_rate_hz", input_rate);
+  status.add("received", counters_.received);
   status.add("accepted", counters_.accepted);
+  status.add("pending", pending_.size());
   status.add("rejected_non_finite", counters_.rejected_non_finite);
   status.add("rejected_no_rate", counters_.rejected_no_rate);
   status.add("rejected_type", counters_.rejected_type);

@@ -102,12 +102,13 @@ class DynamicTest(unittest.TestCase):
         t0 = self.now
         node = self.nodes["rate"]
         self.assertTrue(node.set_state(rospy.Time(t0)).success)
-        before = self.accepted("rate")
+        before = self.diag.counter("/rate/attitude_propagator", "received") or 0
         msg = TwistStamped()
         msg.header.stamp = rospy.Time(0, int(round((t0 + 0.5) * 1e9)))
         msg.twist.angular = Vector3(0.0, 0.0, 0.5)  # about the major axis: stays there
         self.rate_pub.publish(msg)
-        self.diag.wait_counter("/rate/attitude_propagator", "accepted", before + 1)
+        # Stamped ahead of the clock, it waits in the node until the clock reaches it.
+        self.diag.wait_counter("/rate/attitude_propagator", "received", before + 1)
         self.run_clock(t0 + 2.0)
         state = node.state.wait_at(rospy.Time(0, int(round((t0 + 2.0) * 1e9))))
         self.assertRotation(as_tuple(state.orientation), axis_angle((0, 0, 1), 0.75), 1e-7)

@@ -54,6 +54,7 @@ class AttitudePropagatorRos {
  private:
   /// What happened to input, shown in diagnostics.
   struct Counters {
+    std::uint64_t received = 0;             // every message on an input topic
     std::uint64_t accepted = 0;
     std::uint64_t rejected_non_finite = 0;  // NaN / Inf values
     std::uint64_t rejected_no_rate = 0;     // REP-145: angular_velocity_covariance[0] == -1
@@ -73,15 +74,26 @@ class AttitudePropagatorRos {
   void onImu(const ros::MessageEvent<const sensor_msgs::Imu>& event);
   void onTwist(const ros::MessageEvent<const topic_tools::ShapeShifter>& event);
   void onTorque(const ros::MessageEvent<const topic_tools::ShapeShifter>& event);
-  /// A body rate w_B at stamp with noise covariance R_B; imu is the message for imu/data.
+  /// Dynamic model: a torque or a rate sample, applied when the timer reaches its stamp.
+  struct DynamicInput {
+    ros::Time stamp;
+    bool is_torque = false;
+    Eigen::Vector3d value = Eigen::Vector3d::Zero();  // tau (N m) or w_B (rad/s)
+    TorqueFrame frame = TorqueFrame::Body;
+    sensor_msgs::Imu::ConstPtr imu;  // a rate from an IMU: republished on imu/data
+  };
+
+  /// A body rate w_B at stamp with noise covariance R_B; imu (may be null) for imu/data.
   void handleRate(const ros::Time& stamp, const Eigen::Vector3d& w_B, const Eigen::Matrix3d& R_B,
-                  const sensor_msgs::Imu* imu);
+                  const sensor_msgs::Imu::ConstPtr& imu);
   void handleKinematicRate(const ros::Time& stamp, const Eigen::Vector3d& w_B,
                            const Eigen::Matrix3d& R_B, const sensor_msgs::Imu* imu);
-  /// Dynamic model: applies an input at its stamp through the core (which places a late one
-  /// at its last grid point); counts late inputs. Returns whether the state holds.
-  template <class Apply>
-  bool feedDynamic(const ros::Time& stamp, const char* input, Apply&& apply);
+  /// Dynamic model: an input stamped at or before the propagator's time is applied now (the
+  /// core places a late one at its last grid point); a newer one waits in pending_ until the
+  /// timer reaches its stamp.
+  void submitDynamic(const DynamicInput& input);
+  void applyDynamic(const DynamicInput& input);
+  void applyPendingUpTo(const ros::Time& stamp);
   /// Rotation from the frame of a rate message to the body frame; nullptr while tf does not
   /// know it yet. Looked up once per frame id and cached (a sensor mount is static).
   const Eigen::Quaterniond* mountRotation(const std::string& frame_id);
@@ -127,6 +139,7 @@ class AttitudePropagatorRos {
   NodeConfig config_;
   std::optional<KinematicPropagator> kinematic_;
   std::optional<DynamicPropagator> dynamic_;
+  std::vector<DynamicInput> pending_;  // sorted by stamp, capacity reserved
 
   Eigen::Matrix3d P_B_ = Eigen::Matrix3d::Zero();  // orientation covariance, body frame
   Eigen::Matrix3d default_R_;  // rate noise when a message carries none: stddev^2 I
