@@ -4,8 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
-#include <boost/make_shared.hpp>
 #include <tf2_msgs/TFMessage.h>
+#include <boost/make_shared.hpp>
 
 #include "attitude_propagator/AttitudeState.h"
 #include "attitude_propagator/orientation_covariance.h"
@@ -65,10 +65,7 @@ bool isFinite(const Eigen::Quaterniond& q) { return q.coeffs().allFinite(); }
 }  // namespace
 
 AttitudePropagatorRos::AttitudePropagatorRos(ros::NodeHandle nh, ros::NodeHandle pnh)
-    : nh_(nh),
-      pnh_(pnh),
-      config_(loadParameters(pnh)),
-      updater_(nh, pnh, pnh.getNamespace()) {
+    : nh_(nh), pnh_(pnh), config_(loadParameters(pnh)), updater_(nh, pnh, pnh.getNamespace()) {
   if (config_.model == Model::Dynamic) {
     dynamic_.emplace(*config_.dynamic);
   } else {
@@ -107,11 +104,11 @@ void AttitudePropagatorRos::advertise() {
 void AttitudePropagatorRos::subscribe() {
   const auto hints = ros::TransportHints().tcpNoDelay();
   if (config_.rate_input == RateInput::Imu) {
-    rate_sub_ = nh_.subscribe("imu/data_raw", kQueueSize, &AttitudePropagatorRos::onImu, this,
-                              hints);
+    rate_sub_ =
+        nh_.subscribe("imu/data_raw", kQueueSize, &AttitudePropagatorRos::onImu, this, hints);
   } else if (config_.rate_input == RateInput::Twist) {
-    rate_sub_ = nh_.subscribe("body_twist", kQueueSize, &AttitudePropagatorRos::onTwist, this,
-                              hints);
+    rate_sub_ =
+        nh_.subscribe("body_twist", kQueueSize, &AttitudePropagatorRos::onTwist, this, hints);
   }
   if (dynamic_ && config_.torque_input) {
     torque_sub_ =
@@ -122,17 +119,18 @@ void AttitudePropagatorRos::subscribe() {
 void AttitudePropagatorRos::logModel() const {
   const auto& p = config_.parameters;
   if (dynamic_) {
-    ROS_INFO("attitude_propagator: dynamic model %s (integrator %s, max_step %g s), "
-             "publishing %s -> %s at %g Hz; rate input %s, torque input %s",
-             dynamic_->modelName().c_str(), integratorName(dynamic_->integrator()).c_str(),
-             config_.dynamic->max_step, p.fixed_frame.c_str(), p.body_frame.c_str(),
-             p.publish_rate, rateInputName(config_.rate_input),
-             config_.torque_input ? "on" : "off");
+    ROS_INFO(
+        "attitude_propagator: dynamic model %s (integrator %s, max_step %g s), "
+        "publishing %s -> %s at %g Hz; rate input %s, torque input %s",
+        dynamic_->modelName().c_str(), integratorName(dynamic_->integrator()).c_str(),
+        config_.dynamic->max_step, p.fixed_frame.c_str(), p.body_frame.c_str(), p.publish_rate,
+        rateInputName(config_.rate_input), config_.torque_input ? "on" : "off");
   } else {
-    ROS_INFO("attitude_propagator: kinematic model (integrator %s), publishing %s -> %s per "
-             "%s message",
-             integratorName(kinematic_->integrator()).c_str(), p.fixed_frame.c_str(),
-             p.body_frame.c_str(), rateInputName(config_.rate_input));
+    ROS_INFO(
+        "attitude_propagator: kinematic model (integrator %s), publishing %s -> %s per "
+        "%s message",
+        integratorName(kinematic_->integrator()).c_str(), p.fixed_frame.c_str(),
+        p.body_frame.c_str(), rateInputName(config_.rate_input));
   }
 }
 
@@ -167,8 +165,7 @@ void AttitudePropagatorRos::onImu(const ros::MessageEvent<const sensor_msgs::Imu
   const Eigen::Matrix3d R_I = covarianceFromMsg(msg.angular_velocity_covariance);
   const Eigen::Matrix3d R_B =
       R_I.isZero(0.0) ? default_R_ : rotateCovariance(R_I, q_BI->toRotationMatrix());
-  handleRate(stampOr(msg.header.stamp, event.getReceiptTime()), w_B, R_B,
-             event.getConstMessage());
+  handleRate(stampOr(msg.header.stamp, event.getReceiptTime()), w_B, R_B, event.getConstMessage());
 }
 
 void AttitudePropagatorRos::onTwist(
@@ -197,7 +194,8 @@ void AttitudePropagatorRos::onTwist(
   }
   if (!allFinite(*w)) {
     ++counters_.rejected_non_finite;
-    ROS_WARN_THROTTLE(kWarnPeriod, "body_twist: NaN or infinite angular rate: rejected (%lu so far)",
+    ROS_WARN_THROTTLE(kWarnPeriod,
+                      "body_twist: NaN or infinite angular rate: rejected (%lu so far)",
                       counters_.rejected_non_finite);
     return;
   }
@@ -398,8 +396,7 @@ ros::Time AttitudePropagatorRos::stampOr(const ros::Time& stamp, const ros::Time
   return stamp.isZero() ? receipt : stamp;
 }
 
-bool AttitudePropagatorRos::handleOutcome(StampOutcome outcome, const char* input,
-                                          double stamp_s) {
+bool AttitudePropagatorRos::handleOutcome(StampOutcome outcome, const char* input, double stamp_s) {
   switch (outcome) {
     case StampOutcome::Anchored:
     case StampOutcome::Advanced:
@@ -416,16 +413,18 @@ bool AttitudePropagatorRos::handleOutcome(StampOutcome outcome, const char* inpu
     case StampOutcome::ResetBackwardJump:
       ++counters_.accepted;
       ++counters_.resets;
-      ROS_WARN("%s: stamps jumped back by more than %g s to %.3f (looped bag?): reset to the "
-               "initial state",
-               input, kBackwardJump, stamp_s);
+      ROS_WARN(
+          "%s: stamps jumped back by more than %g s to %.3f (looped bag?): reset to the "
+          "initial state",
+          input, kBackwardJump, stamp_s);
       P_B_.setZero();
       last_published_ = ros::Time();
       return true;
     case StampOutcome::DroppedStale:
       ++counters_.dropped_stale;
-      ROS_WARN_THROTTLE(kWarnPeriod, "%s: stamp %.6f at or before the last one: dropped (%lu so far)",
-                        input, stamp_s, counters_.dropped_stale);
+      ROS_WARN_THROTTLE(kWarnPeriod,
+                        "%s: stamp %.6f at or before the last one: dropped (%lu so far)", input,
+                        stamp_s, counters_.dropped_stale);
       return false;
     case StampOutcome::RejectedNonFinite:
       ++counters_.rejected_non_finite;
@@ -440,9 +439,10 @@ void AttitudePropagatorRos::checkRosTime() {
   const ros::Time now = ros::Time::now();
   if (now.isZero()) return;  // sim time before the first /clock
   if (!last_ros_time_.isZero() && (last_ros_time_ - now).toSec() > kBackwardJump) {
-    ROS_WARN("ROS time jumped back from %.3f to %.3f s (looped bag or restarted clock): reset "
-             "to the initial state",
-             last_ros_time_.toSec(), now.toSec());
+    ROS_WARN(
+        "ROS time jumped back from %.3f to %.3f s (looped bag or restarted clock): reset "
+        "to the initial state",
+        last_ros_time_.toSec(), now.toSec());
     ++counters_.resets;
     resetPropagator(true);
     last_ros_time_ = now;
@@ -640,7 +640,8 @@ bool AttitudePropagatorRos::onSetState(SetState::Request& request, SetState::Res
 void AttitudePropagatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   const ros::WallTime now = ros::WallTime::now();
   const double dt = (now - last_diagnosis_).toSec();
-  const double input_rate = dt > 0.0 ? (counters_.accepted - accepted_at_last_diagnosis_) / dt : 0.0;
+  const double input_rate =
+      dt > 0.0 ? (counters_.accepted - accepted_at_last_diagnosis_) / dt : 0.0;
   last_diagnosis_ = now;
   accepted_at_last_diagnosis_ = counters_.accepted;
 
@@ -652,8 +653,8 @@ void AttitudePropagatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "propagating");
   }
   status.add("model", dynamic_ ? dynamic_->modelName() : std::string("kinematic"));
-  status.add("integrator", integratorName(dynamic_ ? dynamic_->integrator()
-                                                  : kinematic_->integrator()));
+  status.add("integrator",
+             integratorName(dynamic_ ? dynamic_->integrator() : kinematic_->integrator()));
   status.add("input_rate_hz", input_rate);
   status.add("received", counters_.received);
   status.add("accepted", counters_.accepted);

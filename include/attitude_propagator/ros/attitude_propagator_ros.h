@@ -54,7 +54,7 @@ class AttitudePropagatorRos {
  private:
   /// What happened to input, shown in diagnostics.
   struct Counters {
-    std::uint64_t received = 0;             // every message on an input topic
+    std::uint64_t received = 0;  // every message on an input topic
     std::uint64_t accepted = 0;
     std::uint64_t rejected_non_finite = 0;  // NaN / Inf values
     std::uint64_t rejected_no_rate = 0;     // REP-145: angular_velocity_covariance[0] == -1
