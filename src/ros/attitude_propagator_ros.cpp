@@ -211,25 +211,13 @@ void AttitudePropagatorRos::onTorque(
   ++counters_.received;
   const topic_tools::ShapeShifter& msg = *event.getConstMessage();
   const geometry_msgs::Vector3* torque = nullptr;
+  const std::string* frame_id = nullptr;
   ros::Time stamp;
-  TorqueFrame frame = config_.torque_frame;
-  Eigen::Quaterniond q_B_torque = Eigen::Quaterniond::Identity();
   if (isType<geometry_msgs::WrenchStamped>(msg)) {
     decodeInto(msg, decode_buffer_, wrench_stamped_);
     torque = &wrench_stamped_.wrench.torque;
     stamp = wrench_stamped_.header.stamp;
-    const std::string& frame_id = wrench_stamped_.header.frame_id;
-    const auto& p = config_.parameters;
-    if (frame_id == p.body_frame) {
-      frame = TorqueFrame::Body;
-    } else if (frame_id == p.fixed_frame) {
-      frame = TorqueFrame::Fixed;
-    } else if (!frame_id.empty()) {  // empty: as unstamped, torque_frame decides
-      const auto q = torqueFrameRotation(frame_id);
-      if (!q) return;
-      q_B_torque = *q;
-      frame = TorqueFrame::Body;
-    }
+    frame_id = &wrench_stamped_.header.frame_id;
   } else if (isType<geometry_msgs::Wrench>(msg)) {
     decodeInto(msg, decode_buffer_, wrench_);
     torque = &wrench_.torque;
@@ -247,13 +235,30 @@ void AttitudePropagatorRos::onTorque(
                       counters_.rejected_non_finite);
     return;
   }
-  last_input_ = ros::WallTime::now();
   DynamicInput input;
   input.stamp = stampOr(stamp, event.getReceiptTime());
   input.is_torque = true;
-  input.value = q_B_torque * toEigen(*torque);
-  input.frame = frame;
+  if (!resolveTorqueFrame(frame_id ? *frame_id : std::string(), toEigen(*torque), input)) return;
+  last_input_ = ros::WallTime::now();
   submitDynamic(input);
+}
+
+bool AttitudePropagatorRos::resolveTorqueFrame(const std::string& frame_id,
+                                               const Eigen::Vector3d& tau, DynamicInput& input) {
+  const auto& p = config_.parameters;
+  input.value = tau;
+  input.frame = config_.torque_frame;  // unstamped, or stamped with an empty frame_id
+  if (frame_id.empty()) return true;
+  if (frame_id == p.body_frame || frame_id == p.fixed_frame) {
+    input.frame = frame_id == p.body_frame ? TorqueFrame::Body : TorqueFrame::Fixed;
+    return true;
+  }
+  // A third frame: rotate into the body now; the core takes it as a body torque.
+  const auto q_B_frame = torqueFrameRotation(frame_id);
+  if (!q_B_frame) return false;
+  input.value = *q_B_frame * tau;
+  input.frame = TorqueFrame::Body;
+  return true;
 }
 
 void AttitudePropagatorRos::handleRate(const ros::Time& stamp, const Eigen::Vector3d& w_B,

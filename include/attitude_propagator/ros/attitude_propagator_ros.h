@@ -100,6 +100,10 @@ class AttitudePropagatorRos {
   /// Rotation of a torque frame into the body frame, looked up per message (rare: a stamped
   /// torque in neither the body nor the fixed frame).
   std::optional<Eigen::Quaterniond> torqueFrameRotation(const std::string& frame_id);
+  /// Sets input.value and input.frame from a torque tau given in frame_id (empty: the
+  /// torque_frame parameter). False when the frame is not known to tf yet.
+  bool resolveTorqueFrame(const std::string& frame_id, const Eigen::Vector3d& tau,
+                          DynamicInput& input);
   void ensureTfListener();
 
   // Time.
