@@ -23,7 +23,7 @@ source_workspace
 port=$(/usr/bin/python3 -c 'import socket; s = socket.socket(); s.bind(("", 0)); print(s.getsockname()[1])')
 export ROS_MASTER_URI="http://localhost:${port}"
 log="$(mktemp -t attitude_propagator_demo.XXXXXX.log)"
-echo "demo: scene $scene for ${seconds} s (roslaunch log: $log)"
+echo "demo: scene $scene for ${seconds} s"
 roslaunch -p "$port" attitude_propagator demo.launch scene:="$scene" >"$log" 2>&1 &
 launch_pid=$!
 stop_launch() {
@@ -42,7 +42,9 @@ status=0
 timeout $((seconds + 60)) "${WORKSPACE}/devel/lib/attitude_propagator/print_tf" \
   _duration:="$seconds" _axis:="$axis" __name:=print_tf || status=$?
 if [ "$status" -ne 0 ]; then
-  echo "demo: print_tf failed ($status); the launch log says:" >&2
+  echo "demo: print_tf failed ($status); the launch log ($log) ends:" >&2
   tail -n 30 "$log" >&2
+else
+  rm -f "$log"
 fi
 exit "$status"
