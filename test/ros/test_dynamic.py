@@ -1,11 +1,14 @@
 #!/usr/bin/python3
 """Dynamic model under sim time (dynamic.test). Tests run in name order on one clock."""
+import math
 import time
 import unittest
 
 import rospy
 import rostest
-from geometry_msgs.msg import TwistStamped, Vector3, Wrench, WrenchStamped
+import tf2_ros
+from geometry_msgs.msg import (Quaternion, TransformStamped, TwistStamped, Vector3, Wrench,
+                               WrenchStamped)
 from rosgraph_msgs.msg import Clock
 
 from ap_test_util import (Diagnostics, Node, as_tuple, axis_angle, lookup, make_tf_buffer,
@@ -113,6 +116,35 @@ class DynamicTest(unittest.TestCase):
         state = node.state.wait_at(rospy.Time(0, int(round((t0 + 2.0) * 1e9))))
         self.assertRotation(as_tuple(state.orientation), axis_angle((0, 0, 1), 0.75), 1e-7)
         self.assertTrue(state.model.startswith("exact"), state.model)
+
+    def test_3b_torque_in_a_third_frame_goes_through_tf(self):
+        # A torque sensor frame turned +90 degrees about the body's z axis: (0, 0.4, 0) there
+        # is (-0.4, 0, 0) in the body. The node looks the frame up through tf when the first
+        # such torque arrives, so the first ones may be dropped until tf has it.
+        broadcaster = tf2_ros.StaticTransformBroadcaster()
+        t = TransformStamped()
+        t.header.stamp = rospy.Time(self.now)
+        t.header.frame_id = "body_trq"
+        t.child_frame_id = "trq_sensor"
+        t.transform.rotation = Quaternion(*axis_angle((0, 0, 1), math.pi / 2))
+        broadcaster.sendTransform(t)
+        t0 = self.now
+        node = self.nodes["trq"]
+        self.assertTrue(node.set_state(rospy.Time(t0)).success)
+        before = self.accepted("trq")
+        msg = WrenchStamped()
+        msg.header.stamp = rospy.Time(t0)
+        msg.header.frame_id = "trq_sensor"
+        msg.wrench.torque = Vector3(0.0, 0.4, 0.0)
+
+        def applied():
+            self.torque_pub.publish(msg)
+            time.sleep(0.05)
+            return self.accepted("trq") > before
+        wait_for(applied, 10.0, "a torque in trq_sensor accepted")
+        self.run_clock(t0 + 2.0)
+        state = node.state.wait_at(rospy.Time(0, int(round((t0 + 2.0) * 1e9))))
+        self.assertRotation(as_tuple(state.orientation), axis_angle((1, 0, 0), -0.4), 1e-7)
 
     def test_4_clock_jumping_back_resets(self):
         node = self.nodes["sph"]
