@@ -237,6 +237,7 @@ void AttitudePropagatorRos::onTorque(
   }
   DynamicInput input;
   input.stamp = stampOr(stamp, event.getReceiptTime());
+  if (!hasTime(input.stamp, "torque")) return;
   input.is_torque = true;
   if (!resolveTorqueFrame(frame_id ? *frame_id : std::string(), toEigen(*torque), input)) return;
   last_input_ = ros::WallTime::now();
@@ -264,7 +265,7 @@ bool AttitudePropagatorRos::resolveTorqueFrame(const std::string& frame_id,
 void AttitudePropagatorRos::handleRate(const ros::Time& stamp, const Eigen::Vector3d& w_B,
                                        const Eigen::Matrix3d& R_B,
                                        const sensor_msgs::Imu::ConstPtr& imu) {
-  if (stamp.isZero()) return;  // sim time before the first /clock: no time to put it at
+  if (!hasTime(stamp, imu ? "imu/data_raw" : "body_twist")) return;
   last_input_ = ros::WallTime::now();
   if (kinematic_) {
     handleKinematicRate(stamp, w_B, R_B, imu.get());
@@ -395,6 +396,15 @@ void AttitudePropagatorRos::ensureTfListener() {
 double AttitudePropagatorRos::coreTime(const ros::Time& stamp) {
   if (origin_.isZero()) origin_ = ros::Time(stamp.sec, 0);  // whole seconds keep the grid exact
   return (stamp - origin_).toSec();
+}
+
+bool AttitudePropagatorRos::hasTime(const ros::Time& stamp, const char* input) {
+  if (!stamp.isZero()) return true;
+  // An unstamped message under sim time before the first /clock: no time to put it at.
+  ++counters_.dropped_no_time;
+  ROS_WARN_THROTTLE(kWarnPeriod, "%s: unstamped message and no ROS time yet (/clock): dropped",
+                    input);
+  return false;
 }
 
 ros::Time AttitudePropagatorRos::stampOr(const ros::Time& stamp, const ros::Time& receipt) {
@@ -669,6 +679,7 @@ void AttitudePropagatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   status.add("rejected_type", counters_.rejected_type);
   status.add("dropped_stale", counters_.dropped_stale);
   status.add("dropped_no_tf", counters_.dropped_no_tf);
+  status.add("dropped_no_time", counters_.dropped_no_time);
   status.add("late", counters_.late);
   status.add("gaps", counters_.gaps);
   status.add("resets", counters_.resets);

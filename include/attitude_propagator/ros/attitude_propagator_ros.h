@@ -61,6 +61,7 @@ class AttitudePropagatorRos {
     std::uint64_t rejected_type = 0;        // a message type the topic does not take
     std::uint64_t dropped_stale = 0;        // stamp at or before the last one
     std::uint64_t dropped_no_tf = 0;        // frame not (yet) known to tf
+    std::uint64_t dropped_no_time = 0;      // unstamped, and sim time without /clock yet
     std::uint64_t late = 0;                 // dynamic: arrived after the timer passed its stamp
     std::uint64_t gaps = 0;                 // longer than max_dt: state held
     std::uint64_t resets = 0;               // backward jumps and ~reset calls
@@ -112,6 +113,8 @@ class AttitudePropagatorRos {
   double coreTime(const ros::Time& stamp);
   /// Receipt time for unstamped (or zero-stamped) messages.
   static ros::Time stampOr(const ros::Time& stamp, const ros::Time& receipt);
+  /// False (counted, warned) for a zero stamp: unstamped under sim time before any /clock.
+  bool hasTime(const ros::Time& stamp, const char* input);
   /// Counts and warns for a core outcome; returns whether the state holds at the stamp.
   bool handleOutcome(StampOutcome outcome, const char* input, double stamp_s);
   /// Resets on ROS time (wall or /clock) going back by more than a second (looped bag).
