@@ -166,6 +166,17 @@ class KinematicTest(unittest.TestCase):
         self.assertAlmostEqual(imu.orientation_covariance[8], n * H * H * 1e-4, delta=1e-15)
         self.assertAlmostEqual(imu.orientation_covariance[0], n * H * H * 1e-4, delta=1e-8)
 
+    def test_a_burst_is_not_dropped(self):
+        # 3000 samples published as fast as rospy can: every one is integrated and published.
+        n = 3000
+        node = self.nodes["kin"]
+        before = node.state.count()
+        self.feed("kin", [(k * 1e-3, (0.0, 0.0, 0.3), None) for k in range(n + 1)])
+        state = node.state.wait_at(stamp_at(self.base, n * 1e-3), timeout=30.0)
+        self.assertRotation(as_tuple(state.orientation), axis_angle((0, 0, 1), 0.3 * n * 1e-3))
+        wait_for(lambda: node.state.count() - before >= n + 1, 10.0, "every burst state")
+        self.assertEqual(node.state.count() - before, n + 1)
+
     def test_octahedron_quarter_turns(self):
         # A quarter turn about body x, then one about body y: q = qx(pi/2) (x) qy(pi/2),
         # the 120 degree turn about (1, 1, 1) that maps x to y: (0.5, 0.5, 0.5, 0.5).
