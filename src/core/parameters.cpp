@@ -221,6 +221,12 @@ NodeConfig validateParameters(const Parameters& p) {
          "required by model dynamic; accepted: 3 principal moments [I1, I2, I3] or "
          "6 values [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] (kg m^2)");
   }
+  if (1.0 / p.publish_rate > p.max_dt) {
+    // Each timer tick would be a gap longer than max_dt: the state would be held forever.
+    fail("publish_rate", "invalid value " + formatParameter(p.publish_rate) + " with max_dt " +
+                             formatParameter(p.max_dt) +
+                             "; accepted: at least 1/max_dt (Hz) in the dynamic model");
+  }
   DynamicConfig dynamic;
   dynamic.body = makeBody(p.inertia);
   dynamic.integrator = integrator;

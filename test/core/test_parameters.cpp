@@ -130,6 +130,11 @@ TEST(Parameters, RejectsEachBadValueNamingTheParameter) {
                  "initial_angular_velocity");
   expectRejected(with([](auto& p) { p.publish_rate = 0.0; }), "publish_rate");
   expectRejected(with([](auto& p) { p.max_step = -0.1; }), "max_step");
+  expectRejected(with([](auto& p) {
+                   p.inertia = {1.0, 1.0, 1.0};
+                   p.publish_rate = 0.5;  // every 2 s tick a gap over max_dt = 1 s
+                 }),
+                 "publish_rate");
   expectRejected(with([](auto& p) { p.max_dt = NAN; }), "max_dt");
   expectRejected(with([](auto& p) { p.tolerance = 0.0; }), "tolerance");
   expectRejected(with([](auto& p) { p.torque_timeout = -1.0; }), "torque_timeout");
