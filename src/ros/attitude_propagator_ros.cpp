@@ -165,7 +165,8 @@ void AttitudePropagatorRos::onImu(const ros::MessageEvent<const sensor_msgs::Imu
   const Eigen::Matrix3d R_I = covarianceFromMsg(msg.angular_velocity_covariance);
   const Eigen::Matrix3d R_B =
       R_I.isZero(0.0) ? default_R_ : rotateCovariance(R_I, q_BI->toRotationMatrix());
-  handleRate(stampOr(msg.header.stamp, event.getReceiptTime()), w_B, R_B, event.getConstMessage());
+  handleRate(stampOr(msg.header.stamp, event.getReceiptTime()), w_B, R_B, event.getConstMessage(),
+             *q_BI);
 }
 
 void AttitudePropagatorRos::onTwist(
@@ -202,7 +203,7 @@ void AttitudePropagatorRos::onTwist(
   static const std::string kBody;
   const Eigen::Quaterniond* q_BS = mountRotation(frame_id ? *frame_id : kBody);
   if (!q_BS) return;
-  handleRate(stampOr(stamp, event.getReceiptTime()), *q_BS * toEigen(*w), default_R_, {});
+  handleRate(stampOr(stamp, event.getReceiptTime()), *q_BS * toEigen(*w), default_R_, {}, *q_BS);
 }
 
 void AttitudePropagatorRos::onTorque(
@@ -264,23 +265,26 @@ bool AttitudePropagatorRos::resolveTorqueFrame(const std::string& frame_id,
 
 void AttitudePropagatorRos::handleRate(const ros::Time& stamp, const Eigen::Vector3d& w_B,
                                        const Eigen::Matrix3d& R_B,
-                                       const sensor_msgs::Imu::ConstPtr& imu) {
+                                       const sensor_msgs::Imu::ConstPtr& imu,
+                                       const Eigen::Quaterniond& q_B_sensor) {
   if (!hasTime(stamp, imu ? "imu/data_raw" : "body_twist")) return;
   last_input_ = ros::WallTime::now();
   if (kinematic_) {
-    handleKinematicRate(stamp, w_B, R_B, imu.get());
+    handleKinematicRate(stamp, w_B, R_B, imu.get(), q_B_sensor);
     return;
   }
   DynamicInput input;
   input.stamp = stamp;
   input.value = w_B;
   input.imu = imu;
+  input.q_B_sensor = q_B_sensor;
   submitDynamic(input);
 }
 
 void AttitudePropagatorRos::handleKinematicRate(const ros::Time& stamp, const Eigen::Vector3d& w_B,
                                                 const Eigen::Matrix3d& R_B,
-                                                const sensor_msgs::Imu* imu) {
+                                                const sensor_msgs::Imu* imu,
+                                                const Eigen::Quaterniond& q_B_sensor) {
   // time() is only defined once anchored (the window is empty before).
   const double t_before = kinematic_->anchored() ? kinematic_->time() : 0.0;
   const Eigen::Quaterniond q_before = kinematic_->orientation();
@@ -296,7 +300,7 @@ void AttitudePropagatorRos::handleKinematicRate(const ros::Time& stamp, const Ei
     P_B_.setZero();  // a new anchor: the state there is the given one
   }
   publishState(stamp);
-  if (imu) publishImu(*imu, stamp, *mountRotation(imu->header.frame_id));
+  if (imu) publishImu(*imu, stamp, q_B_sensor);
 }
 
 void AttitudePropagatorRos::submitDynamic(const DynamicInput& input) {
@@ -328,7 +332,7 @@ void AttitudePropagatorRos::applyDynamic(const DynamicInput& input) {
   if (late && outcome == StampOutcome::Advanced) ++counters_.late;
   const char* name = input.is_torque ? "torque" : input.imu ? "imu/data_raw" : "body_twist";
   if (handleOutcome(outcome, name, input.stamp.toSec()) && input.imu) {
-    publishImu(*input.imu, input.stamp, *mountRotation(input.imu->header.frame_id));
+    publishImu(*input.imu, input.stamp, input.q_B_sensor);
   }
 }
 

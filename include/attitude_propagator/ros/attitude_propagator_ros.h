@@ -82,13 +82,16 @@ class AttitudePropagatorRos {
     Eigen::Vector3d value = Eigen::Vector3d::Zero();  // tau (N m) or w_B (rad/s)
     TorqueFrame frame = TorqueFrame::Body;
     sensor_msgs::Imu::ConstPtr imu;  // a rate from an IMU: republished on imu/data
+    Eigen::Quaterniond q_B_sensor = Eigen::Quaterniond::Identity();  // its mount
   };
 
-  /// A body rate w_B at stamp with noise covariance R_B; imu (may be null) for imu/data.
+  /// A body rate w_B at stamp with noise covariance R_B; imu (may be null) is republished on
+  /// imu/data, q_B_sensor the rotation from the message's frame to the body.
   void handleRate(const ros::Time& stamp, const Eigen::Vector3d& w_B, const Eigen::Matrix3d& R_B,
-                  const sensor_msgs::Imu::ConstPtr& imu);
+                  const sensor_msgs::Imu::ConstPtr& imu, const Eigen::Quaterniond& q_B_sensor);
   void handleKinematicRate(const ros::Time& stamp, const Eigen::Vector3d& w_B,
-                           const Eigen::Matrix3d& R_B, const sensor_msgs::Imu* imu);
+                           const Eigen::Matrix3d& R_B, const sensor_msgs::Imu* imu,
+                           const Eigen::Quaterniond& q_B_sensor);
   /// Dynamic model: an input stamped at or before the propagator's time is applied now (the
   /// core places a late one at its last grid point); a newer one waits in pending_ until the
   /// timer reaches its stamp.
