@@ -326,7 +326,7 @@ void AttitudePropagatorRos::applyDynamic(const DynamicInput& input) {
   const double t = coreTime(input.stamp);
   // The core places an input that arrives after the timer passed its stamp (transport
   // latency) at the last grid point, and drops one not newer than the stream's previous one.
-  const bool late = dynamic_->anchored() && t <= dynamic_->time();
+  const bool late = dynamic_->anchored() && t < dynamic_->time();
   const StampOutcome outcome = input.is_torque ? dynamic_->setTorque(t, input.value, input.frame)
                                                : dynamic_->setRate(t, input.value);
   if (late && outcome == StampOutcome::Advanced) ++counters_.late;
