@@ -12,19 +12,12 @@
 
 #include <Eigen/Geometry>
 
+#include "attitude_propagator/dynamic_state.h"
 #include "attitude_propagator/integrator.h"
 #include "attitude_propagator/rigid_body.h"
 #include "attitude_propagator/time_policy.h"
 
 namespace attitude_propagator {
-
-/// Orientation and body rate of the user's body frame B.
-struct DynamicState {
-  Eigen::Quaterniond q_WB = Eigen::Quaterniond::Identity();
-  Eigen::Vector3d w_B = Eigen::Vector3d::Zero();
-};
-
-enum class TorqueFrame { Body, Fixed };
 
 struct DynamicConfig {
   RigidBody body = RigidBody::fromPrincipalMoments(Eigen::Vector3d::Ones());

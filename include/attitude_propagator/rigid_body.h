@@ -7,6 +7,7 @@
 // here without updating its users.
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -15,19 +16,30 @@ namespace attitude_propagator {
 
 class RigidBody {
  public:
+  /// Whether the moments must satisfy the triangle inequality I_i <= I_j + I_k, which every
+  /// real body does. Ignore admits the mathematical test rotors of the literature, such as
+  /// Hairer-Lubich-Wanner's free body I = (2, 1, 2/3) (REFERENCE §4): the Euler equations
+  /// and their exact solution do not need the inequality.
+  enum class TriangleInequality { Require, Ignore };
+
   /// Principal moments (kg m^2) along the body axes, so P = B.
   /// Throws std::invalid_argument naming the problem: non-finite, non-positive, or moments
-  /// that break the triangle inequality (I_i <= I_j + I_k).
-  static RigidBody fromPrincipalMoments(const Eigen::Vector3d& moments);
+  /// that break the triangle inequality (I_i <= I_j + I_k) unless told to ignore it.
+  static RigidBody fromPrincipalMoments(const Eigen::Vector3d& moments,
+                                        TriangleInequality triangle = TriangleInequality::Require);
 
-  /// A full symmetric inertia tensor in B, diagonalised with Eigen's SelfAdjointEigenSolver.
+  /// A full symmetric inertia tensor in B, diagonalised with Eigen's SelfAdjointEigenSolver:
+  /// I_B = R_BP diag(I1, I2, I3) R_BP^T with the eigenvectors as the columns of R_BP, the
+  /// third one flipped if needed so that det R_BP = +1 (q_BP is a proper rotation). A diagonal
+  /// tensor keeps P = B. Symmetry is checked to 1e-12 of the largest entry.
   /// Throws std::invalid_argument for a non-symmetric, non-finite or not positive definite
   /// tensor or one whose principal moments break the triangle inequality.
   static RigidBody fromTensor(const Eigen::Matrix3d& I_B);
 
   /// The `inertia` parameter: 3 values (principal, Ixx Iyy Izz) or 6 values
-  /// (Ixx Iyy Izz Ixy Ixz Iyz). Throws std::invalid_argument for any other count and for the
-  /// problems above.
+  /// (Ixx Iyy Izz Ixy Ixz Iyz), the latter being the off-diagonal elements of the tensor
+  /// (the URDF convention, Ixy = -sum m x y). Throws std::invalid_argument for any other count and
+  /// for the problems above.
   static RigidBody fromParameter(const std::vector<double>& values);
 
   /// Principal moments I1, I2, I3 in P.
@@ -37,9 +49,21 @@ class RigidBody {
   /// Inertia tensor in the user's body frame.
   Eigen::Matrix3d tensor_B() const;
 
+  /// True when all three principal moments are equal to rel_tol (relative to the largest).
   bool isSphere(double rel_tol = 1e-12) const;
-  /// True when two principal moments are equal (to rel_tol); axis() gives the symmetry axis.
+  /// True when two principal moments are equal (to rel_tol); symmetryAxis() gives the
+  /// symmetry axis.
   bool isSymmetric(double rel_tol = 1e-12) const;
+  /// Index in P (0, 1, 2) of the moment that differs from the other two, i.e. the symmetry
+  /// axis of a symmetric body (for a sphere: 2). Throws std::logic_error for a body that is
+  /// not symmetric to rel_tol.
+  int symmetryAxis(double rel_tol = 1e-12) const;
+  /// Indices in P of the smallest, middle and largest principal moments (ties keep the order
+  /// of the axes).
+  std::array<int, 3> sortedAxes() const;
+
+  /// Inverse principal moments 1/I1, 1/I2, 1/I3.
+  const Eigen::Vector3d& inverseMoments() const { return inverse_moments_P_; }
 
   /// Angular momentum M_B = I_B w_B, body frame.
   Eigen::Vector3d angularMomentum_B(const Eigen::Vector3d& w_B) const;
@@ -52,6 +76,7 @@ class RigidBody {
  private:
   RigidBody(const Eigen::Vector3d& moments_P, const Eigen::Quaterniond& q_BP);
   Eigen::Vector3d moments_P_;
+  Eigen::Vector3d inverse_moments_P_;
   Eigen::Quaterniond q_BP_;
 };
 

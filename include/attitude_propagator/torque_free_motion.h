@@ -1,0 +1,100 @@
+// The exact motion of a free rigid body (integrator `exact`, DESIGN §4, REFERENCE §3): the
+// body rate w(t) and the attitude q(t) in closed form, in the cheapest form the body allows.
+//
+// - sphere (I1 = I2 = I3): w constant, q(t) = q0 (x) Exp(t w).
+// - symmetric top (two equal moments I_perp, symmetry axis e_s with moment I_s):
+//   q(t) = Exp(t m_W / I_perp) (x) q0 (x) Exp(t c e_s), c = M_s (1/I_s - 1/I_perp), and
+//   M(t) = Exp(-t c e_s) M0 in the body.
+// - triaxial: Jacobi elliptic functions (REFERENCE §3 table, cases i and ii on either side of
+//   the separatrix, iii on it). With the moments sorted I1 < I2 < I3 and e the axis M
+//   circulates about (e1 in case i, e3 in case ii, e3 on the separatrix),
+//   q(t) = R (x) Exp(psi(t) e) (x) P(M(t)), where P(M) is the rotation taking M/|M| onto e
+//   and psi(t) follows from psi' = G/I_e - (Delta_e / (G I_e)) / (1 + M_e/G) in closed form
+//   with Legendre's incomplete integral of the third kind. R is fixed by q(t0).
+//
+// Each evaluation costs the same however far t is from t0: the argument u of the elliptic
+// functions is reduced modulo 2K and the whole half-periods are added to am(u) and to
+// Pi(am u, n | k) from cached complete integrals.
+#pragma once
+
+#include <Eigen/Geometry>
+
+#include "attitude_propagator/dynamic_state.h"
+#include "attitude_propagator/rigid_body.h"
+
+namespace attitude_propagator {
+
+class TorqueFreeMotion {
+ public:
+  /// Which closed form applies (by the body's moments, to kRelativeSymmetry).
+  enum class Form { Sphere, SymmetricTop, Triaxial };
+  /// For a triaxial body, where M0 lies (REFERENCE §3, with I1 < I2 < I3): circulating about
+  /// the axis of the smallest moment (case i, Delta2 < 0), of the largest (case ii), on the
+  /// separatrix (case iii, Delta2 = 0 to round-off), or at rest / a steady rotation about a
+  /// principal axis (M along an axis; w constant).
+  enum class Regime { Steady, AboutSmallest, AboutLargest, Separatrix };
+
+  /// Moments equal to this relative tolerance count as equal: the body is treated as a
+  /// symmetric top or a sphere. The attitude error of that approximation grows like
+  /// kRelativeSymmetry |w| t (1e-8 rad after 10^4 rad of rotation).
+  static constexpr double kRelativeSymmetry = 1e-12;
+
+  /// The motion through state x0 at time t0. Throws std::invalid_argument for a non-finite
+  /// state or a zero quaternion (it is normalised otherwise).
+  TorqueFreeMotion(const RigidBody& body, const DynamicState& x0, double t0 = 0.0);
+
+  /// State at time t (any t, before or after t0), in the user's body frame.
+  DynamicState evaluate(double t) const;
+
+  Form form() const { return form_; }
+  Regime regime() const { return regime_; }
+  /// "sphere", "symmetric_top" or "triaxial".
+  const char* formName() const;
+
+  /// Triaxial cases i and ii: the modulus k, the rate lambda of u = lambda t - nu, and the
+  /// body period 4 K(k) / |lambda| of M (infinite on the separatrix, 0 when not elliptic).
+  double modulus() const { return k_; }
+  double lambda() const { return lambda_; }
+  double bodyPeriod() const;
+
+ private:
+  void initSymmetricTop(const Eigen::Vector3d& M_P, int axis);
+  void initTriaxial(const RigidBody& body, const Eigen::Vector3d& M_P);
+  /// M(t) and q_WF(t) in the elliptic frame F for the triaxial case.
+  void triaxialAt(double tau, Eigen::Vector3d& M_F, Eigen::Quaterniond& q_WF) const;
+
+  Form form_;
+  Regime regime_ = Regime::Steady;
+  double t0_;
+  Eigen::Quaterniond q_BP_;
+  Eigen::Vector3d I_P_;
+  Eigen::Quaterniond q0_WP_;
+  Eigen::Vector3d w0_P_;
+  Eigen::Vector3d M0_P_;
+
+  // Symmetric top: precession m_W / I_perp and body spin c about axis_.
+  Eigen::Vector3d precession_W_ = Eigen::Vector3d::Zero();
+  double spin_ = 0.0;
+  int axis_ = 2;
+
+  // Triaxial: the elliptic frame F (moments sorted, signs fixed) and the cached constants.
+  Eigen::Quaterniond q_PF_ = Eigen::Quaterniond::Identity();
+  Eigen::Quaterniond R_ = Eigen::Quaterniond::Identity();  // q_WF(t) = R Exp(psi e) P(M)
+  Eigen::Vector3d I_F_ = Eigen::Vector3d::Ones();
+  double G_ = 0.0;
+  double k_ = 0.0;
+  double lambda_ = 0.0;
+  double nu_ = 0.0;
+  double K_ = 0.0;                 // complete integral of the first kind K(k)
+  double Pi_complete_ = 0.0;       // complete integral of the third kind Pi(n | k)
+  double n_ = 0.0;                 // characteristic of Pi
+  double B_[3] = {0.0, 0.0, 0.0};  // amplitudes of M1, M2, M3 (B13, B21 or B23, B31)
+  double psi_rate_ = 0.0;          // the secular rate G / I_e
+  double C_Pi_ = 0.0;              // coefficient of Pi(am u, n | k) in psi
+  double atan_a_ = 0.0;            // psi's atan2(a sn, b cn) term
+  double atan_b_ = 0.0;
+  double sigma_ = 0.0;
+  double psi_offset_ = 0.0;  // the psi terms at t0, subtracted so that psi(t0) = 0
+};
+
+}  // namespace attitude_propagator

@@ -1,0 +1,372 @@
+#include "attitude_propagator/dynamic_propagator.h"
+
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include "attitude_propagator/dynamic_step.h"
+#include "attitude_propagator/torque_free_motion.h"
+
+namespace attitude_propagator {
+
+namespace {
+
+Integrator resolveIntegrator(const DynamicConfig& config) {
+  if (config.integrator == Integrator::Auto) {
+    // "No more than the scene needs" (DESIGN §4): the exact torque-free motion when no
+    // torque can arrive, otherwise rk4.
+    // TODO(milestone 2): exact for triaxial bodies once the elliptic solution lands.
+    if (config.torque_input) return Integrator::Rk4;
+    return config.body.isSymmetric(TorqueFreeMotion::kRelativeSymmetry) ? Integrator::Exact
+                                                                        : Integrator::Rk4;
+  }
+  if (!supportsDynamic(config.integrator)) {
+    throw std::invalid_argument("integrator: '" + integratorName(config.integrator) +
+                                "' is not a dynamic integrator; accepted for the dynamic model: "
+                                "auto rk4 implicit_midpoint splitting splitting4 dopri5 exact");
+  }
+  if (config.integrator == Integrator::Exact && config.torque_input) {
+    throw std::invalid_argument(
+        "integrator: 'exact' is the torque-free motion and cannot take torque_input; accepted "
+        "with torque: auto rk4 implicit_midpoint splitting splitting4 dopri5");
+  }
+  return config.integrator;
+}
+
+void requirePositiveFinite(double value, const char* name) {
+  if (!(value > 0.0) || !std::isfinite(value)) {
+    throw std::invalid_argument(std::string(name) + ": must be positive and finite, got " +
+                                std::to_string(value));
+  }
+}
+
+DynamicState checkedState(const DynamicState& x, const char* what) {
+  if (!x.q_WB.coeffs().allFinite() || !x.w_B.allFinite()) {
+    throw std::invalid_argument(std::string(what) + ": non-finite orientation or rate");
+  }
+  if (!(x.q_WB.norm() > 0.0)) {
+    throw std::invalid_argument(std::string(what) + ": the orientation is a zero quaternion");
+  }
+  DynamicState normalised = x;
+  normalised.q_WB.normalize();
+  return normalised;
+}
+
+bool finite(const PrincipalState& x) { return x.q_WP.coeffs().allFinite() && x.w_P.allFinite(); }
+
+}  // namespace
+
+// The state is kept at "knots": committed states at times that depend only on the inputs,
+// namely the anchor, the grid points anchor + n max_step, the stamps of torque and rate
+// samples, and the instants a torque times out. The state at any stamp t is the last knot
+// before t advanced by one partial step to t, never committed, so it does not depend on which
+// stamps the caller visited on its way to t (DESIGN §4).
+//
+// Torque over a step: a torque sample at stamp s is in force on [s, s + torque_timeout) (or
+// from s on with no timeout). The sample's stamp and its expiry are knots, so every step
+// (whole or partial) lies inside one interval of constant torque and uses the torque in force
+// at its start. A torque sample thus acts from its own stamp, not from the next grid point,
+// and the grid after it is unchanged.
+struct DynamicPropagator::Impl {
+  DynamicConfig config;
+  Integrator integrator;
+  DynamicStepper stepper;
+  DynamicState initial;
+
+  bool anchored = false;
+  double grid_origin = 0.0;
+  std::int64_t grid_index = 0;  // the last grid point at or before knot_time
+  double knot_time = 0.0;
+  PrincipalState knot;
+  double knot_hint = 0.0;  // dopri5's step-size suggestion after the steps up to the knot
+  double time = 0.0;
+  PrincipalState current;
+  DynamicState current_B;
+  std::optional<TorqueFreeMotion> motion;  // exact: the motion through the knot
+
+  bool torque_set = false;
+  double torque_stamp = -std::numeric_limits<double>::infinity();
+  PrincipalTorque torque;
+  double rate_stamp = -std::numeric_limits<double>::infinity();
+
+  std::uint64_t steps = 0;
+  double norm_error = 0.0;
+  double energy0 = 0.0;
+  double momentum0 = 0.0;
+
+  explicit Impl(const DynamicConfig& c)
+      : config(c),
+        integrator(resolveIntegrator(c)),
+        stepper(integrator == Integrator::Exact ? Integrator::Rk4 : integrator, c.body,
+                c.tolerance),
+        initial(checkedState(c.initial, "initial state")) {
+    requirePositiveFinite(c.max_step, "max_step");
+    requirePositiveFinite(c.tolerance, "tolerance");
+    requirePositiveFinite(c.time_policy.max_dt, "max_dt");
+    requirePositiveFinite(c.time_policy.backward_jump, "backward_jump");
+    if (!(c.torque_timeout >= 0.0) || !std::isfinite(c.torque_timeout)) {
+      throw std::invalid_argument("torque_timeout: must be zero (hold forever) or positive, got " +
+                                  std::to_string(c.torque_timeout));
+    }
+    pin(0.0, initial);
+    anchored = false;
+  }
+
+  bool exact() const { return integrator == Integrator::Exact; }
+
+  double gridTime(std::int64_t n) const {
+    return grid_origin + static_cast<double>(n) * config.max_step;
+  }
+
+  /// Torque in force at time s (the held sample, or zero once it has timed out).
+  PrincipalTorque torqueAt(double s) const {
+    if (!torque_set || (config.torque_timeout > 0.0 && s >= torqueExpiry())) {
+      return PrincipalTorque{};
+    }
+    return torque;
+  }
+  double torqueExpiry() const { return torque_stamp + config.torque_timeout; }
+
+  /// Makes x at time t the anchor: the grid restarts at t.
+  void pin(double t, const DynamicState x) {  // by value: x may be current_B
+    anchored = true;
+    grid_origin = t;
+    grid_index = 0;
+    knot_hint = 0.0;
+    setKnot(t, stepper.toPrincipal(x));
+    current_B = x;  // exactly the state given, not its round trip through P
+    energy0 = config.body.kineticEnergy(x.w_B);
+    momentum0 = config.body.angularMomentum_B(x.w_B).norm();
+  }
+
+  /// Commits x as the knot at t (and the current state).
+  void setKnot(double t, const PrincipalState& x) {
+    knot_time = t;
+    knot = x;
+    if (exact()) motion.emplace(config.body, stepper.fromPrincipal(x), t);
+    setCurrent(t, x);
+  }
+
+  void setCurrent(double t, const PrincipalState& x) {
+    time = t;
+    current = x;
+    current_B = stepper.fromPrincipal(x);
+  }
+
+  /// One step from x over h with the torque in force at `from`. False (x unchanged) if the
+  /// step left the finite numbers, so the state never becomes NaN.
+  bool step(PrincipalState& x, double from, double h) {
+    PrincipalState next = x;
+    StepInfo info;
+    stepper.setStepSizeHint(knot_hint);
+    stepper.stepPrincipal(next, torqueAt(from), h, &info);
+    ++steps;
+    if (!finite(next)) return false;
+    x = next;
+    norm_error = info.norm_error;
+    return true;
+  }
+
+  /// Commits the knots up to t (t >= knot_time) and sets the current state at t.
+  void advanceState(double t) {
+    if (exact()) {
+      ++steps;
+      current_B = motion->evaluate(t);
+      time = t;
+      current = stepper.toPrincipal(current_B);
+      return;
+    }
+    for (;;) {
+      double next = gridTime(grid_index + 1);
+      bool on_grid = true;
+      if (torque_set && config.torque_timeout > 0.0) {
+        const double expiry = torqueExpiry();
+        if (expiry > knot_time && expiry < next) {
+          next = expiry;
+          on_grid = false;
+        }
+      }
+      if (next > t) break;
+      if (!step(knot, knot_time, next - knot_time)) break;
+      knot_hint = stepper.stepSizeHint();
+      knot_time = next;
+      if (on_grid) ++grid_index;
+    }
+    PrincipalState x = knot;
+    if (t > knot_time && !step(x, knot_time, t - knot_time)) x = current;
+    setCurrent(t, x);
+  }
+
+  /// Commits the state at t (knot_time <= t <= time) as a knot.
+  void commitAt(double t) {
+    if (t == knot_time) return;
+    if (exact()) {
+      setKnot(t, stepper.toPrincipal(motion->evaluate(t)));
+      return;
+    }
+    PrincipalState x = knot;
+    if (step(x, knot_time, t - knot_time)) {
+      knot = x;
+      knot_hint = stepper.stepSizeHint();
+      knot_time = t;
+    }
+  }
+
+  StampOutcome advanceTo(double t) {
+    if (!std::isfinite(t)) return StampOutcome::RejectedNonFinite;
+    if (!anchored) {
+      pin(t, initial);
+      return StampOutcome::Anchored;
+    }
+    switch (classifyStamp(time, t, config.time_policy)) {
+      case StampClass::Stale:
+        return StampOutcome::DroppedStale;
+      case StampClass::BackwardJump:
+        clearInputs();
+        pin(t, initial);
+        return StampOutcome::ResetBackwardJump;
+      case StampClass::Gap:
+        // Not integrated across: the state at the last stamp holds at t, a new anchor.
+        pin(t, current_B);
+        return StampOutcome::HeldGap;
+      case StampClass::Forward:
+        advanceState(t);
+        return StampOutcome::Advanced;
+    }
+    return StampOutcome::DroppedStale;
+  }
+
+  /// Where an input stamped t takes effect: advances to t when t is ahead, and for a stamp
+  /// a little behind time() (an input that arrived after the clock passed its stamp) inserts
+  /// a knot at t, or at the last knot if t is older, and recomputes the current state.
+  /// `last_stamp` is the previous input of the same kind: older stamps are out of order.
+  StampOutcome placeInput(double t, double last_stamp) {
+    if (!anchored || t > time) return advanceTo(t);
+    if (classifyStamp(time, t, config.time_policy) == StampClass::BackwardJump) {
+      return advanceTo(t);
+    }
+    if (t <= last_stamp) return StampOutcome::DroppedStale;
+    return StampOutcome::Advanced;
+  }
+
+  /// Applies an input at max(t, knot_time) when t <= time(); see placeInput.
+  template <typename Apply>
+  void insertKnot(double t, Apply apply) {
+    const double now = time;
+    const double at = std::max(t, knot_time);
+    commitAt(at);
+    apply();
+    if (exact()) {
+      motion.emplace(config.body, stepper.fromPrincipal(knot), knot_time);
+    }
+    if (now > knot_time) {
+      advanceState(now);
+    } else {
+      setCurrent(knot_time, knot);
+    }
+  }
+
+  void clearInputs() {
+    torque_set = false;
+    torque = PrincipalTorque{};
+    torque_stamp = -std::numeric_limits<double>::infinity();
+    rate_stamp = -std::numeric_limits<double>::infinity();
+  }
+};
+
+DynamicPropagator::DynamicPropagator(const DynamicConfig& config)
+    : impl_(std::make_unique<Impl>(config)) {}
+
+DynamicPropagator::~DynamicPropagator() = default;
+DynamicPropagator::DynamicPropagator(DynamicPropagator&&) noexcept = default;
+DynamicPropagator& DynamicPropagator::operator=(DynamicPropagator&&) noexcept = default;
+
+Integrator DynamicPropagator::integrator() const { return impl_->integrator; }
+
+std::string DynamicPropagator::modelName() const {
+  if (impl_->integrator != Integrator::Exact) {
+    return "numerical_" + integratorName(impl_->integrator);
+  }
+  const RigidBody& body = impl_->config.body;
+  if (body.isSphere(TorqueFreeMotion::kRelativeSymmetry)) return "exact_sphere";
+  if (body.isSymmetric(TorqueFreeMotion::kRelativeSymmetry)) return "exact_symmetric_top";
+  return "exact_triaxial";
+}
+
+StampOutcome DynamicPropagator::advanceTo(double t) { return impl_->advanceTo(t); }
+
+StampOutcome DynamicPropagator::setTorque(double t, const Eigen::Vector3d& tau, TorqueFrame frame) {
+  Impl& d = *impl_;
+  if (!std::isfinite(t) || !tau.allFinite()) return StampOutcome::RejectedNonFinite;
+  if (d.exact() && !tau.isZero(0.0)) {
+    throw std::logic_error(
+        "DynamicPropagator::setTorque: the exact torque-free model cannot take a torque");
+  }
+  const StampOutcome outcome = d.placeInput(t, d.torque_stamp);
+  if (!stateHoldsAtStamp(outcome)) return outcome;
+  TorqueInput input;
+  input.tau = tau;
+  input.frame = frame;
+  d.insertKnot(t, [&d, &input, t]() {
+    d.torque = d.stepper.toPrincipal(input);
+    d.torque_set = true;
+    d.torque_stamp = std::max(t, d.knot_time);
+  });
+  return outcome;
+}
+
+StampOutcome DynamicPropagator::setRate(double t, const Eigen::Vector3d& w_B) {
+  Impl& d = *impl_;
+  if (!std::isfinite(t) || !w_B.allFinite()) return StampOutcome::RejectedNonFinite;
+  const StampOutcome outcome = d.placeInput(t, d.rate_stamp);
+  if (!stateHoldsAtStamp(outcome)) return outcome;
+  d.insertKnot(t, [&d, &w_B, t]() {
+    d.knot.w_P = d.config.body.q_BP().conjugate() * w_B;
+    d.rate_stamp = std::max(t, d.knot_time);
+    const DynamicState x = d.stepper.fromPrincipal(d.knot);
+    d.energy0 = d.config.body.kineticEnergy(x.w_B);
+    d.momentum0 = d.config.body.angularMomentum_B(x.w_B).norm();
+  });
+  return outcome;
+}
+
+void DynamicPropagator::setState(double t, const DynamicState& state) {
+  if (!std::isfinite(t)) throw std::invalid_argument("set_state: non-finite stamp");
+  impl_->pin(t, checkedState(state, "set_state"));
+}
+
+void DynamicPropagator::reset() {
+  impl_->clearInputs();
+  impl_->pin(0.0, impl_->initial);
+  impl_->anchored = false;
+}
+
+bool DynamicPropagator::anchored() const { return impl_->anchored; }
+double DynamicPropagator::time() const { return impl_->time; }
+const DynamicState& DynamicPropagator::state() const { return impl_->current_B; }
+std::uint64_t DynamicPropagator::steps() const { return impl_->steps; }
+double DynamicPropagator::normError() const { return impl_->norm_error; }
+
+double DynamicPropagator::kineticEnergy() const {
+  return impl_->config.body.kineticEnergy(impl_->current_B.w_B);
+}
+
+Eigen::Vector3d DynamicPropagator::angularMomentum_B() const {
+  return impl_->config.body.angularMomentum_B(impl_->current_B.w_B);
+}
+
+double DynamicPropagator::energyDrift() const {
+  const double e0 = impl_->energy0;
+  const double e = kineticEnergy();
+  return e0 > 0.0 ? (e - e0) / e0 : e;
+}
+
+double DynamicPropagator::momentumDrift() const {
+  const double m0 = impl_->momentum0;
+  const double m = angularMomentum_B().norm();
+  return m0 > 0.0 ? (m - m0) / m0 : m;
+}
+
+}  // namespace attitude_propagator

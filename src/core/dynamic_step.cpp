@@ -1,0 +1,364 @@
+#include "attitude_propagator/dynamic_step.h"
+
+#include <array>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include <boost/numeric/odeint/stepper/controlled_runge_kutta.hpp>
+#include <boost/numeric/odeint/stepper/generation.hpp>
+#include <boost/numeric/odeint/stepper/runge_kutta_dopri5.hpp>
+
+#include "attitude_propagator/torque_free_motion.h"
+
+namespace attitude_propagator {
+
+namespace {
+
+constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
+// The implicit midpoint iteration converges in 8-11 iterations at h = 0.1 on the free body
+// (REFERENCE §5); the cap only stops a step that is too large to contract.
+constexpr int kMaxMidpointIterations = 100;
+// Yoshida's triple jump: w1 = 1/(2 - 2^(1/3)), w0 = -2^(1/3) w1 (no std::pow at run time).
+constexpr double kCubeRootOfTwo = 1.2599210498948731647672106;
+constexpr double kYoshidaW1 = 1.0 / (2.0 - kCubeRootOfTwo);
+constexpr double kYoshidaW0 = -kCubeRootOfTwo * kYoshidaW1;
+// dopri5 gives up (rather than loop forever) after this many rejected trials in one step.
+constexpr int kMaxRejectedSubsteps = 10000;
+
+/// 1/2 q (x) (0, w) (notes eq. 9), for any q (RK stages are not exactly unit).
+Eigen::Quaterniond halfProductWithRate(const Eigen::Quaterniond& q, const Eigen::Vector3d& w) {
+  const Eigen::Vector3d v = q.vec();
+  const Eigen::Vector3d r = 0.5 * (q.w() * w + v.cross(w));
+  return Eigen::Quaterniond(-0.5 * v.dot(w), r.x(), r.y(), r.z());
+}
+
+/// q + s d, coefficient-wise.
+Eigen::Quaterniond axpy(const Eigen::Quaterniond& q, double s, const Eigen::Quaterniond& d) {
+  Eigen::Quaterniond r;
+  r.coeffs() = q.coeffs() + s * d.coeffs();
+  return r;
+}
+
+/// Rotation of a vector by a quaternion that is unit only up to O(h^5) (RK stages):
+/// q^c t q computed as if |q| = 1, which changes the torque by O(h^5) only.
+Eigen::Vector3d torqueAt(const PrincipalTorque& torque, const Eigen::Quaterniond& q) {
+  if (!torque.fixed) return torque.tau;
+  const Eigen::Vector3d v = q.vec();
+  // R^T t = t - 2 w (v x t) + 2 v x (v x t) for a unit q = (w, v).
+  const Eigen::Vector3d vt = v.cross(torque.tau);
+  return torque.tau - 2.0 * q.w() * vt + 2.0 * v.cross(vt);
+}
+
+double normaliseAndReport(Eigen::Quaterniond& q) {
+  const double norm = q.norm();
+  q.coeffs() /= norm;
+  return norm - 1.0;
+}
+
+/// The exact flow of H_i = M_i^2 / (2 I_i) over tau: the body turns about principal axis i
+/// at the constant rate w_i = M_i / I_i, so q <- q (x) Exp(theta e_i) with theta = tau w_i,
+/// and M turns the other way in the body, M <- R_i(-theta) M (dM/dt = M x w_i e_i).
+void axisRotation(int i, double tau, const Eigen::Vector3d& I_inv, Eigen::Quaterniond& q,
+                  Eigen::Vector3d& M) {
+  const int j = (i + 1) % 3;
+  const int k = (i + 2) % 3;
+  const double half = 0.5 * tau * M[i] * I_inv[i];
+  const double s2 = std::sin(half);
+  const double c2 = std::cos(half);
+  // Double-angle formulas: one sin/cos pair serves both the quaternion and M.
+  const double c = c2 * c2 - s2 * s2;
+  const double s = 2.0 * s2 * c2;
+  const double Mj = M[j];
+  const double Mk = M[k];
+  M[j] = c * Mj + s * Mk;
+  M[k] = c * Mk - s * Mj;
+  // q (x) (c2, s2 e_i) = (w c2 - s2 v_i, c2 v + s2 w e_i + s2 v x e_i), (v x e_i) = v_k e_j -
+  // v_j e_k.
+  const double w = q.w();
+  Eigen::Vector3d v = q.vec();
+  const double vi = v[i];
+  const double vj = v[j];
+  const double vk = v[k];
+  v[i] = c2 * vi + s2 * w;
+  v[j] = c2 * vj + s2 * vk;
+  v[k] = c2 * vk - s2 * vj;
+  q.w() = w * c2 - s2 * vi;
+  q.vec() = v;
+}
+
+// ---- dopri5 through Boost.Odeint on a fixed-size state (no heap) -------------------------
+using OdeState = std::array<double, 7>;  // q (w, x, y, z), w_P (x, y, z)
+
+struct EulerSystem {
+  Eigen::Vector3d I;
+  Eigen::Vector3d I_inv;
+  PrincipalTorque torque;
+
+  void operator()(const OdeState& x, OdeState& dxdt, double /*t*/) const {
+    const Eigen::Quaterniond q(x[0], x[1], x[2], x[3]);
+    const Eigen::Vector3d w(x[4], x[5], x[6]);
+    const Eigen::Quaterniond dq = halfProductWithRate(q, w);
+    const Eigen::Vector3d M = I.cwiseProduct(w);
+    const Eigen::Vector3d dw = I_inv.cwiseProduct(M.cross(w) + torqueAt(torque, q));
+    dxdt = {dq.w(), dq.x(), dq.y(), dq.z(), dw.x(), dw.y(), dw.z()};
+  }
+};
+
+}  // namespace
+
+DynamicStepper::DynamicStepper(Integrator method, const RigidBody& body, double tolerance)
+    : method_(method),
+      body_(body),
+      principal_body_(RigidBody::fromPrincipalMoments(body.principalMoments(),
+                                                      RigidBody::TriangleInequality::Ignore)),
+      I_P_(body.principalMoments()),
+      I_inv_P_(body.inverseMoments()),
+      tolerance_(tolerance) {
+  if (method == Integrator::Auto || !supportsDynamic(method)) {
+    throw std::invalid_argument("integrator: '" + integratorName(method) +
+                                "' cannot step the dynamic model; accepted: rk4 "
+                                "implicit_midpoint splitting splitting4 dopri5 exact");
+  }
+  if (!(tolerance > 0.0) || !std::isfinite(tolerance)) {
+    throw std::invalid_argument("tolerance: must be positive and finite, got " +
+                                std::to_string(tolerance));
+  }
+  const std::array<int, 3> sorted = body.sortedAxes();
+  axis_small_ = sorted[0];
+  axis_middle_ = sorted[1];
+  axis_large_ = sorted[2];
+}
+
+int DynamicStepper::order() const { return declaredOrder(method_, Model::Dynamic); }
+
+PrincipalState DynamicStepper::toPrincipal(const DynamicState& x_B) const {
+  PrincipalState x;
+  x.q_WP = x_B.q_WB * body_.q_BP();
+  x.w_P = body_.q_BP().conjugate() * x_B.w_B;
+  return x;
+}
+
+DynamicState DynamicStepper::fromPrincipal(const PrincipalState& x_P) const {
+  DynamicState x;
+  x.q_WB = x_P.q_WP * body_.q_BP().conjugate();
+  x.w_B = body_.q_BP() * x_P.w_P;
+  return x;
+}
+
+PrincipalTorque DynamicStepper::toPrincipal(const TorqueInput& torque) const {
+  PrincipalTorque t;
+  t.fixed = torque.frame == TorqueFrame::Fixed;
+  t.tau = t.fixed ? torque.tau : Eigen::Vector3d(body_.q_BP().conjugate() * torque.tau);
+  return t;
+}
+
+void DynamicStepper::stepPrincipal(PrincipalState& x, const PrincipalTorque& torque, double h,
+                                   StepInfo* info) const {
+  StepInfo local;
+  StepInfo& report = info ? *info : local;
+  report = StepInfo{};
+  report.iterations = 1;
+  switch (method_) {
+    case Integrator::Rk4:
+      rk4(x, torque, h, report);
+      return;
+    case Integrator::ImplicitMidpoint:
+      implicitMidpoint(x, torque, h, report);
+      return;
+    case Integrator::Splitting:
+      strang(x, torque, h);
+      report.norm_error = normaliseAndReport(x.q_WP);
+      return;
+    case Integrator::Splitting4:
+      strang(x, torque, kYoshidaW1 * h);
+      strang(x, torque, kYoshidaW0 * h);
+      strang(x, torque, kYoshidaW1 * h);
+      report.norm_error = normaliseAndReport(x.q_WP);
+      return;
+    case Integrator::Dopri5:
+      dopri5(x, torque, h, report);
+      return;
+    case Integrator::Exact:
+      exact(x, torque, h);
+      return;
+    default:
+      throw std::logic_error("DynamicStepper: unreachable integrator");
+  }
+}
+
+DynamicState DynamicStepper::step(const DynamicState& x, const TorqueInput& torque, double h,
+                                  StepInfo* info) const {
+  PrincipalState x_P = toPrincipal(x);
+  stepPrincipal(x_P, toPrincipal(torque), h, info);
+  return fromPrincipal(x_P);
+}
+
+// Classical RK4 on y = (q, w), f(y) = (1/2 q (x) (0, w), I^-1 ((I w) x w + T(q))).
+void DynamicStepper::rk4(PrincipalState& x, const PrincipalTorque& torque, double h,
+                         StepInfo& info) const {
+  const Eigen::Quaterniond q0 = x.q_WP;
+  const Eigen::Vector3d w0 = x.w_P;
+  const double h2 = 0.5 * h;
+
+  const Eigen::Quaterniond kq1 = halfProductWithRate(q0, w0);
+  const Eigen::Vector3d kw1 = I_inv_P_.cwiseProduct(
+      Eigen::Vector3d(I_P_.cwiseProduct(w0)).cross(w0) + torqueAt(torque, q0));
+
+  const Eigen::Quaterniond q2 = axpy(q0, h2, kq1);
+  const Eigen::Vector3d w2 = w0 + h2 * kw1;
+  const Eigen::Quaterniond kq2 = halfProductWithRate(q2, w2);
+  const Eigen::Vector3d kw2 = I_inv_P_.cwiseProduct(
+      Eigen::Vector3d(I_P_.cwiseProduct(w2)).cross(w2) + torqueAt(torque, q2));
+
+  const Eigen::Quaterniond q3 = axpy(q0, h2, kq2);
+  const Eigen::Vector3d w3 = w0 + h2 * kw2;
+  const Eigen::Quaterniond kq3 = halfProductWithRate(q3, w3);
+  const Eigen::Vector3d kw3 = I_inv_P_.cwiseProduct(
+      Eigen::Vector3d(I_P_.cwiseProduct(w3)).cross(w3) + torqueAt(torque, q3));
+
+  const Eigen::Quaterniond q4 = axpy(q0, h, kq3);
+  const Eigen::Vector3d w4 = w0 + h * kw3;
+  const Eigen::Quaterniond kq4 = halfProductWithRate(q4, w4);
+  const Eigen::Vector3d kw4 = I_inv_P_.cwiseProduct(
+      Eigen::Vector3d(I_P_.cwiseProduct(w4)).cross(w4) + torqueAt(torque, q4));
+
+  const double h6 = h / 6.0;
+  x.q_WP.coeffs() =
+      q0.coeffs() + h6 * (kq1.coeffs() + 2.0 * (kq2.coeffs() + kq3.coeffs()) + kq4.coeffs());
+  x.w_P = w0 + h6 * (kw1 + 2.0 * (kw2 + kw3) + kw4);
+  info.norm_error = normaliseAndReport(x.q_WP);
+}
+
+// Implicit midpoint on (q, w): w1 = w0 + h I^-1((I wm) x wm + T(qm)) with wm = (w0 + w1)/2,
+// q1 = q0 + h/2 qm (x) (0, wm) with qm = (q0 + q1)/2. For a given wm the quaternion equation
+// is linear, q1 (1 - a) = q0 (1 + a) with a = (h/4)(0, wm), solved by the Cayley transform
+// q1 = q0 (x) ((1 - |a|^2) + 2a)/(1 + |a|^2); and qm is along q0 (x) (1 + a). So the
+// iteration runs on wm alone (qm follows it only for a fixed-frame torque).
+void DynamicStepper::implicitMidpoint(PrincipalState& x, const PrincipalTorque& torque, double h,
+                                      StepInfo& info) const {
+  const Eigen::Quaterniond q0 = x.q_WP;
+  const Eigen::Vector3d w0 = x.w_P;
+  const double h2 = 0.5 * h;
+  const double h4 = 0.25 * h;
+  const bool torqued = !torque.isZero();
+  Eigen::Vector3d tau = torque.inP(q0);
+  Eigen::Vector3d wm = w0;
+  double previous = std::numeric_limits<double>::infinity();
+  int iterations = 0;
+  while (iterations < kMaxMidpointIterations) {
+    ++iterations;
+    if (torqued && torque.fixed) {
+      const Eigen::Vector3d a = h4 * wm;
+      const Eigen::Quaterniond qm =
+          (q0 * Eigen::Quaterniond(1.0, a.x(), a.y(), a.z())).normalized();
+      tau = torque.inP(qm);
+    }
+    const Eigen::Vector3d next =
+        w0 + h2 * I_inv_P_.cwiseProduct(Eigen::Vector3d(I_P_.cwiseProduct(wm)).cross(wm) + tau);
+    const double change = (next - wm).cwiseAbs().maxCoeff();
+    wm = next;
+    // Converged when the update is below one ulp of the rate, or once it stops shrinking
+    // (the round-off floor): the invariants then hold to round-off.
+    if (change <= kEpsilon * wm.cwiseAbs().maxCoeff() || change >= previous) break;
+    previous = change;
+  }
+  info.iterations = iterations;
+
+  const Eigen::Vector3d a = h4 * wm;
+  const double a2 = a.squaredNorm();
+  const double scale = 1.0 / (1.0 + a2);
+  const Eigen::Quaterniond cayley((1.0 - a2) * scale, 2.0 * scale * a.x(), 2.0 * scale * a.y(),
+                                  2.0 * scale * a.z());
+  x.q_WP = q0 * cayley;
+  x.w_P = 2.0 * wm - w0;
+  info.norm_error = normaliseAndReport(x.q_WP);
+}
+
+// Strang splitting K(h/2) F(h) K(h/2): torque kicks M += (h/2) T(q) with q frozen (the exact
+// flow of dM/dt = T(q), dq/dt = 0), around the free flow F(h) = R_s(h/2) R_l(h/2) R_m(h)
+// R_l(h/2) R_s(h/2) (s, m, l: smallest, middle, largest moment).
+void DynamicStepper::strang(PrincipalState& x, const PrincipalTorque& torque, double h) const {
+  const double h2 = 0.5 * h;
+  const bool torqued = !torque.isZero();
+  Eigen::Vector3d M = I_P_.cwiseProduct(x.w_P);
+  if (torqued) M += h2 * torque.inP(x.q_WP);
+  axisRotation(axis_small_, h2, I_inv_P_, x.q_WP, M);
+  axisRotation(axis_large_, h2, I_inv_P_, x.q_WP, M);
+  axisRotation(axis_middle_, h, I_inv_P_, x.q_WP, M);
+  axisRotation(axis_large_, h2, I_inv_P_, x.q_WP, M);
+  axisRotation(axis_small_, h2, I_inv_P_, x.q_WP, M);
+  if (torqued) M += h2 * torque.inP(x.q_WP);
+  x.w_P = I_inv_P_.cwiseProduct(M);
+}
+
+// Dormand-Prince 5(4) with step-size control across [0, h]; q renormalised after each
+// accepted sub-step (and the FSAL derivative recomputed, since renormalising changed the
+// state it belongs to).
+void DynamicStepper::dopri5(PrincipalState& x, const PrincipalTorque& torque, double h,
+                            StepInfo& info) const {
+  namespace odeint = boost::numeric::odeint;
+  using Stepper = odeint::runge_kutta_dopri5<OdeState>;
+  auto controlled = odeint::make_controlled(tolerance_, tolerance_, Stepper());
+  const EulerSystem system{I_P_, I_inv_P_, torque};
+  OdeState y{x.q_WP.w(), x.q_WP.x(), x.q_WP.y(), x.q_WP.z(), x.w_P.x(), x.w_P.y(), x.w_P.z()};
+
+  info.iterations = 0;
+  if (h == 0.0) return;
+  const double direction = h > 0.0 ? 1.0 : -1.0;
+  double t = 0.0;
+  double dt = dopri5_dt_ > 0.0 ? direction * std::min(dopri5_dt_, std::abs(h)) : h;
+  double worst_norm_error = 0.0;
+  while (t != h) {
+    const double remaining = h - t;
+    const bool last = std::abs(dt) >= std::abs(remaining);
+    double try_dt = last ? remaining : dt;
+    // On success try_step advances t_try by the step taken and puts the suggested next step
+    // in try_dt; on failure it only shrinks try_dt.
+    double t_try = t;
+    if (controlled.try_step(system, y, t_try, try_dt) == odeint::fail) {
+      if (++info.rejected > kMaxRejectedSubsteps) {
+        throw std::runtime_error("dopri5: step size control failed to converge");
+      }
+      dt = try_dt;
+      continue;
+    }
+    ++info.iterations;
+    t = last ? h : t_try;  // land exactly on h, whatever round-off the sub-steps carry
+    // A last sub-step shortened to land on h says nothing about the step size to come.
+    if (!last || std::abs(try_dt) > std::abs(dt)) dt = try_dt;
+    double norm = 0.0;
+    for (int i = 0; i < 4; ++i) norm += y[i] * y[i];
+    norm = std::sqrt(norm);
+    for (int i = 0; i < 4; ++i) y[i] /= norm;
+    if (std::abs(norm - 1.0) > std::abs(worst_norm_error)) worst_norm_error = norm - 1.0;
+    controlled.reset();
+  }
+  dopri5_dt_ = std::abs(dt);
+  info.norm_error = worst_norm_error;
+  x.q_WP = Eigen::Quaterniond(y[0], y[1], y[2], y[3]);
+  x.w_P = Eigen::Vector3d(y[4], y[5], y[6]);
+}
+
+void DynamicStepper::exact(PrincipalState& x, const PrincipalTorque& torque, double h) const {
+  if (!torque.isZero()) {
+    throw std::invalid_argument(
+        "integrator: 'exact' is the torque-free motion and cannot take a torque");
+  }
+  DynamicState x0;
+  x0.q_WB = x.q_WP;
+  x0.w_B = x.w_P;
+  const TorqueFreeMotion motion(principal_body_, x0);
+  const DynamicState x1 = motion.evaluate(h);
+  x.q_WP = x1.q_WB;
+  x.w_P = x1.w_B;
+}
+
+DynamicState dynamicStep(Integrator method, const RigidBody& body, const DynamicState& x,
+                         const TorqueInput& torque, double h, StepInfo* info, double tolerance) {
+  const DynamicStepper stepper(method, body, tolerance);
+  return stepper.step(x, torque, h, info);
+}
+
+}  // namespace attitude_propagator
