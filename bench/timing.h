@@ -1,20 +1,21 @@
 // Per-step cost measured inside one run, so that ratios between methods are trustworthy on a
 // noisy, shared machine: one warm-up per method, then several rounds in which every method is
 // timed once in turn (a burst of load from another process hits all methods alike), and the
-// median over the rounds.
+// median over the rounds. The clock is this thread's CPU time, so time spent descheduled while
+// other processes run (compilers on a shared 2-core machine) is not counted.
 #pragma once
 
 #include <algorithm>
-#include <chrono>
 #include <cstddef>
+#include <ctime>
 #include <functional>
 #include <vector>
 
 namespace bench {
 
 struct TimingOptions {
-  int rounds = 7;             ///< timed chunks per method; the median is reported
-  double min_chunk_ms = 3.0;  ///< a chunk repeats the run until it lasts this long
+  int rounds = 9;             ///< timed chunks per method; the median is reported
+  double min_chunk_ms = 2.0;  ///< a chunk repeats the run until it lasts this long
 };
 
 /// A callable that performs all steps of one run and returns a value depending on the result
@@ -23,8 +24,11 @@ using Run = std::function<double()>;
 
 namespace detail {
 
-inline double elapsedNs(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - start).count();
+/// CPU time of the calling thread, ns.
+inline double threadNs() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return 1e9 * static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec);
 }
 
 inline double median(std::vector<double> v) {
@@ -41,19 +45,19 @@ inline std::vector<double> medianNsPerStep(const std::vector<Run>& runs, std::si
   std::vector<int> runs_per_chunk;
   for (const Run& run : runs) {
     sink = sink + run();  // warm-up: caches, branch predictors, lazy initialisation
-    const auto start = std::chrono::steady_clock::now();
+    const double start = detail::threadNs();
     sink = sink + run();
-    const double one_run_ms = detail::elapsedNs(start) * 1e-6;
+    const double one_run_ms = (detail::threadNs() - start) * 1e-6;
     runs_per_chunk.push_back(
         std::max(1, static_cast<int>(options.min_chunk_ms / std::max(one_run_ms, 1e-6))));
   }
   std::vector<std::vector<double>> samples(runs.size());
   for (int round = 0; round < options.rounds; ++round) {
     for (std::size_t m = 0; m < runs.size(); ++m) {
-      const auto start = std::chrono::steady_clock::now();
+      const double start = detail::threadNs();
       for (int i = 0; i < runs_per_chunk[m]; ++i) sink = sink + runs[m]();
-      samples[m].push_back(detail::elapsedNs(start) /
-                           (static_cast<double>(runs_per_chunk[m]) * static_cast<double>(steps)));
+      const double runs_done = static_cast<double>(runs_per_chunk[m]);
+      samples[m].push_back((detail::threadNs() - start) / (runs_done * static_cast<double>(steps)));
     }
   }
   std::vector<double> medians;
