@@ -5,6 +5,6 @@
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
-"$REPO_DIR/scripts/install_deps.sh"
-"$REPO_DIR/scripts/build.sh"
+bash "$REPO_DIR/scripts/install_deps.sh"
+bash "$REPO_DIR/scripts/build.sh"
 "${WORKSPACE}/devel/lib/attitude_propagator/kinematic_demo" "$@"

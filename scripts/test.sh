@@ -5,8 +5,8 @@
 set -uo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
-"$REPO_DIR/scripts/install_deps.sh" || exit 1
-"$REPO_DIR/scripts/build.sh" || { echo "0 passed, 1 failed"; exit 1; }
+bash "$REPO_DIR/scripts/install_deps.sh" || exit 1
+bash "$REPO_DIR/scripts/build.sh" || { echo "0 passed, 1 failed"; exit 1; }
 source_ros
 cd "$WORKSPACE"
 catkin_make -j"$(nproc)" tests >/dev/null || { echo "0 passed, 1 failed"; exit 1; }

@@ -17,10 +17,7 @@ Integrator resolveIntegrator(const DynamicConfig& config) {
   if (config.integrator == Integrator::Auto) {
     // "No more than the scene needs" (DESIGN §4): the exact torque-free motion when no
     // torque can arrive, otherwise rk4.
-    // TODO(milestone 2): exact for triaxial bodies once the elliptic solution lands.
-    if (config.torque_input) return Integrator::Rk4;
-    return config.body.isSymmetric(TorqueFreeMotion::kRelativeSymmetry) ? Integrator::Exact
-                                                                        : Integrator::Rk4;
+    return config.torque_input ? Integrator::Rk4 : Integrator::Exact;
   }
   if (!supportsDynamic(config.integrator)) {
     throw std::invalid_argument("integrator: '" + integratorName(config.integrator) +
