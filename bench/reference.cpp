@@ -12,21 +12,29 @@ namespace bench {
 namespace {
 
 namespace odeint = boost::numeric::odeint;
-using OdeState = std::array<double, 7>;  // q (w, x, y, z), w_B (x, y, z)
+// Long double (64-bit mantissa): the reference must be far tighter than the 1e-12 rad the
+// exact solution is judged at, and double round-off over 1e5 steps would not be.
+using Real = long double;
+using OdeState = std::array<Real, 7>;  // q (w, x, y, z), w_B (x, y, z)
 
-constexpr double kTolerance = 1e-13;
+constexpr Real kTolerance = 1e-16L;
 
+/// dq/dt = 1/2 q (x) (0, w) = 1/2 (-v.w, q_w w + v x w),  I dw/dt = (I w) x w + T.
 struct EulerEquations {
-  Eigen::Vector3d I;
-  Eigen::Vector3d tau;
+  std::array<Real, 3> I;
+  std::array<Real, 3> tau;
 
-  void operator()(const OdeState& x, OdeState& dxdt, double /*t*/) const {
-    const Eigen::Vector3d w(x[4], x[5], x[6]);
-    // 1/2 q (x) (0, w) = 1/2 (-v.w, q_w w + v x w)
-    const Eigen::Vector3d v(x[1], x[2], x[3]);
-    const Eigen::Vector3d dv = 0.5 * (x[0] * w + v.cross(w));
-    const Eigen::Vector3d dw = (I.cwiseProduct(w).cross(w) + tau).cwiseQuotient(I);
-    dxdt = {-0.5 * v.dot(w), dv.x(), dv.y(), dv.z(), dw.x(), dw.y(), dw.z()};
+  void operator()(const OdeState& x, OdeState& dxdt, Real /*t*/) const {
+    const Real qw = x[0], vx = x[1], vy = x[2], vz = x[3];
+    const Real wx = x[4], wy = x[5], wz = x[6];
+    dxdt[0] = -0.5L * (vx * wx + vy * wy + vz * wz);
+    dxdt[1] = 0.5L * (qw * wx + vy * wz - vz * wy);
+    dxdt[2] = 0.5L * (qw * wy + vz * wx - vx * wz);
+    dxdt[3] = 0.5L * (qw * wz + vx * wy - vy * wx);
+    const Real Mx = I[0] * wx, My = I[1] * wy, Mz = I[2] * wz;
+    dxdt[4] = (My * wz - Mz * wy + tau[0]) / I[0];
+    dxdt[5] = (Mz * wx - Mx * wz + tau[1]) / I[1];
+    dxdt[6] = (Mx * wy - My * wx + tau[2]) / I[2];
   }
 };
 
@@ -36,10 +44,15 @@ OdeState pack(const ap::DynamicState& x) {
 
 ap::DynamicState unpack(const OdeState& s) {
   ap::DynamicState x;
-  x.q_WB = Eigen::Quaterniond(s[0], s[1], s[2], s[3]).normalized();
-  x.w_B = Eigen::Vector3d(s[4], s[5], s[6]);
+  const Real n = std::sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2] + s[3] * s[3]);
+  x.q_WB = Eigen::Quaterniond(static_cast<double>(s[0] / n), static_cast<double>(s[1] / n),
+                              static_cast<double>(s[2] / n), static_cast<double>(s[3] / n));
+  x.w_B = Eigen::Vector3d(static_cast<double>(s[4]), static_cast<double>(s[5]),
+                          static_cast<double>(s[6]));
   return x;
 }
+
+std::array<Real, 3> toReal(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
 }  // namespace
 
@@ -47,14 +60,14 @@ std::vector<ap::DynamicState> referenceStates(const Eigen::Vector3d& moments,
                                               const ap::DynamicState& x0,
                                               const Eigen::Vector3d& tau_B,
                                               const std::vector<double>& times) {
-  odeint::bulirsch_stoer<OdeState> stepper(kTolerance, kTolerance);
-  const EulerEquations system{moments, tau_B};
+  odeint::bulirsch_stoer<OdeState, Real> stepper(kTolerance, kTolerance);
+  const EulerEquations system{toReal(moments), toReal(tau_B)};
   OdeState state = pack(x0);
   std::vector<ap::DynamicState> out;
-  double t = 0.0;
+  Real t = 0.0L;
   for (double target : times) {
     if (target > t) {
-      odeint::integrate_adaptive(stepper, system, state, t, target, 1e-3);
+      odeint::integrate_adaptive(stepper, system, state, t, static_cast<Real>(target), 1e-3L);
       t = target;
     }
     out.push_back(unpack(state));

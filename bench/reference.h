@@ -1,5 +1,6 @@
 // A tight numerical reference for the dynamic scenes: Boost.Odeint's controlled
-// Bulirsch-Stoer at absolute and relative tolerance 1e-13 on (q, w) with the Euler equations
+// Bulirsch-Stoer in long double at absolute and relative tolerance 1e-16 on (q, w) with the
+// Euler equations
 //   I dw/dt = (I w) x w + T,   dq/dt = 1/2 q (x) (0, w)   (seed notes eqs. 10 and 9),
 // written here independently of the core. It judges the torqued scene (no closed form) and
 // cross-checks the exact solution; it is never a coarser run of a method under test.

@@ -7,13 +7,20 @@
 //
 //   kinematicStep/<method>   one kinematicStep on a four-sample window, then normalise
 //   addSample/<method>       KinematicPropagator::addSample, the node's path per message
+//   dynamicStep/<method>     DynamicStepper::stepPrincipal on the free body (dopri5: one
+//                            output step of 0.01 s at tolerance 1e-9)
+//   exact/<form>             one TorqueFreeMotion::evaluate at a new time
 #include <benchmark/benchmark.h>
 
+#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "attitude_propagator/dynamic_step.h"
 #include "attitude_propagator/kinematic_propagator.h"
 #include "attitude_propagator/kinematic_step.h"
+#include "attitude_propagator/torque_free_motion.h"
+#include "dynamic_scenes.h"
 #include "methods.h"
 
 namespace {
@@ -69,12 +76,58 @@ void registerKinematic() {
   }
 }
 
+ap::RigidBody bodyOf(const bench::DynamicScene& scene) {
+  return ap::RigidBody::fromPrincipalMoments(scene.moments,
+                                             ap::RigidBody::TriangleInequality::Ignore);
+}
+
+void dynamicStepCost(benchmark::State& state, Integrator method) {
+  const bench::DynamicScene scene = bench::freeBodyScene();
+  const ap::DynamicStepper stepper(method, bodyOf(scene), 1e-9);
+  ap::PrincipalState x = stepper.toPrincipal(scene.initial);
+  const ap::PrincipalTorque torque;
+  for (auto _ : state) {
+    stepper.stepPrincipal(x, torque, 0.01);
+    benchmark::DoNotOptimize(x.q_WP.coeffs().data());
+  }
+}
+
+// The time advances every call (the argument reduction and the elliptic functions see new
+// values), as in a propagator that evaluates at each stamp.
+void exactCost(benchmark::State& state, const bench::DynamicScene& scene) {
+  const ap::TorqueFreeMotion motion(bodyOf(scene), scene.initial);
+  double t = 0.0;
+  for (auto _ : state) {
+    t += 0.01;
+    ap::DynamicState x = motion.evaluate(t);
+    benchmark::DoNotOptimize(x.q_WB.coeffs().data());
+  }
+}
+
+void registerDynamic() {
+  for (Integrator m : bench::methodsFor(ap::Model::Dynamic)) {
+    if (m == Integrator::Exact) continue;
+    const std::string name = ap::integratorName(m);
+    benchmark::RegisterBenchmark(("dynamicStep/" + name).c_str(), dynamicStepCost, m);
+  }
+  for (const bench::DynamicScene& scene :
+       {bench::freeBodyScene(), bench::dzhanibekovScene(), bench::symmetricTopScene()}) {
+    try {
+      const ap::TorqueFreeMotion probe(bodyOf(scene), scene.initial);
+      benchmark::RegisterBenchmark(("exact/" + scene.name).c_str(), exactCost, scene);
+    } catch (const std::logic_error&) {
+      // a form the core does not provide yet: nothing to time
+    }
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   registerKinematic();
+  registerDynamic();
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
   return 0;

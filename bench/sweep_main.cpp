@@ -63,7 +63,7 @@ bool checkReferences() {
       (M100 - Eigen::Vector3d(-0.177348313874983, -0.590418524333421, 0.787371285791935)).norm();
   std::fprintf(stderr, "bench: reference check: torque from rest %.2e rad, HLW M(100) %.2e\n",
                from_rest, hlw);
-  return from_rest < 1e-10 && hlw < 1e-10;
+  return from_rest < 1e-12 && hlw < 1e-12;
 }
 
 }  // namespace
