@@ -1,0 +1,104 @@
+// The node's parameters (DESIGN §5): one struct holding every private parameter with its
+// default, one list describing them (forEachParameter), and one validator turning them into
+// the core's configuration. No ROS here: the ROS loader (src/ros/parameter_loader.cpp) only
+// reads values into this struct, and the README table and config/default.yaml are checked
+// against it (test/core/test_parameters.cpp).
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "attitude_propagator/dynamic_propagator.h"
+#include "attitude_propagator/integrator.h"
+#include "attitude_propagator/kinematic_propagator.h"
+
+namespace attitude_propagator {
+
+/// Every private parameter of the node with its default: the one place defaults live.
+struct Parameters {
+  std::string model = "auto";
+  std::string integrator = "auto";
+  std::string rate_input = "imu";
+  bool torque_input = false;
+  std::string torque_frame = "body";
+  double torque_timeout = 0.0;
+  std::vector<double> inertia;  // empty: no inertia given
+  std::vector<double> initial_orientation{0.0, 0.0, 0.0, 1.0};
+  std::vector<double> initial_angular_velocity{0.0, 0.0, 0.0};
+  std::string fixed_frame = "world";
+  std::string body_frame = "base_link";
+  bool publish_tf = true;
+  bool reverse_tf = false;
+  double publish_rate = 100.0;
+  double max_step = 0.0;  // 0: 1 / publish_rate
+  double max_dt = 1.0;
+  double tolerance = 1e-9;
+  double angular_velocity_stddev = 0.0;
+};
+
+/// Calls f(name, field, unit, description) for every parameter, in the README's order.
+/// Works on a const or a mutable Parameters: the loader reads into the fields, the README
+/// table and the YAML check format them. Adding a parameter = one member above, one line here.
+template <class P, class F>
+void forEachParameter(P& p, F&& f) {
+  f("model", p.model, "", "`auto` (dynamic when `inertia` is set), `kinematic` or `dynamic`");
+  f("integrator", p.integrator, "",
+    "one of DESIGN §4's names; `auto`: `cf4` kinematic, `exact` torque-free, else `rk4`");
+  f("rate_input", p.rate_input, "",
+    "`imu` (`imu/data_raw`), `twist` (`body_twist`) or `none` (dynamic only)");
+  f("torque_input", p.torque_input, "", "subscribe to `torque` (dynamic model only)");
+  f("torque_frame", p.torque_frame, "", "`body` or `fixed`: the frame of unstamped torque");
+  f("torque_timeout", p.torque_timeout, "s",
+    "a torque older than this counts as zero; 0: held until the next one");
+  f("inertia", p.inertia, "kg m²",
+    "3 principal moments, or 6 values Ixx Iyy Izz Ixy Ixz Iyz; empty: none");
+  f("initial_orientation", p.initial_orientation, "",
+    "q_WB at the first stamp and after a reset, [x, y, z, w] (normalised)");
+  f("initial_angular_velocity", p.initial_angular_velocity, "rad/s",
+    "body rate at the first stamp (dynamic model), [x, y, z] in the body frame");
+  f("fixed_frame", p.fixed_frame, "", "parent frame of the published transform");
+  f("body_frame", p.body_frame, "", "child frame; IMU rates in another frame are rotated");
+  f("publish_tf", p.publish_tf, "", "publish the transform on /tf");
+  f("reverse_tf", p.reverse_tf, "",
+    "publish `body_frame → fixed_frame` instead (for a tree rooted at the body)");
+  f("publish_rate", p.publish_rate, "Hz", "dynamic model: publish at multiples of 1/rate");
+  f("max_step", p.max_step, "s", "dynamic model: largest integration step; 0: 1/publish_rate");
+  f("max_dt", p.max_dt, "s", "largest gap between stamps integrated across");
+  f("tolerance", p.tolerance, "", "relative and absolute tolerance of `dopri5`");
+  f("angular_velocity_stddev", p.angular_velocity_stddev, "rad/s",
+    "rate noise used when an input carries no covariance; 0: orientation covariance unknown");
+}
+
+/// All parameter names, for rejecting unknown ones.
+std::vector<std::string> parameterNames();
+
+/// A parameter's value as YAML flow text (`auto`, `true`, `0.5`, `[0, 0, 0, 1]`), the format
+/// of config/default.yaml and of the README table.
+std::string formatParameter(const std::string& value);
+std::string formatParameter(bool value);
+std::string formatParameter(double value);
+std::string formatParameter(const std::vector<double>& value);
+
+/// The README's parameter table (Markdown), generated from the defaults above.
+std::string parameterTableMarkdown();
+
+enum class RateInput { Imu, Twist, None };
+
+/// The validated configuration the wrapper runs with.
+struct NodeConfig {
+  Model model = Model::Kinematic;  ///< resolved: Kinematic or Dynamic, never Auto
+  RateInput rate_input = RateInput::Imu;
+  bool torque_input = false;
+  TorqueFrame torque_frame = TorqueFrame::Body;
+  KinematicConfig kinematic;             ///< when model == Kinematic
+  std::optional<DynamicConfig> dynamic;  ///< when model == Dynamic
+  Parameters parameters;                 ///< the values as given (frames, rates, flags)
+};
+
+/// Checks every parameter and resolves `model` (auto: dynamic when inertia is given).
+/// Throws std::invalid_argument whose message starts with the parameter's name and lists the
+/// accepted values, e.g. "model: unknown value 'x'; accepted: auto kinematic dynamic".
+NodeConfig validateParameters(const Parameters& parameters);
+
+}  // namespace attitude_propagator

@@ -1,0 +1,16 @@
+// Reads the node's private parameters into the core's Parameters struct (defaults live there).
+#pragma once
+
+#include <ros/node_handle.h>
+
+#include "attitude_propagator/parameters.h"
+
+namespace attitude_propagator {
+
+/// Reads every private parameter of pnh that is set into a Parameters (unset ones keep the
+/// struct's default) and validates them with the core.
+/// Throws std::invalid_argument naming the parameter and the accepted values for an unknown
+/// private parameter name, a value of the wrong type, or a value the core rejects.
+NodeConfig loadParameters(const ros::NodeHandle& pnh);
+
+}  // namespace attitude_propagator

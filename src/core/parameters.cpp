@@ -1,0 +1,233 @@
+#include "attitude_propagator/parameters.h"
+
+#include <cmath>
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <sstream>
+#include <stdexcept>
+#include <type_traits>
+
+namespace attitude_propagator {
+
+namespace {
+
+[[noreturn]] void fail(const std::string& name, const std::string& problem) {
+  throw std::invalid_argument(name + ": " + problem);
+}
+
+void requireFinite(const std::string& name, double value, double min, bool min_inclusive,
+                   const std::string& accepted) {
+  const bool ok = std::isfinite(value) && (min_inclusive ? value >= min : value > min);
+  if (!ok) fail(name, "invalid value " + formatParameter(value) + "; accepted: " + accepted);
+}
+
+void requireVector(const std::string& name, const std::vector<double>& v, std::size_t size,
+                   const std::string& accepted) {
+  bool ok = v.size() == size;
+  for (double x : v) ok = ok && std::isfinite(x);
+  if (!ok) fail(name, "invalid value " + formatParameter(v) + "; accepted: " + accepted);
+}
+
+void requireOneOf(const std::string& name, const std::string& value,
+                  const std::vector<std::string>& accepted) {
+  std::string list;
+  for (const auto& a : accepted) {
+    if (value == a) return;
+    list += (list.empty() ? "" : " ") + a;
+  }
+  fail(name, "unknown value '" + value + "'; accepted: " + list);
+}
+
+void requireFrameName(const std::string& name, const std::string& frame) {
+  // tf2 refuses frame ids with a leading slash (tf1 style) and empty ones.
+  if (frame.empty() || frame.front() == '/') {
+    fail(name, "invalid frame id '" + frame + "'; accepted: a non-empty tf2 frame id without "
+                                              "a leading '/'");
+  }
+}
+
+/// Names of the integrators that can drive the model, for error messages.
+std::string integratorsFor(Model model) {
+  std::istringstream all(integratorNames());
+  std::string name, list;
+  while (all >> name) {
+    const Integrator i = integratorFromName(name);
+    if (model == Model::Dynamic ? supportsDynamic(i) : supportsKinematic(i)) {
+      list += (list.empty() ? "" : " ") + name;
+    }
+  }
+  return list;
+}
+
+Model resolveModel(const Parameters& p) {
+  const Model requested = modelFromName(p.model);  // throws "model: ..."
+  if (requested != Model::Auto) return requested;
+  return p.inertia.empty() ? Model::Kinematic : Model::Dynamic;
+}
+
+Integrator resolveIntegrator(const Parameters& p, Model model) {
+  const Integrator integrator = integratorFromName(p.integrator);  // throws "integrator: ..."
+  const bool ok = model == Model::Dynamic ? supportsDynamic(integrator)
+                                          : supportsKinematic(integrator);
+  if (!ok) {
+    fail("integrator", "'" + p.integrator + "' does not drive the " + modelName(model) +
+                           " model; accepted: " + integratorsFor(model));
+  }
+  if (integrator == Integrator::Exact && p.torque_input) {
+    fail("integrator", "'exact' is the torque-free solution and torque_input is true; "
+                       "accepted: " + integratorsFor(model) + " except exact");
+  }
+  return integrator;
+}
+
+RigidBody makeBody(const std::vector<double>& inertia) {
+  const std::string accepted =
+      "3 positive principal moments [I1, I2, I3] with each at most the sum of the others, or "
+      "6 values [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] of a positive definite tensor (kg m^2)";
+  bool ok = inertia.size() == 3 || inertia.size() == 6;
+  for (double x : inertia) ok = ok && std::isfinite(x);
+  for (std::size_t i = 0; ok && i < 3; ++i) ok = inertia[i] > 0.0;
+  if (!ok) fail("inertia", "invalid value " + formatParameter(inertia) + "; accepted: " + accepted);
+  try {
+    return RigidBody::fromParameter(inertia);
+  } catch (const std::invalid_argument& e) {
+    fail("inertia", std::string(e.what()) + "; accepted: " + accepted);
+  }
+}
+
+Eigen::Quaterniond initialOrientation(const std::vector<double>& v) {
+  const std::string accepted = "[x, y, z, w], finite, not all zero";
+  requireVector("initial_orientation", v, 4, accepted);
+  const Eigen::Quaterniond q(v[3], v[0], v[1], v[2]);
+  if (!(q.norm() > 1e-9)) fail("initial_orientation", "zero quaternion; accepted: " + accepted);
+  return q.normalized();
+}
+
+void checkScalars(const Parameters& p) {
+  requireOneOf("rate_input", p.rate_input, {"imu", "twist", "none"});
+  requireOneOf("torque_frame", p.torque_frame, {"body", "fixed"});
+  requireFinite("torque_timeout", p.torque_timeout, 0.0, true, "a finite number >= 0 (s)");
+  requireFinite("publish_rate", p.publish_rate, 0.0, false, "a finite number > 0 (Hz)");
+  requireFinite("max_step", p.max_step, 0.0, true, "a finite number >= 0 (s; 0: 1/publish_rate)");
+  requireFinite("max_dt", p.max_dt, 0.0, false, "a finite number > 0 (s)");
+  requireFinite("tolerance", p.tolerance, 0.0, false, "a finite number > 0");
+  requireFinite("angular_velocity_stddev", p.angular_velocity_stddev, 0.0, true,
+                "a finite number >= 0 (rad/s)");
+  requireVector("initial_angular_velocity", p.initial_angular_velocity, 3,
+                "[x, y, z], finite (rad/s)");
+  requireFrameName("fixed_frame", p.fixed_frame);
+  requireFrameName("body_frame", p.body_frame);
+  if (p.fixed_frame == p.body_frame) {
+    fail("body_frame", "equals fixed_frame '" + p.fixed_frame +
+                           "'; accepted: a frame id different from fixed_frame");
+  }
+}
+
+}  // namespace
+
+std::vector<std::string> parameterNames() {
+  std::vector<std::string> names;
+  const Parameters defaults;
+  forEachParameter(defaults, [&names](const char* name, const auto&, const char*, const char*) {
+    names.emplace_back(name);
+  });
+  return names;
+}
+
+std::string formatParameter(const std::string& value) { return value; }
+
+std::string formatParameter(bool value) { return value ? "true" : "false"; }
+
+std::string formatParameter(double value) {
+  // Shortest text that reads back to the same double, with a dot so YAML reads a double.
+  char text[32];
+  if (std::isfinite(value) && value == std::round(value) && std::abs(value) < 1e15) {
+    std::snprintf(text, sizeof(text), "%.1f", value);  // whole numbers: "100.0", not "1e+02"
+    return text;
+  }
+  for (int precision = 1; precision <= 17; ++precision) {
+    std::snprintf(text, sizeof(text), "%.*g", precision, value);
+    if (std::strtod(text, nullptr) == value) break;
+  }
+  std::string s(text);
+  // PyYAML (rosparam) reads "1e-09" as a string: the mantissa needs a dot ("1.0e-09").
+  if (std::isfinite(value) && s.find('.') == std::string::npos) {
+    const auto e = s.find('e');
+    s.insert(e == std::string::npos ? s.size() : e, ".0");
+  }
+  return s;
+}
+
+std::string formatParameter(const std::vector<double>& value) {
+  std::string s = "[";
+  for (std::size_t i = 0; i < value.size(); ++i) {
+    s += (i ? ", " : "") + formatParameter(value[i]);
+  }
+  return s + "]";
+}
+
+std::string parameterTableMarkdown() {
+  std::string table =
+      "| parameter | default | unit | meaning |\n"
+      "|---|---|---|---|\n";
+  const Parameters defaults;
+  forEachParameter(defaults, [&table](const char* name, const auto& value, const char* unit,
+                                      const char* doc) {
+    table += std::string("| `") + name + "` | `" + formatParameter(value) + "` | " + unit +
+             " | " + doc + " |\n";
+  });
+  return table;
+}
+
+NodeConfig validateParameters(const Parameters& p) {
+  NodeConfig config;
+  config.parameters = p;
+  checkScalars(p);
+  config.model = resolveModel(p);
+  const Integrator integrator = resolveIntegrator(p, config.model);
+  config.rate_input = p.rate_input == "imu"     ? RateInput::Imu
+                      : p.rate_input == "twist" ? RateInput::Twist
+                                                : RateInput::None;
+  config.torque_input = p.torque_input;
+  config.torque_frame = p.torque_frame == "fixed" ? TorqueFrame::Fixed : TorqueFrame::Body;
+  const Eigen::Quaterniond q0_WB = initialOrientation(p.initial_orientation);
+
+  TimePolicy policy;
+  policy.max_dt = p.max_dt;
+
+  if (config.model == Model::Kinematic) {
+    if (p.torque_input) {
+      fail("torque_input", "true needs the dynamic model, which needs `inertia`; accepted "
+                           "without inertia: false");
+    }
+    if (config.rate_input == RateInput::None) {
+      fail("rate_input", "'none' leaves the kinematic model nothing to integrate; accepted "
+                         "with model kinematic: imu twist");
+    }
+    config.kinematic.integrator = integrator;
+    config.kinematic.time_policy = policy;
+    config.kinematic.initial_q_WB = q0_WB;
+    return config;
+  }
+
+  if (p.inertia.empty()) {
+    fail("inertia", "required by model dynamic; accepted: 3 principal moments [I1, I2, I3] or "
+                    "6 values [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] (kg m^2)");
+  }
+  DynamicConfig dynamic;
+  dynamic.body = makeBody(p.inertia);
+  dynamic.integrator = integrator;
+  dynamic.torque_input = p.torque_input;
+  dynamic.max_step = p.max_step > 0.0 ? p.max_step : 1.0 / p.publish_rate;
+  dynamic.tolerance = p.tolerance;
+  dynamic.torque_timeout = p.torque_timeout;
+  dynamic.time_policy = policy;
+  dynamic.initial.q_WB = q0_WB;
+  const auto& w = p.initial_angular_velocity;
+  dynamic.initial.w_B = Eigen::Vector3d(w[0], w[1], w[2]);
+  config.dynamic = dynamic;
+  return config;
+}
+
+}  // namespace attitude_propagator

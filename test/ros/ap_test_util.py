@@ -1,0 +1,175 @@
+"""Helpers shared by the rostest nodes: waiting for conditions, recording the node's outputs,
+and quaternion arithmetic for closed-form answers. Public interface only (topics, tf,
+services, diagnostics)."""
+import math
+import threading
+import time
+
+import rospy
+import tf2_ros
+from attitude_propagator.msg import AttitudeState
+from attitude_propagator.srv import SetState, SetStateRequest
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import Quaternion, Vector3
+from sensor_msgs.msg import Imu
+from std_srvs.srv import Empty
+
+
+def wait_for(condition, timeout=10.0, what="condition"):
+    """Polls condition() in wall time (valid under sim time too) until true or timeout."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        value = condition()
+        if value:
+            return value
+        time.sleep(0.01)
+    raise AssertionError("timed out after %.1f s waiting for %s" % (timeout, what))
+
+
+# Quaternions as (x, y, z, w) tuples, Hamilton product, like ROS messages.
+def qmul(a, b):
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return (aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+            aw * bw - ax * bx - ay * by - az * bz)
+
+
+def qconj(q):
+    return (-q[0], -q[1], -q[2], q[3])
+
+
+def axis_angle(axis, angle):
+    n = math.sqrt(sum(c * c for c in axis))
+    s = math.sin(angle / 2.0) / n
+    return (axis[0] * s, axis[1] * s, axis[2] * s, math.cos(angle / 2.0))
+
+
+def rotation_angle(a, b):
+    """Angle of the rotation a^c b, so q and -q compare equal."""
+    d = qmul(qconj(a), b)
+    return 2.0 * math.atan2(math.sqrt(d[0] ** 2 + d[1] ** 2 + d[2] ** 2), abs(d[3]))
+
+
+def as_tuple(q):
+    return (q.x, q.y, q.z, q.w)
+
+
+def finite_quaternion(q):
+    return all(math.isfinite(c) for c in as_tuple(q))
+
+
+def make_imu(stamp, w, frame_id="base_link", covariance=None):
+    msg = Imu()
+    msg.header.stamp = stamp
+    msg.header.frame_id = frame_id
+    msg.angular_velocity = Vector3(*w)
+    if covariance is not None:
+        msg.angular_velocity_covariance = covariance
+    msg.orientation_covariance[0] = -1.0
+    return msg
+
+
+class Recorder:
+    """Keeps every message of a topic by stamp (nanoseconds)."""
+
+    def __init__(self, topic, msg_type):
+        self.lock = threading.Lock()
+        self.by_stamp = {}
+        self.messages = []
+        self.sub = rospy.Subscriber(topic, msg_type, self._cb, queue_size=100000)
+
+    def _cb(self, msg):
+        with self.lock:
+            self.messages.append(msg)
+            self.by_stamp.setdefault(msg.header.stamp.to_nsec(), []).append(msg)
+
+    def at(self, stamp):
+        with self.lock:
+            return list(self.by_stamp.get(stamp.to_nsec(), []))
+
+    def wait_at(self, stamp, timeout=10.0):
+        return wait_for(lambda: self.at(stamp), timeout, "a message at %.3f on %s"
+                        % (stamp.to_sec(), self.sub.name))[0]
+
+    def count(self):
+        with self.lock:
+            return len(self.messages)
+
+
+class Diagnostics:
+    """Latest diagnostic values per status name."""
+
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.values = {}
+        self.sub = rospy.Subscriber("/diagnostics", DiagnosticArray, self._cb, queue_size=100)
+
+    def _cb(self, msg):
+        with self.lock:
+            for status in msg.status:
+                self.values[status.name] = {kv.key: kv.value for kv in status.values}
+
+    def get(self, node, key):
+        with self.lock:
+            for name, values in self.values.items():
+                if name.startswith(node.lstrip("/") + ":") and key in values:
+                    return values[key]
+        return None
+
+    def counter(self, node, key):
+        value = self.get(node, key)
+        return None if value is None else int(value)
+
+    def wait_counter(self, node, key, at_least, timeout=10.0):
+        return wait_for(lambda: (self.counter(node, key) or 0) >= at_least, timeout,
+                        "%s %s >= %d (now %s)" % (node, key, at_least, self.get(node, key)))
+
+
+class Node:
+    """The public interface of one attitude_propagator instance in namespace ns."""
+
+    def __init__(self, ns, name="attitude_propagator"):
+        self.ns = ns
+        self.name = "/%s/%s" % (ns, name)
+        self.state = Recorder("/%s/attitude_state" % ns, AttitudeState)
+        self._reset = rospy.ServiceProxy(self.name + "/reset", Empty)
+        self._set_state = rospy.ServiceProxy(self.name + "/set_state", SetState)
+
+    def wait_ready(self, timeout=20.0):
+        rospy.wait_for_service(self.name + "/reset", timeout)
+        wait_for(lambda: self.state.sub.get_num_connections() > 0, timeout,
+                 self.name + " attitude_state connection")
+
+    def reset(self):
+        self._reset()
+
+    def set_state(self, stamp, q=(0, 0, 0, 1), w=(0, 0, 0)):
+        req = SetStateRequest()
+        req.header.stamp = stamp
+        req.orientation = Quaternion(*q)
+        req.angular_velocity = Vector3(*w)
+        return self._set_state(req)
+
+
+def make_tf_buffer():
+    buffer = tf2_ros.Buffer(cache_time=rospy.Duration(100000.0))
+    listener = tf2_ros.TransformListener(buffer)
+    return buffer, listener
+
+
+def lookup(buffer, parent, child, stamp, timeout=10.0):
+    """The rotation (x, y, z, w) of parent -> child at stamp, waiting in wall time."""
+    def get():
+        try:
+            return buffer.lookup_transform(parent, child, stamp)
+        except (tf2_ros.LookupException, tf2_ros.ExtrapolationException,
+                tf2_ros.ConnectivityException):
+            return None
+    t = wait_for(get, timeout, "tf %s -> %s at %.3f" % (parent, child, stamp.to_sec()))
+    return as_tuple(t.transform.rotation)
+
+
+def wait_connected(pub, timeout=20.0):
+    wait_for(lambda: pub.get_num_connections() > 0, timeout, "a subscriber on " + pub.name)
