@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Node benchmark (issue 5, DESIGN §7): the IMU load generator publishes sensor_msgs/Imu at
-# 1 kHz .. 100 kHz, 3 s each, to attitude_propagator_node (separate processes, TCP) and then to
+# 1 kHz .. 200 kHz, 3 s each, to attitude_propagator_node (separate processes, TCP) and then to
 # the nodelet (generator loaded in the same manager, shared-pointer publish), and reports the
 # fraction of messages that reached imu/data and the input-to-output latency p50/p99.
-#   bash bench/node_bench.sh [out.csv]      (default docs/data/node_bench.csv; ~1.5 min)
+#   bash bench/node_bench.sh [out.csv]      (default docs/data/node_bench.csv; about 2 min)
 # NODE_BENCH_RATES (e.g. "[1000, 20000]") and NODE_BENCH_SECONDS override the defaults.
 # Expects the package built (bench/run_all.sh builds it). Runs its own ROS master on a private
 # port, so it neither needs nor disturbs a running roscore.
@@ -24,7 +24,7 @@ run_mode() {
   local mode="$1" csv="$TMP/$1.csv"
   echo "node_bench: $mode"
   roslaunch -p "$PORT" "$REPO_DIR/bench/node_bench.launch" mode:="$mode" out:="$csv" \
-    rates:="${NODE_BENCH_RATES:-[1000, 2000, 5000, 10000, 20000, 50000, 100000]}" \
+    rates:="${NODE_BENCH_RATES:-[1000, 2000, 5000, 10000, 20000, 50000, 100000, 200000]}" \
     seconds:="${NODE_BENCH_SECONDS:-3.0}" \
     >"$TMP/$mode.log" 2>&1 &
   local launch_pid=$!
