@@ -110,7 +110,7 @@ def work_precision_chart(sweep, path):
         ax.set_xlabel("cost [ns per simulated second]")
         ax.set_ylabel("largest attitude error along the path [rad]")
         ax.grid(True, which="major", alpha=0.3)
-        ax.legend(fontsize=8, loc="lower left")
+        ax.legend(fontsize=8, loc="best")
     notes = axes.flat[-1]
     notes.axis("off")
     notes.text(0.0, 0.95, WORK_PRECISION_NOTE, va="top", fontsize=10, wrap=True)
@@ -330,11 +330,13 @@ def targets_table(sweep, medians, node):
     if e and x:
         lines.append(f"| exp per step ≤ 2.5× euler (Google Benchmark) | {x / e:.2f}× "
                      f"({x:.1f} against {e:.1f} ns) | {yes(x / e <= 2.5)} |")
-    kin = {n: v for n, v in medians.items() if n.split("/")[0] in ("kinematicStep", "addSample")}
-    if kin:
-        worst = max(kin, key=kin.get)
-        lines.append(f"| every kinematic step < 100 ns | slowest `{worst}` {kin[worst]:.1f} ns "
-                     f"| {yes(kin[worst] < 100)} |")
+    for prefix, what in [("kinematicStep", "one step"),
+                         ("addSample", "through addSample: window copy, checks, normalise")]:
+        kin = {n: v for n, v in medians.items() if n.split("/")[0] == prefix}
+        if kin:
+            worst = max(kin, key=kin.get)
+            lines.append(f"| every kinematic step < 100 ns ({what}) | slowest `{worst}` "
+                         f"{kin[worst]:.1f} ns | {yes(kin[worst] < 100)} |")
     rk4 = medians.get("dynamicStep/rk4")
     exact = {n: v for n, v in medians.items() if n.startswith("exact/")}
     for name, ns in exact.items():
@@ -372,15 +374,14 @@ def node_targets(node):
 
 
 def highest_lossless(node, mode, p99_limit=None, threshold=0.999):
-    """Highest offered rate up to which every rate delivered >= threshold (and p99 < limit)."""
+    """Highest offered rate that delivered >= threshold (and, given a limit, p99 below it)."""
     best = 0.0
-    for r in sorted((r for r in node if r["mode"] == mode), key=lambda r: num(r, "rate_hz")):
-        ok = num(r, "delivered_fraction") >= threshold
+    for r in node:
+        ok = r["mode"] == mode and num(r, "delivered_fraction") >= threshold
         if p99_limit is not None:
             ok = ok and num(r, "latency_p99_ms") < p99_limit
-        if not ok:
-            break
-        best = num(r, "rate_hz")
+        if ok:
+            best = max(best, num(r, "rate_hz"))
     return best
 
 
@@ -427,6 +428,69 @@ def node_chart(node, path):
 
 # ---------------------------------------------------------------------------------------------
 
+def find(sweep, scene, method, dt=None, tolerance=None):
+    for r in sweep:
+        if r["scene"] != scene or r["method"] != method:
+            continue
+        if dt is not None and abs(num(r, "dt") - dt) > 1e-12 * max(dt, 1.0):
+            continue
+        if tolerance is not None and abs(num(r, "tolerance") - tolerance) > 1e-3 * tolerance:
+            continue
+        return r
+    return None
+
+
+def err_at(sweep, scene, method, dt):
+    r = find(sweep, scene, method, dt=dt)
+    return fmt(num(r, "err_rad"), 2) if r else "–"
+
+
+def worst_exact(sweep):
+    rows = [r for r in sweep if r["method"] == "exact"]
+    worst_err = max((num(r, "err_rad") for r in rows), default=float("nan"))
+    costs = sorted(num(r, "ns_per_step") for r in rows)
+    return worst_err, (costs[0] if costs else float("nan")), (costs[-1] if costs else float("nan"))
+
+
+def verdict(sweep):
+    """The auto choice of DESIGN §4 against the measurements, with the figures that decide."""
+    cf4 = find(sweep, "coning", "cf4", dt=0.005)
+    euler = find(sweep, "coning", "euler", dt=0.005)
+    exp2 = find(sweep, "coning", "exp2", dt=0.005)
+    err, cheap, dear = worst_exact(sweep)
+    h = 0.0125
+    lines = [
+        "#### Verdict on `auto` (DESIGN §4): keep it",
+        "",
+        "- **Kinematic → `cf4`.** On the coning and fast-spin scenes `cf4` is the cheapest way "
+        "to every tolerance in the table, at every sample rate of the sweep. At 200 Hz on the "
+        f"coning motion it costs {num(cf4, 'ns_per_step') / num(euler, 'ns_per_step'):.1f}× "
+        f"`euler` per sample and is {num(euler, 'err_rad') / num(cf4, 'err_rad'):.0f}× more "
+        f"accurate ({fmt(num(cf4, 'err_rad'), 2)} against {fmt(num(euler, 'err_rad'), 2)} "
+        f"rad; `exp2`: {fmt(num(exp2, 'err_rad'), 2)}). At a fixed gyro rate the extra "
+        "tens of nanoseconds per sample buy 2-4 orders of magnitude. Only for a rate that is "
+        "truly constant between samples (piecewise-constant commands) is `exp` the right "
+        "choice: exact and cheaper.",
+        "- **Torque-free → `exact`.** Its error is round-off at any step (largest "
+        f"{fmt(err, 2)} rad against the long-double Bulirsch-Stoer reference over 100 s) for "
+        f"{cheap:.0f}-{dear:.0f} ns per evaluation, i.e. at most "
+        f"{dear * 100 / 1e3:.0f} µs of CPU per simulated second at the default 100 Hz "
+        "publish rate. The numerical methods' errors grow with time: `rk4` at "
+        f"h = {h} s reaches {err_at(sweep, 'free_body', 'rk4', h)} rad on the free body "
+        f"(100 s) and {err_at(sweep, 'dzhanibekov', 'rk4', h)} rad on the Dzhanibekov flip "
+        "(30 s), and no numerical method of the sweep reaches 1e-12 rad on the flip.",
+        "- **With torque → `rk4`.** It is the cheapest method to 1e-6 rad on the torqued "
+        f"scene (`rk4` at h = {h} s: {err_at(sweep, 'torqued', 'rk4', h)} rad over 20 s). "
+        "For tighter tolerances `dopri5` at the node's 0.01 s grid is cheaper (see the table); "
+        "set `integrator: dopri5` there. The symplectic methods (`implicit_midpoint`, "
+        "`splitting`, `splitting4`) keep |M| (and for the midpoint rule the energy) to "
+        "round-off but are less accurate per unit of CPU on every scene here; they pay off "
+        "only when the invariants themselves matter over very long runs (invariants chart).",
+        "",
+    ]
+    return "\n".join(lines)
+
+
 def results_markdown(sweep, medians, node, has_node_chart):
     parts = [
         "### Benchmarks: speed against accuracy",
@@ -450,6 +514,7 @@ def results_markdown(sweep, medians, node, has_node_chart):
         "",
         cheapest_table(sweep),
         "",
+        verdict(sweep),
         "#### Targets",
         "",
         targets_table(sweep, medians, node),
@@ -464,7 +529,7 @@ def results_markdown(sweep, medians, node, has_node_chart):
         "",
         "![stability](docs/stability.png)",
         "",
-        "#### Cost of one step (Google Benchmark, median CPU time of 5 repetitions)",
+        "#### Cost of one step (Google Benchmark, median CPU time of 7 repetitions)",
         "",
         cost_table(medians) if medians else "Not measured.",
         "",

@@ -31,7 +31,7 @@ echo "== bench_sweep (work-precision, stability, invariants)"
 
 if [ -x "$BIN/bench_step_costs" ]; then
   echo "== bench_step_costs (Google Benchmark)"
-  "$BIN/bench_step_costs" --benchmark_repetitions=5 --benchmark_report_aggregates_only=true \
+  "$BIN/bench_step_costs" --benchmark_repetitions=7 --benchmark_report_aggregates_only=true \
     --benchmark_min_time=0.2 --benchmark_out="$DATA/step_costs.json" \
     --benchmark_out_format=json
 else
