@@ -56,10 +56,16 @@ class DynamicPropagator {
   StampOutcome advanceTo(double t);
 
   /// Torque tau (N m) from time t on, in the body or the fixed frame (T_B = Q^T t_W, notes
-  /// eq. 10), held until the next sample. Advances to t first. Non-finite input is rejected.
+  /// eq. 10), held until the next sample (or for torque_timeout). Advances to t first.
+  /// Non-finite input is rejected. A sample stamped at or before time() (it arrived after
+  /// the clock passed its stamp) acts from its stamp if no grid point was committed since,
+  /// else from the last grid point, and returns Advanced; a sample not newer than the previous
+  /// torque sample is DroppedStale. With the exact model a non-zero torque throws
+  /// std::logic_error.
   StampOutcome setTorque(double t, const Eigen::Vector3d& tau, TorqueFrame frame);
 
-  /// A measured body rate at t: advances to t, then sets w_B (the orientation is kept).
+  /// A measured body rate at t: advances to t, then sets w_B (the orientation is kept). Late
+  /// samples are placed as for setTorque.
   StampOutcome setRate(double t, const Eigen::Vector3d& w_B);
 
   /// Pins the state at time t (a new anchor). Throws std::invalid_argument on non-finite
@@ -82,6 +88,8 @@ class DynamicPropagator {
   /// `exact`; meaningful only without torque).
   double energyDrift() const;
   double momentumDrift() const;
+  /// Steps not committed because they left the finite numbers (the state is held instead).
+  std::uint64_t failedSteps() const;
 
  private:
   struct Impl;

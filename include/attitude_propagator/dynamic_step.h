@@ -22,6 +22,13 @@ namespace attitude_propagator {
 struct PrincipalState {
   Eigen::Quaterniond q_WP = Eigen::Quaterniond::Identity();
   Eigen::Vector3d w_P = Eigen::Vector3d::Zero();
+  /// The angular momentum M_P = I w_P as the splittings carry it from step to step. Rounding
+  /// it through the rate each step, M -> w = M / I -> M = I w, biases |M| (measured on the HLW
+  /// body, REFERENCE §4, 10^5 steps of 0.1: relative |M| drift 2.4e-12 with the round trip,
+  /// 4e-14 without). A stepper uses M_P only while it is consistent with w_P, i.e. while
+  /// w_P == M_P / I exactly as a splitting step leaves them; otherwise (w_P written by the
+  /// caller or by another method) it starts from I w_P, so callers may ignore this member.
+  Eigen::Vector3d M_P = Eigen::Vector3d::Zero();
 };
 
 /// A torque held over a step, as the integrators see it: tau_P in P for a body torque, or
@@ -104,7 +111,10 @@ class DynamicStepper {
   void rk4(PrincipalState& x, const PrincipalTorque& torque, double h, StepInfo& info) const;
   void implicitMidpoint(PrincipalState& x, const PrincipalTorque& torque, double h,
                         StepInfo& info) const;
-  void strang(PrincipalState& x, const PrincipalTorque& torque, double h) const;
+  /// The angular momentum of x: x.M_P if consistent with x.w_P, else I x.w_P.
+  Eigen::Vector3d momentum(const PrincipalState& x) const;
+  void strang(Eigen::Quaterniond& q_WP, Eigen::Vector3d& M_P, const PrincipalTorque& torque,
+              double h) const;
   void dopri5(PrincipalState& x, const PrincipalTorque& torque, double h, StepInfo& info) const;
   void exact(PrincipalState& x, const PrincipalTorque& torque, double h) const;
 

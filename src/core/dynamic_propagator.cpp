@@ -89,6 +89,7 @@ struct DynamicPropagator::Impl {
   double rate_stamp = -std::numeric_limits<double>::infinity();
 
   std::uint64_t steps = 0;
+  std::uint64_t failed_steps = 0;
   double norm_error = 0.0;
   double energy0 = 0.0;
   double momentum0 = 0.0;
@@ -160,7 +161,10 @@ struct DynamicPropagator::Impl {
     stepper.setStepSizeHint(knot_hint);
     stepper.stepPrincipal(next, torqueAt(from), h, &info);
     ++steps;
-    if (!finite(next)) return false;
+    if (!finite(next)) {
+      ++failed_steps;
+      return false;
+    }
     x = next;
     norm_error = info.norm_error;
     return true;
@@ -344,6 +348,7 @@ bool DynamicPropagator::anchored() const { return impl_->anchored; }
 double DynamicPropagator::time() const { return impl_->time; }
 const DynamicState& DynamicPropagator::state() const { return impl_->current_B; }
 std::uint64_t DynamicPropagator::steps() const { return impl_->steps; }
+std::uint64_t DynamicPropagator::failedSteps() const { return impl_->failed_steps; }
 double DynamicPropagator::normError() const { return impl_->norm_error; }
 
 double DynamicPropagator::kineticEnergy() const {

@@ -31,7 +31,7 @@ Eigen::Quaterniond eulerStep(const Eigen::Quaterniond& q, const Eigen::Vector3d&
 Eigen::Quaterniond rk4Step(const Eigen::Quaterniond& q, const Eigen::Vector3d& w0,
                            const Eigen::Vector3d& w1, double h) {
   const Eigen::Vector3d w_mid = 0.5 * (w0 + w1);
-  const Eigen::Vector4d y = q.coeffs();
+  const Eigen::Vector4d& y = q.coeffs();
   const Eigen::Vector4d k1 = 0.5 * timesPure(y, w0);
   const Eigen::Vector4d k2 = 0.5 * timesPure(y + (0.5 * h) * k1, w_mid);
   const Eigen::Vector4d k3 = 0.5 * timesPure(y + (0.5 * h) * k2, w_mid);

@@ -74,7 +74,7 @@ RigidBody RigidBody::fromTensor(const Eigen::Matrix3d& I_B) {
   if (solver.info() != Eigen::Success) {
     throw std::invalid_argument("inertia: the tensor could not be diagonalised");
   }
-  const Eigen::Vector3d moments = solver.eigenvalues();
+  const Eigen::Vector3d& moments = solver.eigenvalues();
   checkMoments(moments);
   Eigen::Matrix3d R_BP = solver.eigenvectors();
   // Eigenvectors are defined up to sign: make the frame right-handed so that R_BP is a

@@ -108,7 +108,7 @@ Eigen::Quaterniond halfTurn(int i) {
 void TorqueFreeMotion::initTriaxial(const RigidBody& body, const Eigen::Vector3d& M_P) {
   G_ = M_P.norm();
   // At rest or turning about a principal axis, w is constant: a steady rotation.
-  const int zeros = (M_P.array() == 0.0).count();
+  const Eigen::Index zeros = (M_P.array() == 0.0).count();
   if (G_ == 0.0 || zeros >= 2) {
     regime_ = Regime::Steady;
     return;

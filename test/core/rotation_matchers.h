@@ -13,12 +13,16 @@
       << "rotations differ: a = " << (a).coeffs().transpose()          \
       << " (x y z w), b = " << (b).coeffs().transpose() << " (x y z w)"
 
+/// Reproducible uniform numbers in [0, 1): a 64-bit linear congruential generator (Knuth's
+/// MMIX constants), the top 53 bits.
+inline double uniformRandom(std::uint64_t& state) {
+  state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+  return static_cast<double>(state >> 11) * 0x1.0p-53;
+}
+
 /// Reproducible random unit quaternions, uniform on SO(3) (Shoemake's method).
 inline Eigen::Quaterniond randomUnitQuaternion(std::uint64_t& state) {
-  auto uniform = [&state]() {
-    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-    return static_cast<double>(state >> 11) * 0x1.0p-53;
-  };
+  auto uniform = [&state]() { return uniformRandom(state); };
   const double u1 = uniform(), u2 = 2.0 * M_PI * uniform(), u3 = 2.0 * M_PI * uniform();
   const double a = std::sqrt(1.0 - u1), b = std::sqrt(u1);
   return Eigen::Quaterniond(b * std::cos(u3), a * std::sin(u2), a * std::cos(u2), b * std::sin(u3));

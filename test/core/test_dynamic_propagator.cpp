@@ -3,11 +3,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 #include <vector>
 
 #include "attitude_propagator/dynamic_propagator.h"
+#include "attitude_propagator/torque_free_motion.h"
 #include "rotation_matchers.h"
 
 namespace ap = attitude_propagator;
@@ -150,20 +152,16 @@ TEST(DynPropagator, StateAtStampIsIndependentOfIntermediateStamps) {
     ASSERT_EQ(direct.advanceTo(0.0), ap::StampOutcome::Anchored);
 
     std::uint64_t state = 42;
-    auto uniform = [&state]() {
-      state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-      return static_cast<double>(state >> 11) * 0x1.0p-53;
-    };
     double t = 0.0;
     while (t < 0.4) {
-      t += 0.0037 * uniform();
+      t += 0.0037 * uniformRandom(state);
       bursty.advanceTo(t);
     }
     bursty.setTorque(0.4123, Eigen::Vector3d(0.2, -0.1, 0.3), ap::TorqueFrame::Body);
     direct.setTorque(0.4123, Eigen::Vector3d(0.2, -0.1, 0.3), ap::TorqueFrame::Body);
     t = 0.4123;
     while (t < 0.9) {
-      t += 0.02 * uniform();
+      t += 0.02 * uniformRandom(state);
       bursty.advanceTo(t);
     }
     bursty.setTorque(0.91, Eigen::Vector3d(0.0, 0.5, 0.0), ap::TorqueFrame::Fixed);
@@ -177,7 +175,7 @@ TEST(DynPropagator, StateAtStampIsIndependentOfIntermediateStamps) {
     bursty.setTorque(1.3031, Eigen::Vector3d(-0.3, 0.0, 0.1), ap::TorqueFrame::Body);
     t = 1.3045;
     while (t < 2.5) {
-      t += 0.011 * uniform();
+      t += 0.011 * uniformRandom(state);
       bursty.advanceTo(t);
     }
     bursty.advanceTo(2.75);
@@ -204,4 +202,262 @@ TEST(DynPropagator, TorqueTimeoutZeroesTheTorque) {
     EXPECT_NEAR(p.state().w_B.x(), 0.0, 1e-15);
     EXPECT_NEAR(p.state().w_B.z(), 0.0, 1e-15);
   }
+}
+
+// ---- The exact model (auto without torque): the same time policy, and states that follow the
+// closed forms of REFERENCE §3 from every anchor (first stamp, gap, reset, set_state,
+// set_rate). The sphere and symmetric-top truths are written here independently of
+// TorqueFreeMotion; the triaxial one is TorqueFreeMotion itself, checked against the published
+// Hairer-Lubich-Wanner values below.
+namespace {
+
+using Truth = std::function<ap::DynamicState(const ap::DynamicState& x0, double t)>;
+
+struct ExactCase {
+  const char* name;
+  const char* model;
+  ap::RigidBody body;
+  ap::DynamicState initial;
+  Truth truth;
+};
+
+/// Sphere: w constant, q(t) = q0 (x) Exp(t w) (body rates compose on the right).
+ap::DynamicState sphereAt(const ap::DynamicState& x0, double t) {
+  ap::DynamicState x = x0;
+  const double rate = x0.w_B.norm();
+  if (rate > 0.0) x.q_WB = x0.q_WB * Eigen::AngleAxisd(rate * t, x0.w_B / rate);
+  return x;
+}
+
+/// Symmetric top with moment I_s about the unit body axis a_B and I_perp across it
+/// (REFERENCE §3 with e3 -> a_B): q(t) = Exp(t G/I_perp m_W/G) (x) q0 (x) Exp(t c a_B),
+/// c = M_s (1/I_s - 1/I_perp), and M_B(t) = Exp(-t c a_B) M_B(0), w_B = I_B^-1 M_B.
+Truth symmetricTop(double I_perp, double I_s, const Eigen::Vector3d& a_B) {
+  return [I_perp, I_s, a_B](const ap::DynamicState& x0, double t) {
+    const Eigen::Matrix3d I_B =
+        I_perp * Eigen::Matrix3d::Identity() + (I_s - I_perp) * a_B * a_B.transpose();
+    const Eigen::Vector3d M0_B = I_B * x0.w_B;
+    const Eigen::Vector3d m_W = x0.q_WB * M0_B;
+    const double G = m_W.norm();
+    const double c = a_B.dot(M0_B) * (1.0 / I_s - 1.0 / I_perp);
+    ap::DynamicState x;
+    x.q_WB = Eigen::Quaterniond(Eigen::AngleAxisd(t * G / I_perp, m_W / G)) * x0.q_WB *
+             Eigen::Quaterniond(Eigen::AngleAxisd(t * c, a_B));
+    x.w_B = I_B.inverse() * (Eigen::AngleAxisd(-t * c, a_B) * M0_B);
+    return x;
+  };
+}
+
+std::vector<ExactCase> exactCases() {
+  std::uint64_t seed = 7;
+  std::vector<ExactCase> cases;
+
+  ap::DynamicState x0;
+  x0.q_WB = randomUnitQuaternion(seed);
+  x0.w_B = Eigen::Vector3d(0.4, -1.1, 0.7);
+  cases.push_back({"sphere", "exact_sphere",
+                   ap::RigidBody::fromPrincipalMoments(Eigen::Vector3d::Constant(0.3)), x0,
+                   sphereAt});
+
+  // A top whose symmetry axis is not a body axis, so the principal frame differs from B.
+  const Eigen::Vector3d a_B = Eigen::Vector3d(1.0, 2.0, -0.5).normalized();
+  const double I_perp = 1.0;
+  const double I_s = 1.6;
+  const Eigen::Matrix3d I_B =
+      I_perp * Eigen::Matrix3d::Identity() + (I_s - I_perp) * a_B * a_B.transpose();
+  x0.q_WB = randomUnitQuaternion(seed);
+  x0.w_B = Eigen::Vector3d(0.5, 0.9, -1.3);
+  cases.push_back({"symmetric_top", "exact_symmetric_top", ap::RigidBody::fromTensor(I_B), x0,
+                   symmetricTop(I_perp, I_s, a_B)});
+
+  const ap::RigidBody hlw = freeBodyConfig(ap::Integrator::Auto).body;
+  x0.q_WB = randomUnitQuaternion(seed);
+  x0.w_B = freeBodyConfig(ap::Integrator::Auto).initial.w_B;
+  cases.push_back(
+      {"triaxial", "exact_triaxial", hlw, x0, [hlw](const ap::DynamicState& x, double t) {
+         return ap::TorqueFreeMotion(hlw, x).evaluate(t);
+       }});
+  return cases;
+}
+
+ap::DynamicConfig exactConfig(const ExactCase& c) {
+  ap::DynamicConfig config;
+  config.body = c.body;
+  config.integrator = ap::Integrator::Auto;
+  config.torque_input = false;
+  config.initial = c.initial;
+  config.time_policy.max_dt = 0.5;
+  config.time_policy.backward_jump = 1.0;
+  return config;
+}
+
+constexpr double kEps = std::numeric_limits<double>::epsilon();
+
+// Closed forms over a few seconds at rates ~1 rad/s: round-off of ~1e-15 per radian turned.
+constexpr double kExactAngleTol = 1e-12;
+constexpr double kExactRateTol = 1e-12;
+
+void expectState(const ap::DynamicState& actual, const ap::DynamicState& expected,
+                 int line = __builtin_LINE()) {
+  SCOPED_TRACE(line);
+  EXPECT_ROTATION_NEAR(actual.q_WB, expected.q_WB, kExactAngleTol);
+  EXPECT_LE((actual.w_B - expected.w_B).norm(), kExactRateTol * expected.w_B.norm());
+}
+
+/// Visits stamps from the current time to t in steps of at most `stride` (all within max_dt).
+void walkTo(ap::DynamicPropagator& p, double t, double stride) {
+  while (p.time() + stride < t)
+    ASSERT_EQ(p.advanceTo(p.time() + stride), ap::StampOutcome::Advanced);
+  ASSERT_EQ(p.advanceTo(t), ap::StampOutcome::Advanced);
+}
+
+}  // namespace
+
+TEST(DynPropagatorExact, TimePolicyAndClosedForms) {
+  for (const ExactCase& c : exactCases()) {
+    SCOPED_TRACE(c.name);
+    const ap::DynamicConfig config = exactConfig(c);
+    ap::DynamicPropagator p(config);
+    EXPECT_EQ(p.integrator(), ap::Integrator::Exact);
+    EXPECT_EQ(p.modelName(), c.model);
+
+    // The first stamp anchors: the initial state holds there, then the motion follows the
+    // closed form from it.
+    EXPECT_EQ(p.advanceTo(20.0), ap::StampOutcome::Anchored);
+    expectSameState(p.state(), c.initial, 0.0);
+    walkTo(p, 23.7, 0.31);
+    expectState(p.state(), c.truth(c.initial, 3.7));
+    EXPECT_NEAR(p.energyDrift(), 0.0, 1e-14);
+    EXPECT_NEAR(p.momentumDrift(), 0.0, 1e-14);
+
+    // Stale stamps (equal, or earlier by less than the backward-jump threshold) do nothing.
+    const ap::DynamicState at_23_7 = p.state();
+    EXPECT_EQ(p.advanceTo(23.7), ap::StampOutcome::DroppedStale);
+    EXPECT_EQ(p.advanceTo(22.8), ap::StampOutcome::DroppedStale);
+    EXPECT_EQ(p.time(), 23.7);
+    expectSameState(p.state(), at_23_7, 0.0);
+
+    // Non-finite stamps and values are rejected; a torque is refused by the exact model.
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_EQ(p.advanceTo(nan), ap::StampOutcome::RejectedNonFinite);
+    EXPECT_EQ(p.advanceTo(std::numeric_limits<double>::infinity()),
+              ap::StampOutcome::RejectedNonFinite);
+    EXPECT_EQ(p.setRate(23.8, Eigen::Vector3d(0.0, nan, 0.0)), ap::StampOutcome::RejectedNonFinite);
+    EXPECT_EQ(p.setTorque(23.8, Eigen::Vector3d(nan, 0.0, 0.0), ap::TorqueFrame::Body),
+              ap::StampOutcome::RejectedNonFinite);
+    EXPECT_THROW(p.setTorque(23.8, Eigen::Vector3d(0.0, 0.1, 0.0), ap::TorqueFrame::Body),
+                 std::logic_error);
+    EXPECT_EQ(p.time(), 23.7);
+    expectSameState(p.state(), at_23_7, 0.0);
+
+    // A gap over max_dt is not integrated across: the state holds at the new stamp, which
+    // anchors the motion afresh.
+    EXPECT_EQ(p.advanceTo(25.0), ap::StampOutcome::HeldGap);
+    EXPECT_EQ(p.time(), 25.0);
+    expectSameState(p.state(), at_23_7, 0.0);
+    walkTo(p, 26.2, 0.29);
+    expectState(p.state(), c.truth(at_23_7, 1.2));
+
+    // Back by more than the threshold: the initial state at the new stamp, and on from there.
+    EXPECT_EQ(p.advanceTo(3.0), ap::StampOutcome::ResetBackwardJump);
+    EXPECT_EQ(p.time(), 3.0);
+    expectSameState(p.state(), c.initial, 0.0);
+    walkTo(p, 5.5, 0.45);
+    expectState(p.state(), c.truth(c.initial, 2.5));
+
+    // reset(): unanchored until the next stamp, which anchors the initial state.
+    p.reset();
+    EXPECT_FALSE(p.anchored());
+    EXPECT_EQ(p.advanceTo(40.0), ap::StampOutcome::Anchored);
+    expectSameState(p.state(), c.initial, 0.0);
+  }
+}
+
+TEST(DynPropagatorExact, SetStateAndSetRateReanchor) {
+  std::uint64_t seed = 99;
+  for (const ExactCase& c : exactCases()) {
+    SCOPED_TRACE(c.name);
+    ap::DynamicPropagator p(exactConfig(c));
+    ASSERT_EQ(p.advanceTo(1.0), ap::StampOutcome::Anchored);
+    walkTo(p, 2.0, 0.3);
+
+    // set_state pins the given state (normalised) and the motion restarts from it.
+    ap::DynamicState pinned;
+    pinned.q_WB = randomUnitQuaternion(seed);
+    pinned.w_B = Eigen::Vector3d(-0.8, 0.3, 1.2);
+    ap::DynamicState unnormalised = pinned;
+    unnormalised.q_WB.coeffs() *= 3.0;
+    p.setState(2.5, unnormalised);
+    EXPECT_EQ(p.time(), 2.5);
+    expectState(p.state(), pinned);
+    EXPECT_EQ(p.energyDrift(), 0.0);
+    walkTo(p, 4.6, 0.37);
+    expectState(p.state(), c.truth(pinned, 2.1));
+
+    // set_rate at a new stamp: the orientation there is kept, the rate replaced.
+    const Eigen::Vector3d w_new(0.6, -0.9, 0.2);
+    walkTo(p, 5.0, 0.2);
+    EXPECT_EQ(p.setRate(5.3, w_new), ap::StampOutcome::Advanced);
+    const ap::DynamicState expected_at_5_3 = c.truth(pinned, 5.3 - 2.5);
+    EXPECT_ROTATION_NEAR(p.state().q_WB, expected_at_5_3.q_WB, kExactAngleTol);
+    // (To round-off: the rate goes through the principal frame, which differs from B here.)
+    EXPECT_LE((p.state().w_B - w_new).norm(), 4.0 * kEps * w_new.norm());
+    ap::DynamicState rate_anchor{p.state().q_WB, w_new};
+    walkTo(p, 7.1, 0.4);
+    expectState(p.state(), c.truth(rate_anchor, 7.1 - 5.3));
+    EXPECT_NEAR(p.energyDrift(), 0.0, 1e-14);
+
+    // A rate sample that arrives after the clock passed its stamp acts from its stamp.
+    const Eigen::Vector3d w_late(0.1, 0.7, -0.4);
+    const ap::DynamicState at_7_05 = c.truth(rate_anchor, 7.05 - 5.3);
+    EXPECT_EQ(p.setRate(7.05, w_late), ap::StampOutcome::Advanced);
+    EXPECT_EQ(p.time(), 7.1);
+    expectState(p.state(), c.truth(ap::DynamicState{at_7_05.q_WB, w_late}, 0.05));
+    // ... and one not newer than the previous rate sample is stale.
+    EXPECT_EQ(p.setRate(7.0, w_new), ap::StampOutcome::DroppedStale);
+  }
+}
+
+// The state at a stamp does not depend on the stamps visited on the way, nor on where the
+// grid of the numerical models would have been (the exact model has none).
+TEST(DynPropagatorExact, StateAtStampIsIndependentOfIntermediateStamps) {
+  for (const ExactCase& c : exactCases()) {
+    SCOPED_TRACE(c.name);
+    ap::DynamicConfig config = exactConfig(c);
+    config.time_policy.max_dt = 100.0;
+    ap::DynamicPropagator bursty(config);
+    ap::DynamicPropagator direct(config);
+    ASSERT_EQ(bursty.advanceTo(0.5), ap::StampOutcome::Anchored);
+    ASSERT_EQ(direct.advanceTo(0.5), ap::StampOutcome::Anchored);
+    std::uint64_t state = 5;
+    double t = 0.5;
+    while (t < 3.1) {
+      t += 0.05 * uniformRandom(state);
+      bursty.advanceTo(t);
+    }
+    // The same rate sample for both, late for the bursty one.
+    bursty.setRate(3.1, Eigen::Vector3d(0.2, 0.4, -0.6));
+    direct.setRate(3.1, Eigen::Vector3d(0.2, 0.4, -0.6));
+    t = bursty.time();
+    while (t < 6.0) {
+      t += 0.07 * uniformRandom(state);
+      bursty.advanceTo(t);
+    }
+    bursty.advanceTo(6.25);
+    direct.advanceTo(6.25);
+    expectSameState(bursty.state(), direct.state(), 1e-15);
+  }
+}
+
+// Hairer-Lubich-Wanner's free body through the propagator (REFERENCE §4): anchored at 2 s and
+// walked through irregular stamps, M in the body at anchor + 10 s is the published M(10).
+TEST(DynPropagatorExact, TriaxialMatchesPublishedValues) {
+  ap::DynamicPropagator p(freeBodyConfig(ap::Integrator::Auto));
+  EXPECT_EQ(p.modelName(), "exact_triaxial");
+  ASSERT_EQ(p.advanceTo(2.0), ap::StampOutcome::Anchored);
+  walkTo(p, 12.0, 0.43);
+  EXPECT_LE((p.angularMomentum_B() -
+             Eigen::Vector3d(0.407066136588041, 0.283007426812843, 0.868449167661562))
+                .norm(),
+            1e-13);
 }
