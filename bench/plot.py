@@ -491,19 +491,31 @@ def verdict(sweep):
     return "\n".join(lines)
 
 
-def results_markdown(sweep, medians, node, has_node_chart):
+def machine_line(data_dir):
+    path = os.path.join(data_dir, "machine.txt")
+    if not os.path.exists(path):
+        return "the development machine"
+    with open(path) as f:
+        info = dict(line.strip().split(": ", 1) for line in f if ": " in line)
+    return (f"{info.get('cpu', '?')} ({info.get('date', '?')}, commit "
+            f"{info.get('commit', '?')}, load average {info.get('load before the run', '?')})")
+
+
+def results_markdown(sweep, medians, node, has_node_chart, machine):
     parts = [
         "### Benchmarks: speed against accuracy",
         "",
-        "Regenerate everything below (about 5 minutes on 2 cores: Release build, the sweep, "
-        "Google Benchmark, the node benchmark, the charts):",
+        "Regenerate everything below with one command (about 4 minutes on 2 cores after the "
+        "build: the sweep, Google Benchmark, the node benchmark, the charts):",
         "",
         "```bash",
-        "bash bench/run_all.sh          # add --no-node to skip the node benchmark",
+        "bash bench/run_all.sh      # --no-node skips the node benchmark (bench/node_bench.sh)",
         "```",
         "",
-        "Measured on the development machine (2 cores, shared with compiles; costs are CPU "
-        "time of the benchmark thread, so ratios between methods measured in one run hold).",
+        f"Measured on {machine}; the machine was shared with compiles and tests, so costs are "
+        "CPU time of the benchmark thread and methods are timed in turn within one run: "
+        "ratios between methods hold, absolute figures move by 10-20 % from run to run. "
+        "Raw data: `docs/data/*.csv`, `docs/data/step_costs.json`.",
         "",
         "#### Which integrator: cheapest method within a tolerance",
         "",
@@ -568,7 +580,7 @@ def main(argv):
     node = read_csv(node_path) if os.path.exists(node_path) else []
     if node:
         node_chart(node, os.path.join(docs_dir, "node_bench.png"))
-    text = results_markdown(sweep, medians, node, bool(node))
+    text = results_markdown(sweep, medians, node, bool(node), machine_line(data_dir))
     with open(os.path.join(docs_dir, "results.md"), "w") as f:
         f.write(text.replace("](docs/", "]("))  # results.md sits next to the charts
     if readme:

@@ -26,6 +26,13 @@ mkdir -p "$DATA"
 bash "$REPO_DIR/scripts/install_deps.sh"
 bash "$REPO_DIR/scripts/build.sh"
 
+{
+  echo "date: $(date -u '+%Y-%m-%d %H:%M UTC')"
+  echo "commit: $(git -C "$REPO_DIR" rev-parse --short HEAD 2>/dev/null || echo unknown)"
+  echo "cpu: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//'), $(nproc) cores"
+  echo "load before the run: $(cut -d' ' -f1-3 /proc/loadavg)"
+} >"$DATA/machine.txt"
+
 echo "== bench_sweep (work-precision, stability, invariants)"
 "$BIN/bench_sweep" "$DATA"
 
