@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # Node benchmark (issue 5, DESIGN §7): the IMU load generator publishes sensor_msgs/Imu at
-# 1 kHz .. 200 kHz, 3 s each, to attitude_propagator_node (separate processes, TCP) and then to
-# the nodelet (generator loaded in the same manager, shared-pointer publish), and reports the
-# fraction of messages that reached imu/data and the input-to-output latency p50/p99.
-#   bash bench/node_bench.sh [out.csv]      (default docs/data/node_bench.csv; about 2 min)
-# NODE_BENCH_RATES (e.g. "[1000, 20000]") and NODE_BENCH_SECONDS override the defaults.
+# 1 kHz .. 200 kHz, 3 s each, to attitude_propagator_node (separate processes, TCP) and to the
+# nodelet (generator loaded in the same manager, shared-pointer publish), and records the
+# fraction of messages that reached imu/data and the input-to-output latency p50/p99, one CSV
+# row per run, mode and rate.
+#   bash bench/node_bench.sh [out.csv]   (default docs/data/node_bench.csv; about 4 min)
+# NODE_BENCH_RATES (e.g. "[1000, 20000]"), NODE_BENCH_SECONDS and NODE_BENCH_REPEATS (3)
+# override the defaults.
 # Expects the package built (bench/run_all.sh builds it). Runs its own ROS master on a private
 # port, so it neither needs nor disturbs a running roscore.
 set -euo pipefail
@@ -44,7 +46,16 @@ run_mode() {
   grep "load generator" "$TMP/$mode.log" | sed 's/^.*load generator/  load generator/' || true
 }
 
-run_mode node
-run_mode nodelet
-{ cat "$TMP/node.csv"; tail -n +2 "$TMP/nodelet.csv"; } >"$OUT"
+# Node and nodelet alternate, REPEATS times each, so background load (a shared 2-core machine)
+# hits both alike; bench/plot.py reports the median over the repeats per mode and rate.
+REPEATS="${NODE_BENCH_REPEATS:-3}"
+echo "run,mode,rate_hz,seconds,sent,sent_rate_hz,received,delivered_fraction,latency_p50_ms,latency_p99_ms,latency_max_ms" >"$OUT.tmp"
+for run in $(seq 1 "$REPEATS"); do
+  for mode in node nodelet; do
+    run_mode "$mode"
+    tail -n +2 "$TMP/$mode.csv" | sed "s/^/$run,/" >>"$OUT.tmp"
+    rm -f "$TMP/$mode.csv"
+  done
+done
+mv "$OUT.tmp" "$OUT"
 echo "node_bench: wrote $OUT"

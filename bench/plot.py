@@ -13,6 +13,7 @@ import csv
 import json
 import math
 import os
+import statistics
 import sys
 from collections import defaultdict
 
@@ -385,15 +386,39 @@ def highest_lossless(node, mode, p99_limit=None, threshold=0.999):
     return best
 
 
+def aggregate_node(rows):
+    """Median over the repeated runs of each (mode, rate), with the spread of the runs."""
+    groups = defaultdict(list)
+    for r in rows:
+        groups[(r["mode"], num(r, "rate_hz"))].append(r)
+    out = []
+    for (mode, rate), group in sorted(groups.items()):
+        agg = {"mode": mode, "rate_hz": str(rate), "runs": str(len(group))}
+        for key in ("sent_rate_hz", "delivered_fraction", "latency_p50_ms", "latency_p99_ms",
+                    "latency_max_ms"):
+            values = [num(r, key) for r in group]
+            agg[key] = str(statistics.median(values))
+            agg[key + "_min"], agg[key + "_max"] = str(min(values)), str(max(values))
+        out.append(agg)
+    return out
+
+
 def node_table(node):
     if not node:
         return "Not measured yet (run `bash bench/node_bench.sh`)."
-    lines = ["| mode | offered rate [Hz] | achieved send rate [Hz] | delivered | "
+    runs = node[0]["runs"] if node else "?"
+    lines = [f"Median of {runs} runs per row (node and nodelet alternating); in brackets the "
+             "range over the runs.", "",
+             "| mode | offered rate [Hz] | achieved send rate [Hz] | delivered | "
              "latency p50 [ms] | p99 [ms] |", "|---|---|---|---|---|---|"]
     for r in node:
-        lines.append(f"| {r['mode']} | {num(r, 'rate_hz'):.0f} | {num(r, 'sent_rate_hz'):.0f} "
-                     f"| {100 * num(r, 'delivered_fraction'):.2f} % "
-                     f"| {fmt(num(r, 'latency_p50_ms'))} | {fmt(num(r, 'latency_p99_ms'))} |")
+        lines.append(
+            f"| {r['mode']} | {num(r, 'rate_hz'):.0f} | {num(r, 'sent_rate_hz'):.0f} "
+            f"| {100 * num(r, 'delivered_fraction'):.2f} % "
+            f"({100 * num(r, 'delivered_fraction_min'):.1f}-"
+            f"{100 * num(r, 'delivered_fraction_max'):.1f}) "
+            f"| {fmt(num(r, 'latency_p50_ms'))} | {fmt(num(r, 'latency_p99_ms'))} "
+            f"({fmt(num(r, 'latency_p99_ms_min'))}-{fmt(num(r, 'latency_p99_ms_max'))}) |")
     return "\n".join(lines)
 
 
@@ -408,6 +433,12 @@ def node_chart(node, path):
                      label=f"{mode} p50")
         axes[1].plot(xs, [num(r, "latency_p99_ms") for r in rows], marker="^", color=colour,
                      linestyle="--", label=f"{mode} p99")
+        axes[1].fill_between(xs, [num(r, "latency_p99_ms_min") for r in rows],
+                             [num(r, "latency_p99_ms_max") for r in rows], color=colour,
+                             alpha=0.12, label=f"{mode} p99, range over runs")
+        axes[0].fill_between(xs, [100 * num(r, "delivered_fraction_min") for r in rows],
+                             [100 * num(r, "delivered_fraction_max") for r in rows],
+                             color=colour, alpha=0.12)
     axes[0].axhline(99.9, color="gray", linestyle=":", label="99.9 %")
     axes[0].set_ylabel("messages that reached imu/data [%]")
     axes[1].axhline(1.0, color="gray", linestyle=":", label="1 ms")
@@ -420,7 +451,7 @@ def node_chart(node, path):
         ax.legend(fontsize=9)
     axes[0].set_title("delivery")
     axes[1].set_title("latency (input header stamped at send time)")
-    fig.suptitle("Node benchmark: sensor_msgs/Imu in, imu/data out")
+    fig.suptitle("Node benchmark: sensor_msgs/Imu in, imu/data out (median of the runs)")
     fig.tight_layout()
     fig.savefig(path, dpi=80)
     plt.close(fig)
@@ -577,7 +608,7 @@ def main(argv):
     costs_path = os.path.join(data_dir, "step_costs.json")
     medians = gbench_medians(costs_path) if os.path.exists(costs_path) else {}
     node_path = os.path.join(data_dir, "node_bench.csv")
-    node = read_csv(node_path) if os.path.exists(node_path) else []
+    node = aggregate_node(read_csv(node_path)) if os.path.exists(node_path) else []
     if node:
         node_chart(node, os.path.join(docs_dir, "node_bench.png"))
     text = results_markdown(sweep, medians, node, bool(node), machine_line(data_dir))
