@@ -101,11 +101,11 @@ bool isTriaxial(const Eigen::Vector3d& I) { return I[0] != I[1] && I[1] != I[2] 
 /// Running error and invariant drift of one run, fed a state at each check time.
 class Score {
  public:
-  Score(const DynamicScene& scene)
-      : I_(scene.moments), check_side_(scene.torqueFree() && isTriaxial(scene.moments)) {
-    inv0_ = invariantsOf(I_, scene.initial.w_B);
-    torque_free_ = scene.torqueFree();
-  }
+  explicit Score(const DynamicScene& scene)
+      : I_(scene.moments),
+        torque_free_(scene.torqueFree()),
+        check_side_(torque_free_ && isTriaxial(scene.moments)),
+        inv0_(invariantsOf(I_, scene.initial.w_B)) {}
 
   void add(const DynamicState& x, const DynamicState& truth) {
     last_err_ = ap::rotationAngle(x.q_WB, truth.q_WB);
@@ -141,9 +141,9 @@ class Score {
 
  private:
   Eigen::Vector3d I_;
-  bool check_side_;
-  bool torque_free_ = true;
-  Invariants inv0_{};
+  bool torque_free_;
+  bool check_side_;  // the separatrix sides exist only for a torque-free triaxial body
+  Invariants inv0_;
   double err_ = 0.0, last_err_ = 0.0, energy_ = 0.0, momentum_ = 0.0, norm_ = 0.0;
   bool nonfinite_ = false, wrong_side_ = false;
 };
@@ -172,8 +172,7 @@ Result baseResult(const DynamicScene& scene, Integrator method, double dt, long 
 class Driver {
  public:
   Driver(const DynamicScene& scene, Integrator method, double tolerance = 1e-9)
-      : method_(method),
-        stepper_(method == Integrator::Exact ? Integrator::Rk4 : method, bodyOf(scene), tolerance),
+      : stepper_(method == Integrator::Exact ? Integrator::Rk4 : method, bodyOf(scene), tolerance),
         x0_(stepper_.toPrincipal(scene.initial)),
         torque_(stepper_.toPrincipal(ap::TorqueInput{scene.torque_B, ap::TorqueFrame::Body})) {
     if (method == Integrator::Exact) motion_.emplace(bodyOf(scene), scene.initial);
@@ -200,7 +199,6 @@ class Driver {
   double probe() const { return motion_ ? last_exact_.q_WB.w() : x_.q_WP.w(); }
 
  private:
-  Integrator method_;
   ap::DynamicStepper stepper_;
   ap::PrincipalState x0_;
   ap::PrincipalTorque torque_;
