@@ -592,7 +592,10 @@ def results_markdown(sweep, medians, node, has_node_chart, machine):
         "fills: latency then sits near 10000 / rate (100 ms at 100 kHz, 50 ms at 200 kHz) "
         "and the excess is dropped. Profiles (`perf`) at 100-200 kHz put 85-90 % of the "
         "propagator's CPU in roscpp, nodelet, libc (mutexes, shared-pointer counts, malloc) "
-        "and the kernel's TCP path, and under 12 % in the wrapper and the core together.",
+        "and the kernel's TCP path, and under 12 % in the wrapper and the core together. On "
+        "this shared 2-core machine (other engineers' builds and tests running, the generator "
+        "on the same two cores) the p99 at a given rate varies up to tenfold between runs: "
+        "read the ranges.",
         "",
         node_table(node),
     ]
