@@ -17,7 +17,8 @@ DEBIAN_PACKAGES=(
   libtf2-ros-dev libtf2-eigen-dev libtf2-geometry-msgs-dev
   libnodelet-dev pluginlib-dev libtopic-tools-dev
   librostest-dev python3-rostest python3-rospy python3-roslaunch python3-rosnode
-  python3-rostopic python3-tf2-ros python3-tf2-msgs
+  python3-rostopic python3-tf2-ros python3-tf2-msgs python3-sensor-msgs python3-diagnostic-msgs
+  python3-std-srvs python3-geometry-msgs python3-std-msgs python3-rosgraph-msgs python3-yaml
   libeigen3-dev libboost-dev libboost-math-dev
   libgtest-dev googletest libbenchmark-dev python3-matplotlib
 )

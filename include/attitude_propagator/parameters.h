@@ -44,7 +44,8 @@ template <class P, class F>
 void forEachParameter(P& p, F&& f) {
   f("model", p.model, "", "`auto` (dynamic when `inertia` is set), `kinematic` or `dynamic`");
   f("integrator", p.integrator, "",
-    "one of DESIGN §4's names; `auto`: `cf4` kinematic, `exact` torque-free, else `rk4`");
+    "kinematic: `euler` `rk4` `exp` `exp2` `cf4`; dynamic: `rk4` `implicit_midpoint` "
+    "`splitting` `splitting4` `dopri5` `exact`; `auto`: `cf4`, `exact` torque-free, else `rk4`");
   f("rate_input", p.rate_input, "",
     "`imu` (`imu/data_raw`), `twist` (`body_twist`) or `none` (dynamic only)");
   f("torque_input", p.torque_input, "", "subscribe to `torque` (dynamic model only)");

@@ -1,7 +1,7 @@
 #include "attitude_propagator/parameters.h"
 
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <sstream>
@@ -42,8 +42,9 @@ void requireOneOf(const std::string& name, const std::string& value,
 void requireFrameName(const std::string& name, const std::string& frame) {
   // tf2 refuses frame ids with a leading slash (tf1 style) and empty ones.
   if (frame.empty() || frame.front() == '/') {
-    fail(name, "invalid frame id '" + frame + "'; accepted: a non-empty tf2 frame id without "
-                                              "a leading '/'");
+    fail(name, "invalid frame id '" + frame +
+                   "'; accepted: a non-empty tf2 frame id without "
+                   "a leading '/'");
   }
 }
 
@@ -68,15 +69,17 @@ Model resolveModel(const Parameters& p) {
 
 Integrator resolveIntegrator(const Parameters& p, Model model) {
   const Integrator integrator = integratorFromName(p.integrator);  // throws "integrator: ..."
-  const bool ok = model == Model::Dynamic ? supportsDynamic(integrator)
-                                          : supportsKinematic(integrator);
+  const bool ok =
+      model == Model::Dynamic ? supportsDynamic(integrator) : supportsKinematic(integrator);
   if (!ok) {
     fail("integrator", "'" + p.integrator + "' does not drive the " + modelName(model) +
                            " model; accepted: " + integratorsFor(model));
   }
   if (integrator == Integrator::Exact && p.torque_input) {
-    fail("integrator", "'exact' is the torque-free solution and torque_input is true; "
-                       "accepted: " + integratorsFor(model) + " except exact");
+    fail("integrator",
+         "'exact' is the torque-free solution and torque_input is true; "
+         "accepted: " +
+             integratorsFor(model) + " except exact");
   }
   return integrator;
 }
@@ -172,11 +175,11 @@ std::string parameterTableMarkdown() {
       "| parameter | default | unit | meaning |\n"
       "|---|---|---|---|\n";
   const Parameters defaults;
-  forEachParameter(defaults, [&table](const char* name, const auto& value, const char* unit,
-                                      const char* doc) {
-    table += std::string("| `") + name + "` | `" + formatParameter(value) + "` | " + unit +
-             " | " + doc + " |\n";
-  });
+  forEachParameter(
+      defaults, [&table](const char* name, const auto& value, const char* unit, const char* doc) {
+        table += std::string("| `") + name + "` | `" + formatParameter(value) + "` | " + unit +
+                 " | " + doc + " |\n";
+      });
   return table;
 }
 
@@ -198,12 +201,14 @@ NodeConfig validateParameters(const Parameters& p) {
 
   if (config.model == Model::Kinematic) {
     if (p.torque_input) {
-      fail("torque_input", "true needs the dynamic model, which needs `inertia`; accepted "
-                           "without inertia: false");
+      fail("torque_input",
+           "true needs the dynamic model, which needs `inertia`; accepted "
+           "without inertia: false");
     }
     if (config.rate_input == RateInput::None) {
-      fail("rate_input", "'none' leaves the kinematic model nothing to integrate; accepted "
-                         "with model kinematic: imu twist");
+      fail("rate_input",
+           "'none' leaves the kinematic model nothing to integrate; accepted "
+           "with model kinematic: imu twist");
     }
     config.kinematic.integrator = integrator;
     config.kinematic.time_policy = policy;
@@ -212,8 +217,15 @@ NodeConfig validateParameters(const Parameters& p) {
   }
 
   if (p.inertia.empty()) {
-    fail("inertia", "required by model dynamic; accepted: 3 principal moments [I1, I2, I3] or "
-                    "6 values [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] (kg m^2)");
+    fail("inertia",
+         "required by model dynamic; accepted: 3 principal moments [I1, I2, I3] or "
+         "6 values [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] (kg m^2)");
+  }
+  if (1.0 / p.publish_rate > p.max_dt) {
+    // Each timer tick would be a gap longer than max_dt: the state would be held forever.
+    fail("publish_rate", "invalid value " + formatParameter(p.publish_rate) + " with max_dt " +
+                             formatParameter(p.max_dt) +
+                             "; accepted: at least 1/max_dt (Hz) in the dynamic model");
   }
   DynamicConfig dynamic;
   dynamic.body = makeBody(p.inertia);

@@ -1,10 +1,11 @@
 #include "attitude_propagator/ros/attitude_propagator_ros.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
-#include <boost/make_shared.hpp>
 #include <tf2_msgs/TFMessage.h>
+#include <boost/make_shared.hpp>
 
 #include "attitude_propagator/AttitudeState.h"
 #include "attitude_propagator/orientation_covariance.h"
@@ -21,6 +22,9 @@ constexpr double kBackwardJump = 1.0;
 // Inputs are queued, not dropped, through a burst of this many messages (a bag played fast,
 // a load generator); outputs likewise for slow subscribers.
 constexpr std::uint32_t kQueueSize = 10000;
+// Dynamic model: inputs stamped ahead of the propagator wait for the timer; at most this many
+// (a stream stamped far in the future must not grow memory without bound).
+constexpr std::size_t kMaxPending = 4096;
 // Throttle period (s) of warnings about input that keeps coming bad.
 constexpr double kWarnPeriod = 5.0;
 // How often ROS time is checked for jumps while no input arrives (s).
@@ -61,15 +65,13 @@ bool isFinite(const Eigen::Quaterniond& q) { return q.coeffs().allFinite(); }
 }  // namespace
 
 AttitudePropagatorRos::AttitudePropagatorRos(ros::NodeHandle nh, ros::NodeHandle pnh)
-    : nh_(nh),
-      pnh_(pnh),
-      config_(loadParameters(pnh)),
-      updater_(nh, pnh, pnh.getNamespace()) {
+    : nh_(nh), pnh_(pnh), config_(loadParameters(pnh)), updater_(nh, pnh, pnh.getNamespace()) {
   if (config_.model == Model::Dynamic) {
     dynamic_.emplace(*config_.dynamic);
   } else {
     kinematic_.emplace(config_.kinematic);
   }
+  pending_.reserve(kMaxPending);
   const double stddev = config_.parameters.angular_velocity_stddev;
   default_R_ = stddev * stddev * Eigen::Matrix3d::Identity();
 
@@ -102,11 +104,11 @@ void AttitudePropagatorRos::advertise() {
 void AttitudePropagatorRos::subscribe() {
   const auto hints = ros::TransportHints().tcpNoDelay();
   if (config_.rate_input == RateInput::Imu) {
-    rate_sub_ = nh_.subscribe("imu/data_raw", kQueueSize, &AttitudePropagatorRos::onImu, this,
-                              hints);
+    rate_sub_ =
+        nh_.subscribe("imu/data_raw", kQueueSize, &AttitudePropagatorRos::onImu, this, hints);
   } else if (config_.rate_input == RateInput::Twist) {
-    rate_sub_ = nh_.subscribe("body_twist", kQueueSize, &AttitudePropagatorRos::onTwist, this,
-                              hints);
+    rate_sub_ =
+        nh_.subscribe("body_twist", kQueueSize, &AttitudePropagatorRos::onTwist, this, hints);
   }
   if (dynamic_ && config_.torque_input) {
     torque_sub_ =
@@ -117,17 +119,18 @@ void AttitudePropagatorRos::subscribe() {
 void AttitudePropagatorRos::logModel() const {
   const auto& p = config_.parameters;
   if (dynamic_) {
-    ROS_INFO("attitude_propagator: dynamic model %s (integrator %s, max_step %g s), "
-             "publishing %s -> %s at %g Hz; rate input %s, torque input %s",
-             dynamic_->modelName().c_str(), integratorName(dynamic_->integrator()).c_str(),
-             config_.dynamic->max_step, p.fixed_frame.c_str(), p.body_frame.c_str(),
-             p.publish_rate, rateInputName(config_.rate_input),
-             config_.torque_input ? "on" : "off");
+    ROS_INFO(
+        "attitude_propagator: dynamic model %s (integrator %s, max_step %g s), "
+        "publishing %s -> %s at %g Hz; rate input %s, torque input %s",
+        dynamic_->modelName().c_str(), integratorName(dynamic_->integrator()).c_str(),
+        config_.dynamic->max_step, p.fixed_frame.c_str(), p.body_frame.c_str(), p.publish_rate,
+        rateInputName(config_.rate_input), config_.torque_input ? "on" : "off");
   } else {
-    ROS_INFO("attitude_propagator: kinematic model (integrator %s), publishing %s -> %s per "
-             "%s message",
-             integratorName(kinematic_->integrator()).c_str(), p.fixed_frame.c_str(),
-             p.body_frame.c_str(), rateInputName(config_.rate_input));
+    ROS_INFO(
+        "attitude_propagator: kinematic model (integrator %s), publishing %s -> %s per "
+        "%s message",
+        integratorName(kinematic_->integrator()).c_str(), p.fixed_frame.c_str(),
+        p.body_frame.c_str(), rateInputName(config_.rate_input));
   }
 }
 
@@ -137,6 +140,7 @@ void AttitudePropagatorRos::logModel() const {
 
 void AttitudePropagatorRos::onImu(const ros::MessageEvent<const sensor_msgs::Imu>& event) {
   checkRosTime();
+  ++counters_.received;
   const sensor_msgs::Imu& msg = *event.getConstMessage();
   if (msg.angular_velocity_covariance[0] == -1.0) {
     // REP-145: element 0 at -1 marks "this message carries no angular velocity".
@@ -161,12 +165,14 @@ void AttitudePropagatorRos::onImu(const ros::MessageEvent<const sensor_msgs::Imu
   const Eigen::Matrix3d R_I = covarianceFromMsg(msg.angular_velocity_covariance);
   const Eigen::Matrix3d R_B =
       R_I.isZero(0.0) ? default_R_ : rotateCovariance(R_I, q_BI->toRotationMatrix());
-  handleRate(stampOr(msg.header.stamp, event.getReceiptTime()), w_B, R_B, &msg);
+  handleRate(stampOr(msg.header.stamp, event.getReceiptTime()), w_B, R_B, event.getConstMessage(),
+             *q_BI);
 }
 
 void AttitudePropagatorRos::onTwist(
     const ros::MessageEvent<const topic_tools::ShapeShifter>& event) {
   checkRosTime();
+  ++counters_.received;
   const topic_tools::ShapeShifter& msg = *event.getConstMessage();
   const geometry_msgs::Vector3* w = nullptr;
   ros::Time stamp;
@@ -189,40 +195,30 @@ void AttitudePropagatorRos::onTwist(
   }
   if (!allFinite(*w)) {
     ++counters_.rejected_non_finite;
-    ROS_WARN_THROTTLE(kWarnPeriod, "body_twist: NaN or infinite angular rate: rejected (%lu so far)",
+    ROS_WARN_THROTTLE(kWarnPeriod,
+                      "body_twist: NaN or infinite angular rate: rejected (%lu so far)",
                       counters_.rejected_non_finite);
     return;
   }
   static const std::string kBody;
   const Eigen::Quaterniond* q_BS = mountRotation(frame_id ? *frame_id : kBody);
   if (!q_BS) return;
-  handleRate(stampOr(stamp, event.getReceiptTime()), *q_BS * toEigen(*w), default_R_, nullptr);
+  handleRate(stampOr(stamp, event.getReceiptTime()), *q_BS * toEigen(*w), default_R_, {}, *q_BS);
 }
 
 void AttitudePropagatorRos::onTorque(
     const ros::MessageEvent<const topic_tools::ShapeShifter>& event) {
   checkRosTime();
+  ++counters_.received;
   const topic_tools::ShapeShifter& msg = *event.getConstMessage();
   const geometry_msgs::Vector3* torque = nullptr;
+  const std::string* frame_id = nullptr;
   ros::Time stamp;
-  TorqueFrame frame = config_.torque_frame;
-  Eigen::Quaterniond q_B_torque = Eigen::Quaterniond::Identity();
   if (isType<geometry_msgs::WrenchStamped>(msg)) {
     decodeInto(msg, decode_buffer_, wrench_stamped_);
     torque = &wrench_stamped_.wrench.torque;
     stamp = wrench_stamped_.header.stamp;
-    const std::string& frame_id = wrench_stamped_.header.frame_id;
-    const auto& p = config_.parameters;
-    if (frame_id == p.body_frame) {
-      frame = TorqueFrame::Body;
-    } else if (frame_id == p.fixed_frame) {
-      frame = TorqueFrame::Fixed;
-    } else if (!frame_id.empty()) {  // empty: as unstamped, torque_frame decides
-      const auto q = torqueFrameRotation(frame_id);
-      if (!q) return;
-      q_B_torque = *q;
-      frame = TorqueFrame::Body;
-    }
+    frame_id = &wrench_stamped_.header.frame_id;
   } else if (isType<geometry_msgs::Wrench>(msg)) {
     decodeInto(msg, decode_buffer_, wrench_);
     torque = &wrench_.torque;
@@ -240,28 +236,55 @@ void AttitudePropagatorRos::onTorque(
                       counters_.rejected_non_finite);
     return;
   }
-  const Eigen::Vector3d tau = q_B_torque * toEigen(*torque);
-  feedDynamic(stampOr(stamp, event.getReceiptTime()), last_torque_stamp_, "torque",
-              [&](double t) { return dynamic_->setTorque(t, tau, frame); });
+  DynamicInput input;
+  input.stamp = stampOr(stamp, event.getReceiptTime());
+  if (!hasTime(input.stamp, "torque")) return;
+  input.is_torque = true;
+  if (!resolveTorqueFrame(frame_id ? *frame_id : std::string(), toEigen(*torque), input)) return;
+  last_input_ = ros::WallTime::now();
+  submitDynamic(input);
+}
+
+bool AttitudePropagatorRos::resolveTorqueFrame(const std::string& frame_id,
+                                               const Eigen::Vector3d& tau, DynamicInput& input) {
+  const auto& p = config_.parameters;
+  input.value = tau;
+  input.frame = config_.torque_frame;  // unstamped, or stamped with an empty frame_id
+  if (frame_id.empty()) return true;
+  if (frame_id == p.body_frame || frame_id == p.fixed_frame) {
+    input.frame = frame_id == p.body_frame ? TorqueFrame::Body : TorqueFrame::Fixed;
+    return true;
+  }
+  // A third frame: rotate into the body now; the core takes it as a body torque.
+  const auto q_B_frame = torqueFrameRotation(frame_id);
+  if (!q_B_frame) return false;
+  input.value = *q_B_frame * tau;
+  input.frame = TorqueFrame::Body;
+  return true;
 }
 
 void AttitudePropagatorRos::handleRate(const ros::Time& stamp, const Eigen::Vector3d& w_B,
-                                       const Eigen::Matrix3d& R_B, const sensor_msgs::Imu* imu) {
-  if (stamp.isZero()) return;  // sim time before the first /clock: no time to put it at
+                                       const Eigen::Matrix3d& R_B,
+                                       const sensor_msgs::Imu::ConstPtr& imu,
+                                       const Eigen::Quaterniond& q_B_sensor) {
+  if (!hasTime(stamp, imu ? "imu/data_raw" : "body_twist")) return;
   last_input_ = ros::WallTime::now();
   if (kinematic_) {
-    handleKinematicRate(stamp, w_B, R_B, imu);
+    handleKinematicRate(stamp, w_B, R_B, imu.get(), q_B_sensor);
     return;
   }
-  const char* input = imu ? "imu/data_raw" : "body_twist";
-  const bool holds = feedDynamic(stamp, last_rate_stamp_, input,
-                                 [&](double t) { return dynamic_->setRate(t, w_B); });
-  if (holds && imu) publishImu(*imu, stamp, *mountRotation(imu->header.frame_id));
+  DynamicInput input;
+  input.stamp = stamp;
+  input.value = w_B;
+  input.imu = imu;
+  input.q_B_sensor = q_B_sensor;
+  submitDynamic(input);
 }
 
 void AttitudePropagatorRos::handleKinematicRate(const ros::Time& stamp, const Eigen::Vector3d& w_B,
                                                 const Eigen::Matrix3d& R_B,
-                                                const sensor_msgs::Imu* imu) {
+                                                const sensor_msgs::Imu* imu,
+                                                const Eigen::Quaterniond& q_B_sensor) {
   // time() is only defined once anchored (the window is empty before).
   const double t_before = kinematic_->anchored() ? kinematic_->time() : 0.0;
   const Eigen::Quaterniond q_before = kinematic_->orientation();
@@ -277,36 +300,47 @@ void AttitudePropagatorRos::handleKinematicRate(const ros::Time& stamp, const Ei
     P_B_.setZero();  // a new anchor: the state there is the given one
   }
   publishState(stamp);
-  if (imu) publishImu(*imu, stamp, *mountRotation(imu->header.frame_id));
+  if (imu) publishImu(*imu, stamp, q_B_sensor);
 }
 
-template <class Apply>
-bool AttitudePropagatorRos::feedDynamic(const ros::Time& stamp, ros::Time& last_stamp,
-                                        const char* input, Apply&& apply) {
-  if (!last_stamp.isZero() && stamp <= last_stamp) {
-    if ((last_stamp - stamp).toSec() > kBackwardJump) {
-      ROS_WARN("%s: stamps jumped back from %.3f to %.3f s (looped bag?): reset to the initial "
-               "state",
-               input, last_stamp.toSec(), stamp.toSec());
-      ++counters_.resets;
-      resetPropagator(true);
-    } else {
-      ++counters_.dropped_stale;
-      ROS_WARN_THROTTLE(kWarnPeriod,
-                        "%s: stamp %.6f at or before the last one: dropped (%lu so far)", input,
-                        stamp.toSec(), counters_.dropped_stale);
-      return false;
-    }
+void AttitudePropagatorRos::submitDynamic(const DynamicInput& input) {
+  const double t = coreTime(input.stamp);
+  if (!dynamic_->anchored() || t <= dynamic_->time()) {
+    applyDynamic(input);  // anchors, or late (the core places it), or a jump back
+    return;
   }
-  last_stamp = stamp;
-  double t = coreTime(stamp);
-  if (dynamic_->anchored() && t < dynamic_->time()) {
-    // The timer already advanced past this stamp (transport latency): the input acts from
-    // the propagator's time on, so it is late by at most one publish period, never lost.
-    ++counters_.late;
-    t = dynamic_->time();
+  // Ahead of the propagator: held until the timer reaches its stamp, so the state published
+  // at a grid stamp sees exactly the inputs stamped up to it, and the timer is never left
+  // behind a propagator that inputs pushed past the grid.
+  if (pending_.size() >= kMaxPending) {
+    applyDynamic(pending_.front());
+    pending_.erase(pending_.begin());
   }
-  return handleOutcome(apply(t), input, stamp.toSec());
+  const auto at = std::upper_bound(
+      pending_.begin(), pending_.end(), input.stamp,
+      [](const ros::Time& stamp, const DynamicInput& other) { return stamp < other.stamp; });
+  pending_.insert(at, input);
+}
+
+void AttitudePropagatorRos::applyDynamic(const DynamicInput& input) {
+  const double t = coreTime(input.stamp);
+  // The core places an input that arrives after the timer passed its stamp (transport
+  // latency) at the last grid point, and drops one not newer than the stream's previous one.
+  const bool late = dynamic_->anchored() && t < dynamic_->time();
+  const StampOutcome outcome = input.is_torque ? dynamic_->setTorque(t, input.value, input.frame)
+                                               : dynamic_->setRate(t, input.value);
+  if (late && outcome == StampOutcome::Advanced) ++counters_.late;
+  const char* name = input.is_torque ? "torque" : input.imu ? "imu/data_raw" : "body_twist";
+  if (handleOutcome(outcome, name, input.stamp.toSec()) && input.imu) {
+    publishImu(*input.imu, input.stamp, input.q_B_sensor);
+  }
+}
+
+void AttitudePropagatorRos::applyPendingUpTo(const ros::Time& stamp) {
+  std::size_t n = 0;
+  while (n < pending_.size() && pending_[n].stamp <= stamp) ++n;
+  for (std::size_t i = 0; i < n && i < pending_.size(); ++i) applyDynamic(pending_[i]);
+  pending_.erase(pending_.begin(), pending_.begin() + std::min(n, pending_.size()));
 }
 
 const Eigen::Quaterniond* AttitudePropagatorRos::mountRotation(const std::string& frame_id) {
@@ -368,12 +402,20 @@ double AttitudePropagatorRos::coreTime(const ros::Time& stamp) {
   return (stamp - origin_).toSec();
 }
 
+bool AttitudePropagatorRos::hasTime(const ros::Time& stamp, const char* input) {
+  if (!stamp.isZero()) return true;
+  // An unstamped message under sim time before the first /clock: no time to put it at.
+  ++counters_.dropped_no_time;
+  ROS_WARN_THROTTLE(kWarnPeriod, "%s: unstamped message and no ROS time yet (/clock): dropped",
+                    input);
+  return false;
+}
+
 ros::Time AttitudePropagatorRos::stampOr(const ros::Time& stamp, const ros::Time& receipt) {
   return stamp.isZero() ? receipt : stamp;
 }
 
-bool AttitudePropagatorRos::handleOutcome(StampOutcome outcome, const char* input,
-                                          double stamp_s) {
+bool AttitudePropagatorRos::handleOutcome(StampOutcome outcome, const char* input, double stamp_s) {
   switch (outcome) {
     case StampOutcome::Anchored:
     case StampOutcome::Advanced:
@@ -390,17 +432,18 @@ bool AttitudePropagatorRos::handleOutcome(StampOutcome outcome, const char* inpu
     case StampOutcome::ResetBackwardJump:
       ++counters_.accepted;
       ++counters_.resets;
-      ROS_WARN("%s: stamps jumped back by more than %g s to %.3f (looped bag?): reset to the "
-               "initial state",
-               input, kBackwardJump, stamp_s);
+      ROS_WARN(
+          "%s: stamps jumped back by more than %g s to %.3f (looped bag?): reset to the "
+          "initial state",
+          input, kBackwardJump, stamp_s);
       P_B_.setZero();
       last_published_ = ros::Time();
-      last_rate_stamp_ = last_torque_stamp_ = ros::Time();
       return true;
     case StampOutcome::DroppedStale:
       ++counters_.dropped_stale;
-      ROS_WARN_THROTTLE(kWarnPeriod, "%s: stamp %.6f at or before the last one: dropped (%lu so far)",
-                        input, stamp_s, counters_.dropped_stale);
+      ROS_WARN_THROTTLE(kWarnPeriod,
+                        "%s: stamp %.6f at or before the last one: dropped (%lu so far)", input,
+                        stamp_s, counters_.dropped_stale);
       return false;
     case StampOutcome::RejectedNonFinite:
       ++counters_.rejected_non_finite;
@@ -415,11 +458,17 @@ void AttitudePropagatorRos::checkRosTime() {
   const ros::Time now = ros::Time::now();
   if (now.isZero()) return;  // sim time before the first /clock
   if (!last_ros_time_.isZero() && (last_ros_time_ - now).toSec() > kBackwardJump) {
-    ROS_WARN("ROS time jumped back from %.3f to %.3f s (looped bag or restarted clock): reset "
-             "to the initial state",
-             last_ros_time_.toSec(), now.toSec());
+    ROS_WARN(
+        "ROS time jumped back from %.3f to %.3f s (looped bag or restarted clock): reset "
+        "to the initial state",
+        last_ros_time_.toSec(), now.toSec());
     ++counters_.resets;
     resetPropagator(true);
+    last_ros_time_ = now;
+    // Publish the initial state now rather than one timer period later: roscpp restarts
+    // its timers a full period after a backward jump.
+    if (dynamic_) publishDynamic();
+    return;
   }
   last_ros_time_ = now;
 }
@@ -437,27 +486,34 @@ ros::Time AttitudePropagatorRos::gridStampAtOrBefore(const ros::Time& now) const
 
 void AttitudePropagatorRos::onDynamicTimer(const ros::TimerEvent&) {
   checkRosTime();
+  publishDynamic();
+}
+
+void AttitudePropagatorRos::publishDynamic() {
   const ros::Time now = ros::Time::now();
   if (now.isZero()) return;
   const ros::Time stamp = gridStampAtOrBefore(now);
+  applyPendingUpTo(stamp);
   if (!last_published_.isZero() && stamp <= last_published_) return;
   const double t = coreTime(stamp);
-  if (dynamic_->anchored() && t <= dynamic_->time()) return;  // an input already went past it
-  const StampOutcome outcome = dynamic_->advanceTo(t);
-  if (outcome == StampOutcome::HeldGap) {
-    ++counters_.gaps;
-    ROS_WARN_THROTTLE(kWarnPeriod,
-                      "ROS time advanced by more than max_dt = %g s to %.3f: not integrated "
-                      "across, state held",
-                      config_.parameters.max_dt, stamp.toSec());
-  } else if (outcome == StampOutcome::ResetBackwardJump) {
-    ++counters_.resets;
-    ROS_WARN("ROS time went back to %.3f s: reset to the initial state", stamp.toSec());
-    last_published_ = ros::Time();
-  } else if (!stateHoldsAtStamp(outcome)) {
-    return;
+  if (dynamic_->anchored() && t < dynamic_->time()) return;  // set_state pinned a later time
+  if (!dynamic_->anchored() || t > dynamic_->time()) {
+    const StampOutcome outcome = dynamic_->advanceTo(t);
+    if (outcome == StampOutcome::HeldGap) {
+      ++counters_.gaps;
+      ROS_WARN_THROTTLE(kWarnPeriod,
+                        "ROS time advanced by more than max_dt = %g s to %.3f: not integrated "
+                        "across, state held",
+                        config_.parameters.max_dt, stamp.toSec());
+    } else if (outcome == StampOutcome::ResetBackwardJump) {
+      ++counters_.resets;
+      ROS_WARN("ROS time went back to %.3f s: reset to the initial state", stamp.toSec());
+      last_published_ = ros::Time();
+    } else if (!stateHoldsAtStamp(outcome)) {
+      return;
+    }
   }
-  publishState(stamp);
+  publishState(stamp);  // also when an input stamped exactly here brought the state to it
 }
 
 void AttitudePropagatorRos::onWatchdog(const ros::WallTimerEvent&) {
@@ -470,10 +526,10 @@ void AttitudePropagatorRos::onWatchdog(const ros::WallTimerEvent&) {
 void AttitudePropagatorRos::resetPropagator(bool forget_time) {
   if (kinematic_) kinematic_->reset();
   if (dynamic_) dynamic_->reset();
+  pending_.clear();
   P_B_.setZero();
   if (forget_time) {
     origin_ = last_published_ = ros::Time();
-    last_rate_stamp_ = last_torque_stamp_ = ros::Time();
   }
 }
 
@@ -603,7 +659,8 @@ bool AttitudePropagatorRos::onSetState(SetState::Request& request, SetState::Res
 void AttitudePropagatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   const ros::WallTime now = ros::WallTime::now();
   const double dt = (now - last_diagnosis_).toSec();
-  const double input_rate = dt > 0.0 ? (counters_.accepted - accepted_at_last_diagnosis_) / dt : 0.0;
+  const double input_rate =
+      dt > 0.0 ? (counters_.accepted - accepted_at_last_diagnosis_) / dt : 0.0;
   last_diagnosis_ = now;
   accepted_at_last_diagnosis_ = counters_.accepted;
 
@@ -615,15 +672,18 @@ void AttitudePropagatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "propagating");
   }
   status.add("model", dynamic_ ? dynamic_->modelName() : std::string("kinematic"));
-  status.add("integrator", integratorName(dynamic_ ? dynamic_->integrator()
-                                                  : kinematic_->integrator()));
+  status.add("integrator",
+             integratorName(dynamic_ ? dynamic_->integrator() : kinematic_->integrator()));
   status.add("input_rate_hz", input_rate);
+  status.add("received", counters_.received);
   status.add("accepted", counters_.accepted);
+  status.add("pending", pending_.size());
   status.add("rejected_non_finite", counters_.rejected_non_finite);
   status.add("rejected_no_rate", counters_.rejected_no_rate);
   status.add("rejected_type", counters_.rejected_type);
   status.add("dropped_stale", counters_.dropped_stale);
   status.add("dropped_no_tf", counters_.dropped_no_tf);
+  status.add("dropped_no_time", counters_.dropped_no_time);
   status.add("late", counters_.late);
   status.add("gaps", counters_.gaps);
   status.add("resets", counters_.resets);
@@ -632,6 +692,7 @@ void AttitudePropagatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
     status.add("kinetic_energy", dynamic_->kineticEnergy());
     status.add("energy_drift", dynamic_->energyDrift());
     status.add("momentum_drift", dynamic_->momentumDrift());
+    status.add("failed_steps", dynamic_->failedSteps());
   }
 }
 

@@ -34,8 +34,7 @@ bool isNumber(const XmlRpc::XmlRpcValue& v) {
 }
 
 double toDouble(XmlRpc::XmlRpcValue& v) {
-  return v.getType() == XmlRpc::XmlRpcValue::TypeInt ? static_cast<int>(v)
-                                                     : static_cast<double>(v);
+  return v.getType() == XmlRpc::XmlRpcValue::TypeInt ? static_cast<int>(v) : static_cast<double>(v);
 }
 
 void read(const std::string& name, XmlRpc::XmlRpcValue& v, std::string& out) {
@@ -71,7 +70,8 @@ void rejectUnknownNames(const ros::NodeHandle& pnh) {
   const std::vector<std::string> known = parameterNames();
   for (const std::string& key : keys) {
     if (key.compare(0, prefix.size(), prefix) != 0) continue;
-    const std::string name = key.substr(prefix.size(), key.find('/', prefix.size()) - prefix.size());
+    const std::string name =
+        key.substr(prefix.size(), key.find('/', prefix.size()) - prefix.size());
     const bool ok = std::find(known.begin(), known.end(), name) != known.end() ||
                     std::find(kForeignParameters.begin(), kForeignParameters.end(), name) !=
                         kForeignParameters.end();

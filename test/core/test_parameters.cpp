@@ -116,14 +116,25 @@ TEST(Parameters, RejectsEachBadValueNamingTheParameter) {
                    p.integrator = "exact";
                  }),
                  "integrator");
-  expectRejected(with([](auto& p) { p.initial_orientation = {0.0, 0.0, 0.0, 0.0}; }),
+  expectRejected(with([](auto& p) {
+                   p.initial_orientation = {0.0, 0.0, 0.0, 0.0};
+                 }),
                  "initial_orientation");
-  expectRejected(with([](auto& p) { p.initial_orientation = {0.0, 0.0, 1.0}; }),
+  expectRejected(with([](auto& p) {
+                   p.initial_orientation = {0.0, 0.0, 1.0};
+                 }),
                  "initial_orientation");
-  expectRejected(with([](auto& p) { p.initial_angular_velocity = {0.0, INFINITY, 0.0}; }),
+  expectRejected(with([](auto& p) {
+                   p.initial_angular_velocity = {0.0, INFINITY, 0.0};
+                 }),
                  "initial_angular_velocity");
   expectRejected(with([](auto& p) { p.publish_rate = 0.0; }), "publish_rate");
   expectRejected(with([](auto& p) { p.max_step = -0.1; }), "max_step");
+  expectRejected(with([](auto& p) {
+                   p.inertia = {1.0, 1.0, 1.0};
+                   p.publish_rate = 0.5;  // every 2 s tick a gap over max_dt = 1 s
+                 }),
+                 "publish_rate");
   expectRejected(with([](auto& p) { p.max_dt = NAN; }), "max_dt");
   expectRejected(with([](auto& p) { p.tolerance = 0.0; }), "tolerance");
   expectRejected(with([](auto& p) { p.torque_timeout = -1.0; }), "torque_timeout");
@@ -158,16 +169,16 @@ TEST(Parameters, DefaultYamlMatchesTheStruct) {
   const auto yaml = yamlEntries(packageRoot() / "config" / "default.yaml");
   const ap::Parameters defaults;
   std::size_t count = 0;
-  ap::forEachParameter(defaults, [&](const char* name, const auto& value, const char*,
-                                     const char*) {
-    ++count;
-    const auto it = yaml.find(name);
-    if (it == yaml.end()) {
-      ADD_FAILURE() << "config/default.yaml lacks " << name;
-      return;
-    }
-    EXPECT_EQ(it->second, ap::formatParameter(value)) << "default of " << name;
-  });
+  ap::forEachParameter(defaults,
+                       [&](const char* name, const auto& value, const char*, const char*) {
+                         ++count;
+                         const auto it = yaml.find(name);
+                         if (it == yaml.end()) {
+                           ADD_FAILURE() << "config/default.yaml lacks " << name;
+                           return;
+                         }
+                         EXPECT_EQ(it->second, ap::formatParameter(value)) << "default of " << name;
+                       });
   EXPECT_EQ(yaml.size(), count) << "config/default.yaml has names the struct does not";
 }
 

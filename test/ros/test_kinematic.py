@@ -11,6 +11,7 @@ import rostest
 import tf2_ros
 from geometry_msgs.msg import Quaternion, TransformStamped, Twist, TwistStamped, Vector3
 from sensor_msgs.msg import Imu
+from std_msgs.msg import Float64
 from tf2_msgs.msg import TFMessage
 
 from ap_test_util import (Diagnostics, Node, Recorder, axis_angle, as_tuple, lookup,
@@ -65,16 +66,18 @@ class KinematicTest(unittest.TestCase):
         cls.tf_buffer, cls.tf_listener = make_tf_buffer()
         cls.diag = Diagnostics()
         cls.tf_stamps = TfStamps()
-        cls.nodes = {ns: Node(ns) for ns in ("kin", "rev", "mount", "nl", "tws", "twu")}
+        cls.nodes = {ns: Node(ns) for ns in ("kin", "rev", "mount", "nl", "tws", "twu", "twx")}
         cls.imu_pubs = {ns: rospy.Publisher("/%s/imu/data_raw" % ns, Imu, queue_size=100000)
                         for ns in ("kin", "rev", "mount", "nl")}
         cls.twist_stamped_pub = rospy.Publisher("/tws/body_twist", TwistStamped,
                                                 queue_size=100000)
         cls.twist_pub = rospy.Publisher("/twu/body_twist", Twist, queue_size=100000)
+        cls.wrong_type_pub = rospy.Publisher("/twx/body_twist", Float64, queue_size=10)
         cls.imu_out = Recorder("/kin/imu/data", Imu)
         for node in cls.nodes.values():
             node.wait_ready()
-        for pub in list(cls.imu_pubs.values()) + [cls.twist_stamped_pub, cls.twist_pub]:
+        for pub in list(cls.imu_pubs.values()) + [cls.twist_stamped_pub, cls.twist_pub,
+                                                  cls.wrong_type_pub]:
             wait_connected(pub)
         wait_for(lambda: cls.imu_out.sub.get_num_connections() > 0, 20.0, "imu/data")
         cls.static_tf = publish_static_mount()
@@ -163,6 +166,17 @@ class KinematicTest(unittest.TestCase):
         self.assertAlmostEqual(imu.orientation_covariance[8], n * H * H * 1e-4, delta=1e-15)
         self.assertAlmostEqual(imu.orientation_covariance[0], n * H * H * 1e-4, delta=1e-8)
 
+    def test_a_burst_is_not_dropped(self):
+        # 3000 samples published as fast as rospy can: every one is integrated and published.
+        n = 3000
+        node = self.nodes["kin"]
+        before = node.state.count()
+        self.feed("kin", [(k * 1e-3, (0.0, 0.0, 0.3), None) for k in range(n + 1)])
+        state = node.state.wait_at(stamp_at(self.base, n * 1e-3), timeout=30.0)
+        self.assertRotation(as_tuple(state.orientation), axis_angle((0, 0, 1), 0.3 * n * 1e-3))
+        wait_for(lambda: node.state.count() - before >= n + 1, 10.0, "every burst state")
+        self.assertEqual(node.state.count() - before, n + 1)
+
     def test_octahedron_quarter_turns(self):
         # A quarter turn about body x, then one about body y: q = qx(pi/2) (x) qy(pi/2),
         # the 120 degree turn about (1, 1, 1) that maps x to y: (0.5, 0.5, 0.5, 0.5).
@@ -206,6 +220,13 @@ class KinematicTest(unittest.TestCase):
             self.assertAlmostEqual(imu.orientation_covariance[i], 50 * H * H * cov[i],
                                    delta=1e-15)
         self.assertEqual(imu.orientation_covariance[1], 0.0)
+
+    def test_wrong_message_type_is_rejected(self):
+        pub = self.wrong_type_pub
+        before = self.diag.counter("/twx/attitude_propagator", "rejected_type") or 0
+        pub.publish(Float64(1.0))
+        self.diag.wait_counter("/twx/attitude_propagator", "rejected_type", before + 1)
+        self.assertEqual(self.nodes["twx"].state.count(), 0)
 
     # -- DESIGN §6 ----------------------------------------------------------------------------
 

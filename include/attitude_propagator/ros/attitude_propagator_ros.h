@@ -54,13 +54,15 @@ class AttitudePropagatorRos {
  private:
   /// What happened to input, shown in diagnostics.
   struct Counters {
+    std::uint64_t received = 0;  // every message on an input topic
     std::uint64_t accepted = 0;
     std::uint64_t rejected_non_finite = 0;  // NaN / Inf values
     std::uint64_t rejected_no_rate = 0;     // REP-145: angular_velocity_covariance[0] == -1
     std::uint64_t rejected_type = 0;        // a message type the topic does not take
     std::uint64_t dropped_stale = 0;        // stamp at or before the last one
     std::uint64_t dropped_no_tf = 0;        // frame not (yet) known to tf
-    std::uint64_t late = 0;                 // dynamic: applied at the propagator's time
+    std::uint64_t dropped_no_time = 0;      // unstamped, and sim time without /clock yet
+    std::uint64_t late = 0;                 // dynamic: arrived after the timer passed its stamp
     std::uint64_t gaps = 0;                 // longer than max_dt: state held
     std::uint64_t resets = 0;               // backward jumps and ~reset calls
   };
@@ -73,23 +75,39 @@ class AttitudePropagatorRos {
   void onImu(const ros::MessageEvent<const sensor_msgs::Imu>& event);
   void onTwist(const ros::MessageEvent<const topic_tools::ShapeShifter>& event);
   void onTorque(const ros::MessageEvent<const topic_tools::ShapeShifter>& event);
-  /// A body rate w_B at stamp with noise covariance R_B; imu is the message for imu/data.
+  /// Dynamic model: a torque or a rate sample, applied when the timer reaches its stamp.
+  struct DynamicInput {
+    ros::Time stamp;
+    bool is_torque = false;
+    Eigen::Vector3d value = Eigen::Vector3d::Zero();  // tau (N m) or w_B (rad/s)
+    TorqueFrame frame = TorqueFrame::Body;
+    sensor_msgs::Imu::ConstPtr imu;  // a rate from an IMU: republished on imu/data
+    Eigen::Quaterniond q_B_sensor = Eigen::Quaterniond::Identity();  // its mount
+  };
+
+  /// A body rate w_B at stamp with noise covariance R_B; imu (may be null) is republished on
+  /// imu/data, q_B_sensor the rotation from the message's frame to the body.
   void handleRate(const ros::Time& stamp, const Eigen::Vector3d& w_B, const Eigen::Matrix3d& R_B,
-                  const sensor_msgs::Imu* imu);
+                  const sensor_msgs::Imu::ConstPtr& imu, const Eigen::Quaterniond& q_B_sensor);
   void handleKinematicRate(const ros::Time& stamp, const Eigen::Vector3d& w_B,
-                           const Eigen::Matrix3d& R_B, const sensor_msgs::Imu* imu);
-  /// Dynamic model: checks stamp against the stream's last one (stale, backward jump), then
-  /// applies the input at its stamp, or at the propagator's time when it arrives after the
-  /// timer has moved past it. Returns whether the state holds at the input.
-  template <class Apply>
-  bool feedDynamic(const ros::Time& stamp, ros::Time& last_stamp, const char* input,
-                   Apply&& apply);
+                           const Eigen::Matrix3d& R_B, const sensor_msgs::Imu* imu,
+                           const Eigen::Quaterniond& q_B_sensor);
+  /// Dynamic model: an input stamped at or before the propagator's time is applied now (the
+  /// core places a late one at its last grid point); a newer one waits in pending_ until the
+  /// timer reaches its stamp.
+  void submitDynamic(const DynamicInput& input);
+  void applyDynamic(const DynamicInput& input);
+  void applyPendingUpTo(const ros::Time& stamp);
   /// Rotation from the frame of a rate message to the body frame; nullptr while tf does not
   /// know it yet. Looked up once per frame id and cached (a sensor mount is static).
   const Eigen::Quaterniond* mountRotation(const std::string& frame_id);
   /// Rotation of a torque frame into the body frame, looked up per message (rare: a stamped
   /// torque in neither the body nor the fixed frame).
   std::optional<Eigen::Quaterniond> torqueFrameRotation(const std::string& frame_id);
+  /// Sets input.value and input.frame from a torque tau given in frame_id (empty: the
+  /// torque_frame parameter). False when the frame is not known to tf yet.
+  bool resolveTorqueFrame(const std::string& frame_id, const Eigen::Vector3d& tau,
+                          DynamicInput& input);
   void ensureTfListener();
 
   // Time.
@@ -98,11 +116,15 @@ class AttitudePropagatorRos {
   double coreTime(const ros::Time& stamp);
   /// Receipt time for unstamped (or zero-stamped) messages.
   static ros::Time stampOr(const ros::Time& stamp, const ros::Time& receipt);
+  /// False (counted, warned) for a zero stamp: unstamped under sim time before any /clock.
+  bool hasTime(const ros::Time& stamp, const char* input);
   /// Counts and warns for a core outcome; returns whether the state holds at the stamp.
   bool handleOutcome(StampOutcome outcome, const char* input, double stamp_s);
   /// Resets on ROS time (wall or /clock) going back by more than a second (looped bag).
   void checkRosTime();
   void onDynamicTimer(const ros::TimerEvent& event);
+  /// Dynamic model: advances to the latest grid stamp at or before now and publishes there.
+  void publishDynamic();
   void onWatchdog(const ros::WallTimerEvent& event);
   /// The latest multiple of 1/publish_rate at or before now.
   ros::Time gridStampAtOrBefore(const ros::Time& now) const;
@@ -127,6 +149,7 @@ class AttitudePropagatorRos {
   NodeConfig config_;
   std::optional<KinematicPropagator> kinematic_;
   std::optional<DynamicPropagator> dynamic_;
+  std::vector<DynamicInput> pending_;  // sorted by stamp, capacity reserved
 
   Eigen::Matrix3d P_B_ = Eigen::Matrix3d::Zero();  // orientation covariance, body frame
   Eigen::Matrix3d default_R_;  // rate noise when a message carries none: stddev^2 I
@@ -134,8 +157,6 @@ class AttitudePropagatorRos {
   ros::Time origin_;          // zero: not yet set
   ros::Time last_published_;  // zero: nothing published since the last backward jump
   ros::Time last_ros_time_;
-  ros::Time last_rate_stamp_;    // dynamic model: per-stream stamp checks
-  ros::Time last_torque_stamp_;
 
   // Sensor mount (frame of the rate messages -> body), cached.
   std::string mount_frame_;

@@ -4,10 +4,10 @@
 
 #include <boost/array.hpp>
 
-#include <Eigen/Geometry>
 #include <geometry_msgs/Quaternion.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <geometry_msgs/Vector3.h>
+#include <Eigen/Geometry>
 
 namespace attitude_propagator {
 
