@@ -514,7 +514,7 @@ def verdict(sweep):
         "- **With torque → `rk4`.** It is the cheapest method to 1e-6 rad on the torqued "
         f"scene (`rk4` at h = {h} s: {err_at(sweep, 'torqued', 'rk4', h)} rad over 20 s). "
         "For tighter tolerances `dopri5` at the node's 0.01 s grid is cheaper (see the table: "
-        "at that grid every tolerance from 1e-4 to 1e-9 takes one Dormand-Prince step per "
+        "at that grid tolerances down to about 1e-11 take one Dormand-Prince step per "
         "grid step, a fifth-order method); set `integrator: dopri5` there. The symplectic methods (`implicit_midpoint`, "
         "`splitting`, `splitting4`) keep |M| (and for the midpoint rule the energy) to "
         "round-off but are less accurate per unit of CPU on every scene here; they pay off "
