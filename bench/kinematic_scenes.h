@@ -1,0 +1,122 @@
+// Kinematic benchmark scenes (DESIGN §7): a body-rate history w_B(t) with its closed-form
+// attitude q_WB(t), so the error of a propagation from rate samples is measured against the
+// truth, never against another run of ours.
+#pragma once
+
+#include <cmath>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+namespace bench {
+
+/// Closed form of dq/dt = 1/2 q (x) (0, w_B(t)) for a precession at rate a about the fixed
+/// axis m_W combined with a spin at rate c about body e3:
+///   q(t) = Exp(t a m_W) (x) q0 (x) Exp(t c e3).
+/// Differentiating, dq/dt = 1/2 (0, a m_W) q + 1/2 q (0, c e3) = 1/2 q (x) (0, w_B) with
+///   w_B(t) = a R(q(t))^T m_W + c e3 = a Rz(-c t) R(q0)^T m_W + c e3,
+/// since Exp(t a m_W) fixes m_W. With a = 0 it is the constant rate c e3.
+struct TwoAxisMotion {
+  double precession = 0.0;  ///< a, rad/s
+  double spin = 0.0;        ///< c, rad/s
+  Eigen::Vector3d m_W = Eigen::Vector3d::UnitZ();
+  Eigen::Quaterniond q0 = Eigen::Quaterniond::Identity();
+
+  Eigen::Quaterniond attitude(double t) const {
+    return Eigen::Quaterniond(Eigen::AngleAxisd(precession * t, m_W)) * q0 *
+           Eigen::Quaterniond(Eigen::AngleAxisd(spin * t, Eigen::Vector3d::UnitZ()));
+  }
+
+  Eigen::Vector3d bodyRate(double t) const {
+    const Eigen::Vector3d m_B0 = q0.conjugate() * m_W;
+    const Eigen::Vector3d m_B = Eigen::AngleAxisd(-spin * t, Eigen::Vector3d::UnitZ()) * m_B0;
+    return precession * m_B + spin * Eigen::Vector3d::UnitZ();
+  }
+};
+
+/// The coning motion of REFERENCE §2 (the strapdown benchmark): half-angle beta, cone rate
+/// Omega, q(t) = (cos(b/2), 0, sin(b/2) cos(Omega t), sin(b/2) sin(Omega t)).
+struct ConingMotion {
+  double beta = 0.1;
+  double omega = 2.0 * M_PI * 1.1;  // not a whole number of cones over the run
+
+  Eigen::Quaterniond attitude(double t) const {
+    const double s = std::sin(0.5 * beta);
+    return Eigen::Quaterniond(std::cos(0.5 * beta), 0.0, s * std::cos(omega * t),
+                              s * std::sin(omega * t));
+  }
+  /// w_B(t) = (-2 Omega sin^2(b/2), -Omega sin b sin(Omega t), Omega sin b cos(Omega t)).
+  Eigen::Vector3d bodyRate(double t) const {
+    const double s = std::sin(0.5 * beta);
+    return Eigen::Vector3d(-2.0 * omega * s * s, -omega * std::sin(beta) * std::sin(omega * t),
+                           omega * std::sin(beta) * std::cos(omega * t));
+  }
+  double maxRate() const { return bodyRate(0.0).norm(); }  // |w_B| is constant
+};
+
+struct KinematicScene {
+  std::string name;
+  std::function<Eigen::Quaterniond(double)> attitude;  ///< closed-form q_WB(t)
+  std::function<Eigen::Vector3d(double)> rate;         ///< w_B(t), rad/s
+  double max_rate = 1.0;             ///< largest |w_B|, rad/s: the |Omega| of |Omega| dt
+  double duration = 1.0;             ///< s
+  std::vector<double> sample_rates;  ///< Hz, the step-size sweep (dt = 1 / rate)
+};
+
+/// first * 2^k, k = 0..count-1.
+inline std::vector<double> doublingRates(double first, int count) {
+  std::vector<double> rates;
+  for (int k = 0; k < count; ++k) rates.push_back(first * std::ldexp(1.0, k));
+  return rates;
+}
+
+inline KinematicScene fromTwoAxis(const std::string& name, const TwoAxisMotion& m) {
+  KinematicScene scene;
+  scene.name = name;
+  scene.attitude = [m](double t) { return m.attitude(t); };
+  scene.rate = [m](double t) { return m.bodyRate(t); };
+  scene.max_rate = std::abs(m.precession) + std::abs(m.spin);
+  return scene;
+}
+
+/// constant_rate: 1 rad/s about body e3 from a skew initial attitude. exp, exp2 and cf4 are
+/// exact at any step; euler and rk4 are not.
+inline KinematicScene constantRateScene() {
+  TwoAxisMotion m;
+  m.spin = 1.0;
+  m.q0 = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1.0, -2.0, 0.5).normalized());
+  KinematicScene scene = fromTwoAxis("constant_rate", m);
+  scene.duration = 20.0;
+  scene.sample_rates = doublingRates(25.0, 11);  // 25 Hz .. 25.6 kHz
+  return scene;
+}
+
+/// coning: beta = 0.1 rad, Omega = 2 pi 1.1 rad/s over 20 s, as REFERENCE §2 measured.
+inline KinematicScene coningScene() {
+  const ConingMotion cone;
+  KinematicScene scene;
+  scene.name = "coning";
+  scene.attitude = [cone](double t) { return cone.attitude(t); };
+  scene.rate = [cone](double t) { return cone.bodyRate(t); };
+  scene.max_rate = cone.maxRate();
+  scene.duration = 20.0;
+  scene.sample_rates = doublingRates(25.0, 11);  // includes 200 Hz, the target's rate
+  return scene;
+}
+
+/// fast_spin: a spinner at 20 rev/s about body e3 whose spin axis, tilted by 0.3 rad,
+/// precesses at 2 rad/s about world z (|w_B| up to 128 rad/s: |w| dt = 0.64 at 200 Hz).
+inline KinematicScene fastSpinScene() {
+  TwoAxisMotion m;
+  m.spin = 2.0 * M_PI * 20.0;
+  m.precession = 2.0;
+  m.q0 = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX());
+  KinematicScene scene = fromTwoAxis("fast_spin", m);
+  scene.duration = 5.0;
+  scene.sample_rates = doublingRates(100.0, 10);  // 100 Hz .. 51.2 kHz
+  return scene;
+}
+
+}  // namespace bench

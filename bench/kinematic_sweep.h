@@ -1,0 +1,24 @@
+// Work-precision sweep and stability map of the kinematic integrators (DESIGN §7).
+#pragma once
+
+#include <cstdio>
+#include <vector>
+
+#include "csv.h"
+#include "kinematic_scenes.h"
+#include "timing.h"
+
+namespace bench {
+
+/// Every kinematic method on every scene at every sample rate of the scene: one CSV row each.
+void runKinematicSweep(const std::vector<KinematicScene>& scenes, const TimingOptions& timing,
+                       std::FILE* out);
+
+/// Error after a fixed time against |w| dt, log-spaced from 1e-3 to 10.
+void runKinematicStability(const KinematicScene& scene, double duration, std::FILE* out);
+
+/// Aborts (returns false, with a message) if a scene's closed form does not satisfy
+/// dq/dt = 1/2 q (x) (0, w_B): the truth must be checked before it judges anything.
+bool checkClosedForm(const KinematicScene& scene);
+
+}  // namespace bench
