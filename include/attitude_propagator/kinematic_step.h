@@ -21,22 +21,48 @@ struct RateSample {
 };
 
 /// The newest samples, oldest first, at most kCapacity of them (cf4 needs four).
+///
+/// A ring of twice the capacity: push() writes past the newest sample and only then lets the
+/// oldest go, so undoPush() can restore the window exactly, with no copy on the hot path.
 class RateWindow {
  public:
   static constexpr std::size_t kCapacity = 4;
 
-  void push(const RateSample& sample);
+  /// Appends a sample; returns true when the oldest one left the window to make room.
+  bool push(const RateSample& sample) {
+    samples_[(head_ + size_) & kMask] = sample;
+    if (size_ < kCapacity) {
+      ++size_;
+      return false;
+    }
+    head_ = (head_ + 1) & kMask;
+    return true;
+  }
+  /// Reverts the last push(), given what it returned.
+  void undoPush(bool evicted) {
+    if (evicted) {
+      head_ = (head_ - 1) & kMask;
+    } else {
+      --size_;
+    }
+  }
   void clear() { size_ = 0; }
   std::size_t size() const { return size_; }
   /// i = 0 is the oldest sample held, size() - 1 the newest.
-  const RateSample& operator[](std::size_t i) const { return samples_[i]; }
-  const RateSample& newest() const { return samples_[size_ - 1]; }
+  const RateSample& operator[](std::size_t i) const { return samples_[(head_ + i) & kMask]; }
+  const RateSample& newest() const { return (*this)[size_ - 1]; }
 
   /// The interpolating polynomial through all samples held (degree size() - 1) at time t.
   Eigen::Vector3d interpolate(double t) const;
 
+  /// The same polynomial at two times at once: the Lagrange denominators are shared, which
+  /// halves the divisions of cf4's two Gauss-point evaluations.
+  void interpolate(double t_a, double t_b, Eigen::Vector3d& w_a, Eigen::Vector3d& w_b) const;
+
  private:
-  std::array<RateSample, kCapacity> samples_{};
+  static constexpr std::size_t kMask = 2 * kCapacity - 1;
+  std::array<RateSample, 2 * kCapacity> samples_{};
+  std::size_t head_ = 0;
   std::size_t size_ = 0;
 };
 

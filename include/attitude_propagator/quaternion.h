@@ -6,14 +6,33 @@
 // rotation matrix (notes §6) are used as they are.
 #pragma once
 
+#include <cmath>
+
 #include <Eigen/Geometry>
 
 namespace attitude_propagator {
 
 /// Exponential map of a rotation vector v (angle |v|, REFERENCE §2):
 /// Exp(v) = (cos(|v|/2), sin(|v|/2) v/|v|). Below |v|^2 = 1e-12 a Taylor series is used, so
-/// the result is exact to round-off near zero and never divides by zero.
-Eigen::Quaterniond expMap(const Eigen::Vector3d& v);
+/// the result is exact to round-off near zero and never divides by zero. Inline: it is the
+/// inner operation of every Lie-group step.
+inline Eigen::Quaterniond expMap(const Eigen::Vector3d& v) {
+  // Below this squared angle the series are exact to round-off (the next terms are of order
+  // theta^6 / 46080 < 1e-22) and avoid the 0/0 of sin(theta/2)/theta.
+  constexpr double kSmallAngleSquared = 1e-12;
+  const double theta2 = v.squaredNorm();
+  double w;
+  double s;  // sin(theta/2) / theta
+  if (theta2 < kSmallAngleSquared) {
+    w = 1.0 - theta2 / 8.0 + theta2 * theta2 / 384.0;
+    s = 0.5 - theta2 / 48.0 + theta2 * theta2 / 3840.0;
+  } else {
+    const double theta = std::sqrt(theta2);
+    w = std::cos(0.5 * theta);
+    s = std::sin(0.5 * theta) / theta;
+  }
+  return Eigen::Quaterniond(w, s * v.x(), s * v.y(), s * v.z());
+}
 
 /// Logarithm map, the inverse of expMap: the rotation vector of q with angle in [0, pi].
 /// q and -q give the same vector (the shorter of the two rotations is returned).

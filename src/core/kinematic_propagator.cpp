@@ -99,18 +99,19 @@ void KinematicPropagator::anchor(double t, const Eigen::Vector3d& w_B) {
   steps_ = 0;
 }
 
-// The step is computed on a copy of the window and committed only when finite: a finite rate
-// can still overflow (|w| h beyond the double range), and the state must never become NaN.
+// The step is committed only when finite: a finite rate can still overflow (|w| h beyond the
+// double range), and the state must never become NaN. The window is restored otherwise.
 StampOutcome KinematicPropagator::integrate(const RateSample& sample) {
-  RateWindow next = window_;
-  next.push(sample);
+  const bool evicted = window_.push(sample);
   const bool restart =
       integrator_ == Integrator::Cf4 && samples_since_anchor_ + 1 == RateWindow::kCapacity;
   const Eigen::Quaterniond q =
-      restart ? cf4FromAnchor(next) : kinematicStep(integrator_, q_WB_, next);
+      restart ? cf4FromAnchor(window_) : kinematicStep(integrator_, q_WB_, window_);
   const double n = q.norm();
-  if (!std::isfinite(n) || n == 0.0) return StampOutcome::RejectedNonFinite;
-  window_ = next;
+  if (!std::isfinite(n) || n == 0.0) {
+    window_.undoPush(evicted);
+    return StampOutcome::RejectedNonFinite;
+  }
   ++samples_since_anchor_;
   ++steps_;
   norm_error_ = n - 1.0;

@@ -43,39 +43,48 @@ Eigen::Quaterniond rk4Step(const Eigen::Quaterniond& q, const Eigen::Vector3d& w
 Eigen::Quaterniond cf4Step(const Eigen::Quaterniond& q, const RateWindow& window, std::size_t i,
                            double h) {
   const double t0 = window[i].t;
-  const Eigen::Vector3d a = window.interpolate(t0 + kGauss1 * h);
-  const Eigen::Vector3d b = window.interpolate(t0 + kGauss2 * h);
+  Eigen::Vector3d a;
+  Eigen::Vector3d b;
+  window.interpolate(t0 + kGauss1 * h, t0 + kGauss2 * h, a, b);
   // Larger weight on the earlier Gauss point first; the other order is only second order.
   return q * expMap(h * (kAlpha * a + kBeta * b)) * expMap(h * (kBeta * a + kAlpha * b));
 }
 
 }  // namespace
 
-void RateWindow::push(const RateSample& sample) {
-  if (size_ == kCapacity) {
-    for (std::size_t i = 1; i < kCapacity; ++i) samples_[i - 1] = samples_[i];
-    --size_;
-  }
-  samples_[size_++] = sample;
+Eigen::Vector3d RateWindow::interpolate(double t) const {
+  Eigen::Vector3d w;
+  Eigen::Vector3d unused;
+  interpolate(t, t, w, unused);
+  return w;
 }
 
-Eigen::Vector3d RateWindow::interpolate(double t) const {
+void RateWindow::interpolate(double t_a, double t_b, Eigen::Vector3d& w_a,
+                             Eigen::Vector3d& w_b) const {
   // Lagrange form on times relative to the first node: stamps may be large (epoch seconds),
   // and differences of nearby doubles are exact where t - t_m computed directly is not.
-  const double origin = samples_[0].t;
-  const double tau = t - origin;
-  Eigen::Vector3d w = Eigen::Vector3d::Zero();
+  const double origin = (*this)[0].t;
+  std::array<double, kCapacity> tau{};
+  for (std::size_t j = 0; j < size_; ++j) tau[j] = (*this)[j].t - origin;
+  const double tau_a = t_a - origin;
+  const double tau_b = t_b - origin;
+  w_a.setZero();
+  w_b.setZero();
   for (std::size_t j = 0; j < size_; ++j) {
-    const double tau_j = samples_[j].t - origin;
-    double basis = 1.0;
+    double denominator = 1.0;
+    double numerator_a = 1.0;
+    double numerator_b = 1.0;
     for (std::size_t m = 0; m < size_; ++m) {
       if (m == j) continue;
-      const double tau_m = samples_[m].t - origin;
-      basis *= (tau - tau_m) / (tau_j - tau_m);
+      denominator *= tau[j] - tau[m];
+      numerator_a *= tau_a - tau[m];
+      numerator_b *= tau_b - tau[m];
     }
-    w += basis * samples_[j].w_B;
+    const double inverse = 1.0 / denominator;
+    const Eigen::Vector3d& w_j = (*this)[j].w_B;
+    w_a += (numerator_a * inverse) * w_j;
+    w_b += (numerator_b * inverse) * w_j;
   }
-  return w;
 }
 
 Eigen::Quaterniond kinematicStep(Integrator method, const Eigen::Quaterniond& q_WB,

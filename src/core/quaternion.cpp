@@ -5,27 +5,6 @@
 
 namespace attitude_propagator {
 
-namespace {
-// Below this squared angle the Taylor series of cos(t/2) and sin(t/2)/t are exact to round-off
-// (the next terms are of order t^6 / 46080 < 1e-22) and avoid the 0/0 of sin(t/2)/t.
-constexpr double kSmallAngleSquared = 1e-12;
-}  // namespace
-
-Eigen::Quaterniond expMap(const Eigen::Vector3d& v) {
-  const double theta2 = v.squaredNorm();
-  double w;
-  double s;  // sin(theta/2) / theta
-  if (theta2 < kSmallAngleSquared) {
-    w = 1.0 - theta2 / 8.0 + theta2 * theta2 / 384.0;
-    s = 0.5 - theta2 / 48.0 + theta2 * theta2 / 3840.0;
-  } else {
-    const double theta = std::sqrt(theta2);
-    w = std::cos(0.5 * theta);
-    s = std::sin(0.5 * theta) / theta;
-  }
-  return Eigen::Quaterniond(w, s * v.x(), s * v.y(), s * v.z());
-}
-
 Eigen::Vector3d logMap(const Eigen::Quaterniond& q) {
   // q and -q are one rotation: take w >= 0 so that the angle is in [0, pi].
   const double sign = q.w() < 0.0 ? -1.0 : 1.0;

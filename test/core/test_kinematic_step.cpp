@@ -247,3 +247,18 @@ TEST(KinematicStep, RejectsDynamicOnlyMethods) {
   EXPECT_THROW(ap::kinematicStep(Integrator::Splitting, Eigen::Quaterniond::Identity(), window),
                std::invalid_argument);
 }
+
+TEST(RateWindow, UndoPushRestoresTheWindow) {
+  ap::RateWindow window;
+  for (int k = 0; k < 6; ++k) {
+    const ap::RateWindow before = window;
+    const bool evicted = window.push({1.0 * k, Eigen::Vector3d::Constant(k)});
+    EXPECT_EQ(evicted, k >= static_cast<int>(ap::RateWindow::kCapacity));
+    EXPECT_EQ(window.newest().t, 1.0 * k);
+    window.undoPush(evicted);
+    ASSERT_EQ(window.size(), before.size());
+    for (std::size_t i = 0; i < window.size(); ++i) EXPECT_EQ(window[i].t, before[i].t);
+    window.push({1.0 * k, Eigen::Vector3d::Constant(k)});
+  }
+  EXPECT_EQ(window[0].t, 2.0);  // samples 2..5 remain
+}
