@@ -332,7 +332,7 @@ def targets_table(sweep, medians, node):
         lines.append(f"| exp per step ≤ 2.5× euler (Google Benchmark) | {x / e:.2f}× "
                      f"({x:.1f} against {e:.1f} ns) | {yes(x / e <= 2.5)} |")
     for prefix, what in [("kinematicStep", "one step"),
-                         ("addSample", "through addSample: window copy, checks, normalise")]:
+                         ("addSample", "through addSample: time policy, window, step, normalise")]:
         kin = {n: v for n, v in medians.items() if n.split("/")[0] == prefix}
         if kin:
             worst = max(kin, key=kin.get)
