@@ -10,6 +10,8 @@
 
 #include <Eigen/Geometry>
 
+#include "attitude_propagator/coning_motion.h"
+
 namespace bench {
 
 /// Closed form of dq/dt = 1/2 q (x) (0, w_B(t)) for a precession at rate a about the fixed
@@ -36,25 +38,7 @@ struct TwoAxisMotion {
   }
 };
 
-/// The coning motion of REFERENCE §2 (the strapdown benchmark): half-angle beta, cone rate
-/// Omega, q(t) = (cos(b/2), 0, sin(b/2) cos(Omega t), sin(b/2) sin(Omega t)).
-struct ConingMotion {
-  double beta = 0.1;
-  double omega = 2.0 * M_PI * 1.1;  // not a whole number of cones over the run
-
-  Eigen::Quaterniond attitude(double t) const {
-    const double s = std::sin(0.5 * beta);
-    return Eigen::Quaterniond(std::cos(0.5 * beta), 0.0, s * std::cos(omega * t),
-                              s * std::sin(omega * t));
-  }
-  /// w_B(t) = (-2 Omega sin^2(b/2), -Omega sin b sin(Omega t), Omega sin b cos(Omega t)).
-  Eigen::Vector3d bodyRate(double t) const {
-    const double s = std::sin(0.5 * beta);
-    return Eigen::Vector3d(-2.0 * omega * s * s, -omega * std::sin(beta) * std::sin(omega * t),
-                           omega * std::sin(beta) * std::cos(omega * t));
-  }
-  double maxRate() const { return bodyRate(0.0).norm(); }  // |w_B| is constant
-};
+using attitude_propagator::ConingMotion;
 
 struct KinematicScene {
   std::string name;
@@ -100,7 +84,7 @@ inline KinematicScene coningScene() {
   scene.name = "coning";
   scene.attitude = [cone](double t) { return cone.attitude(t); };
   scene.rate = [cone](double t) { return cone.bodyRate(t); };
-  scene.max_rate = cone.maxRate();
+  scene.max_rate = cone.rateMagnitude();
   scene.duration = 20.0;
   scene.sample_rates = doublingRates(25.0, 11);  // includes 200 Hz, the target's rate
   return scene;

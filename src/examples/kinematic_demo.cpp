@@ -6,6 +6,7 @@
 #include <exception>
 #include <string>
 
+#include "attitude_propagator/coning_motion.h"
 #include "attitude_propagator/kinematic_propagator.h"
 #include "attitude_propagator/quaternion.h"
 
@@ -13,44 +14,30 @@ namespace ap = attitude_propagator;
 
 namespace {
 
-constexpr double kHalfAngle = 0.1;              // rad
-constexpr double kConeRate = 2.0 * M_PI * 0.5;  // rad/s
-constexpr double kSampleRate = 200.0;           // Hz
-
-Eigen::Quaterniond coningAttitude(double t) {
-  const double s = std::sin(0.5 * kHalfAngle);
-  return Eigen::Quaterniond(std::cos(0.5 * kHalfAngle), 0.0, s * std::cos(kConeRate * t),
-                            s * std::sin(kConeRate * t));
-}
-
-Eigen::Vector3d coningRate(double t) {
-  const double s = std::sin(0.5 * kHalfAngle);
-  return Eigen::Vector3d(-2.0 * kConeRate * s * s,
-                         -kConeRate * std::sin(kHalfAngle) * std::sin(kConeRate * t),
-                         kConeRate * std::sin(kHalfAngle) * std::cos(kConeRate * t));
-}
+constexpr double kSampleRate = 200.0;  // Hz
 
 }  // namespace
 
 int main(int argc, char** argv) {
   try {
+    const ap::ConingMotion cone{0.1, M_PI};  // half-angle 0.1 rad, one cone every 2 s
     ap::KinematicConfig config;
     config.integrator = ap::integratorFromName(argc > 1 ? argv[1] : "cf4");
-    config.initial_q_WB = coningAttitude(0.0);
+    config.initial_q_WB = cone.attitude(0.0);
     const double duration = argc > 2 ? std::stod(argv[2]) : 5.0;
     ap::KinematicPropagator propagator(config);
     std::printf("coning motion, half-angle %.2f rad, cone rate %.2f rad/s, %s at %.0f Hz\n",
-                kHalfAngle, kConeRate, ap::integratorName(propagator.integrator()).c_str(),
+                cone.beta, cone.omega, ap::integratorName(propagator.integrator()).c_str(),
                 kSampleRate);
     std::printf("%8s  %10s %10s %10s %10s  %12s\n", "t [s]", "x", "y", "z", "w", "error [rad]");
     const int samples = static_cast<int>(duration * kSampleRate);
     for (int k = 0; k <= samples; ++k) {
       const double t = k / kSampleRate;
-      propagator.addSample(t, coningRate(t));
+      propagator.addSample(t, cone.bodyRate(t));
       if (k % static_cast<int>(kSampleRate / 4) != 0) continue;
       const Eigen::Quaterniond& q = propagator.orientation();
       std::printf("%8.2f  %10.6f %10.6f %10.6f %10.6f  %12.3e\n", t, q.x(), q.y(), q.z(), q.w(),
-                  ap::rotationAngle(q, coningAttitude(t)));
+                  ap::rotationAngle(q, cone.attitude(t)));
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "kinematic_demo: %s\n", e.what());

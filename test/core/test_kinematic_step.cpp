@@ -7,13 +7,14 @@
 #include <limits>
 #include <vector>
 
+#include "attitude_propagator/coning_motion.h"
 #include "attitude_propagator/kinematic_propagator.h"
 #include "attitude_propagator/kinematic_step.h"
 #include "attitude_propagator/quaternion.h"
-#include "coning.h"
 #include "rotation_matchers.h"
 
 namespace ap = attitude_propagator;
+using ap::ConingMotion;
 using ap::Integrator;
 
 namespace {
