@@ -169,78 +169,72 @@ void AttitudePropagatorRos::onImu(const ros::MessageEvent<const sensor_msgs::Imu
              *q_BI);
 }
 
+// Twist/TwistStamped and Wrench/WrenchStamped arrive on one topic each, told apart at run
+// time; both carry one vector of interest. Decodes into the reused message of its type,
+// rejects (and counts) other types and non-finite vectors.
+template <class Stamped, class Plain, class Inner, class Field>
+bool AttitudePropagatorRos::decodeVectorInput(const topic_tools::ShapeShifter& msg,
+                                              const char* topic, const char* what, Stamped& stamped,
+                                              Plain& plain, Inner inner, Field field,
+                                              VectorInput& out) {
+  if (isType<Stamped>(msg)) {
+    decodeInto(msg, decode_buffer_, stamped);
+    out = {&field(inner(stamped)), stamped.header.stamp, &stamped.header.frame_id};
+  } else if (isType<Plain>(msg)) {
+    decodeInto(msg, decode_buffer_, plain);
+    out = {&field(plain), ros::Time(), nullptr};
+  } else {
+    ++counters_.rejected_type;
+    ROS_WARN_THROTTLE(kWarnPeriod, "%s: message type %s rejected; accepted: %s %s", topic,
+                      msg.getDataType().c_str(), ros::message_traits::datatype<Plain>(),
+                      ros::message_traits::datatype<Stamped>());
+    return false;
+  }
+  if (!allFinite(*out.value)) {
+    ++counters_.rejected_non_finite;
+    ROS_WARN_THROTTLE(kWarnPeriod, "%s: NaN or infinite %s: rejected (%lu so far)", topic, what,
+                      counters_.rejected_non_finite);
+    return false;
+  }
+  return true;
+}
+
 void AttitudePropagatorRos::onTwist(
     const ros::MessageEvent<const topic_tools::ShapeShifter>& event) {
   checkRosTime();
   ++counters_.received;
-  const topic_tools::ShapeShifter& msg = *event.getConstMessage();
-  const geometry_msgs::Vector3* w = nullptr;
-  ros::Time stamp;
-  const std::string* frame_id = nullptr;
-  if (isType<geometry_msgs::TwistStamped>(msg)) {
-    decodeInto(msg, decode_buffer_, twist_stamped_);
-    w = &twist_stamped_.twist.angular;
-    stamp = twist_stamped_.header.stamp;
-    frame_id = &twist_stamped_.header.frame_id;
-  } else if (isType<geometry_msgs::Twist>(msg)) {
-    decodeInto(msg, decode_buffer_, twist_);
-    w = &twist_.angular;
-  } else {
-    ++counters_.rejected_type;
-    ROS_WARN_THROTTLE(kWarnPeriod,
-                      "body_twist: message type %s rejected; accepted: geometry_msgs/Twist "
-                      "geometry_msgs/TwistStamped",
-                      msg.getDataType().c_str());
-    return;
-  }
-  if (!allFinite(*w)) {
-    ++counters_.rejected_non_finite;
-    ROS_WARN_THROTTLE(kWarnPeriod,
-                      "body_twist: NaN or infinite angular rate: rejected (%lu so far)",
-                      counters_.rejected_non_finite);
+  VectorInput in;
+  if (!decodeVectorInput<geometry_msgs::TwistStamped, geometry_msgs::Twist>(
+          *event.getConstMessage(), "body_twist", "angular rate", twist_stamped_, twist_,
+          [](geometry_msgs::TwistStamped& m) -> geometry_msgs::Twist& { return m.twist; },
+          [](geometry_msgs::Twist& m) -> geometry_msgs::Vector3& { return m.angular; }, in)) {
     return;
   }
   static const std::string kBody;
-  const Eigen::Quaterniond* q_BS = mountRotation(frame_id ? *frame_id : kBody);
+  const Eigen::Quaterniond* q_BS = mountRotation(in.frame_id ? *in.frame_id : kBody);
   if (!q_BS) return;
-  handleRate(stampOr(stamp, event.getReceiptTime()), *q_BS * toEigen(*w), default_R_, {}, *q_BS);
+  handleRate(stampOr(in.stamp, event.getReceiptTime()), *q_BS * toEigen(*in.value), default_R_, {},
+             *q_BS);
 }
 
 void AttitudePropagatorRos::onTorque(
     const ros::MessageEvent<const topic_tools::ShapeShifter>& event) {
   checkRosTime();
   ++counters_.received;
-  const topic_tools::ShapeShifter& msg = *event.getConstMessage();
-  const geometry_msgs::Vector3* torque = nullptr;
-  const std::string* frame_id = nullptr;
-  ros::Time stamp;
-  if (isType<geometry_msgs::WrenchStamped>(msg)) {
-    decodeInto(msg, decode_buffer_, wrench_stamped_);
-    torque = &wrench_stamped_.wrench.torque;
-    stamp = wrench_stamped_.header.stamp;
-    frame_id = &wrench_stamped_.header.frame_id;
-  } else if (isType<geometry_msgs::Wrench>(msg)) {
-    decodeInto(msg, decode_buffer_, wrench_);
-    torque = &wrench_.torque;
-  } else {
-    ++counters_.rejected_type;
-    ROS_WARN_THROTTLE(kWarnPeriod,
-                      "torque: message type %s rejected; accepted: geometry_msgs/Wrench "
-                      "geometry_msgs/WrenchStamped",
-                      msg.getDataType().c_str());
-    return;
-  }
-  if (!allFinite(*torque)) {
-    ++counters_.rejected_non_finite;
-    ROS_WARN_THROTTLE(kWarnPeriod, "torque: NaN or infinite torque: rejected (%lu so far)",
-                      counters_.rejected_non_finite);
+  VectorInput in;
+  if (!decodeVectorInput<geometry_msgs::WrenchStamped, geometry_msgs::Wrench>(
+          *event.getConstMessage(), "torque", "torque", wrench_stamped_, wrench_,
+          [](geometry_msgs::WrenchStamped& m) -> geometry_msgs::Wrench& { return m.wrench; },
+          [](geometry_msgs::Wrench& m) -> geometry_msgs::Vector3& { return m.torque; }, in)) {
     return;
   }
   DynamicInput input;
-  input.stamp = stampOr(stamp, event.getReceiptTime());
+  input.stamp = stampOr(in.stamp, event.getReceiptTime());
   if (!hasTime(input.stamp, "torque")) return;
   input.is_torque = true;
-  if (!resolveTorqueFrame(frame_id ? *frame_id : std::string(), toEigen(*torque), input)) return;
+  if (!resolveTorqueFrame(in.frame_id ? *in.frame_id : std::string(), toEigen(*in.value), input)) {
+    return;
+  }
   last_input_ = ros::WallTime::now();
   submitDynamic(input);
 }

@@ -75,6 +75,17 @@ class AttitudePropagatorRos {
   void onImu(const ros::MessageEvent<const sensor_msgs::Imu>& event);
   void onTwist(const ros::MessageEvent<const topic_tools::ShapeShifter>& event);
   void onTorque(const ros::MessageEvent<const topic_tools::ShapeShifter>& event);
+
+  /// The vector a Twist/Wrench input carries, with the header of its stamped form if it had one.
+  struct VectorInput {
+    const geometry_msgs::Vector3* value = nullptr;
+    ros::Time stamp;                        // zero when unstamped
+    const std::string* frame_id = nullptr;  // null when unstamped
+  };
+  template <class Stamped, class Plain, class Inner, class Field>
+  bool decodeVectorInput(const topic_tools::ShapeShifter& msg, const char* topic, const char* what,
+                         Stamped& stamped, Plain& plain, Inner inner, Field field,
+                         VectorInput& out);
   /// Dynamic model: a torque or a rate sample, applied when the timer reaches its stamp.
   struct DynamicInput {
     ros::Time stamp;
