@@ -30,18 +30,6 @@ constexpr double kWarnPeriod = 5.0;
 // How often ROS time is checked for jumps while no input arrives (s).
 constexpr double kWatchdogPeriod = 0.1;
 
-const char* rateInputName(RateInput input) {
-  switch (input) {
-    case RateInput::Imu:
-      return "imu";
-    case RateInput::Twist:
-      return "twist";
-    case RateInput::None:
-      return "none";
-  }
-  return "?";
-}
-
 template <class M>
 bool isType(const topic_tools::ShapeShifter& message) {
   return message.getDataType() == ros::message_traits::datatype<M>() &&
@@ -124,13 +112,13 @@ void AttitudePropagatorRos::logModel() const {
         "publishing %s -> %s at %g Hz; rate input %s, torque input %s",
         dynamic_->modelName().c_str(), integratorName(dynamic_->integrator()).c_str(),
         config_.dynamic->max_step, p.fixed_frame.c_str(), p.body_frame.c_str(), p.publish_rate,
-        rateInputName(config_.rate_input), config_.torque_input ? "on" : "off");
+        config_.parameters.rate_input.c_str(), config_.torque_input ? "on" : "off");
   } else {
     ROS_INFO(
         "attitude_propagator: kinematic model (integrator %s), publishing %s -> %s per "
         "%s message",
         integratorName(kinematic_->integrator()).c_str(), p.fixed_frame.c_str(),
-        p.body_frame.c_str(), rateInputName(config_.rate_input));
+        p.body_frame.c_str(), config_.parameters.rate_input.c_str());
   }
 }
 
