@@ -37,6 +37,17 @@ const std::vector<ap::Integrator> kNumerical = {
     ap::Integrator::Rk4, ap::Integrator::ImplicitMidpoint, ap::Integrator::Splitting,
     ap::Integrator::Splitting4, ap::Integrator::Dopri5};
 
+// Advances p through irregular stamps from t0 until past t1, each step a random fraction of
+// max_step (a bursty /clock). The state at a stamp must not depend on this path.
+void walkBurstyClock(ap::DynamicPropagator& p, double t0, double t1, double max_step,
+                     std::uint64_t& state) {
+  double t = t0;
+  while (t < t1) {
+    t += max_step * uniformRandom(state);
+    p.advanceTo(t);
+  }
+}
+
 }  // namespace
 
 TEST(DynPropagator, ModelSelection) {
@@ -152,18 +163,10 @@ TEST(DynPropagator, StateAtStampIsIndependentOfIntermediateStamps) {
     ASSERT_EQ(direct.advanceTo(0.0), ap::StampOutcome::Anchored);
 
     std::uint64_t state = 42;
-    double t = 0.0;
-    while (t < 0.4) {
-      t += 0.0037 * uniformRandom(state);
-      bursty.advanceTo(t);
-    }
+    walkBurstyClock(bursty, 0.0, 0.4, 0.0037, state);
     bursty.setTorque(0.4123, Eigen::Vector3d(0.2, -0.1, 0.3), ap::TorqueFrame::Body);
     direct.setTorque(0.4123, Eigen::Vector3d(0.2, -0.1, 0.3), ap::TorqueFrame::Body);
-    t = 0.4123;
-    while (t < 0.9) {
-      t += 0.02 * uniformRandom(state);
-      bursty.advanceTo(t);
-    }
+    walkBurstyClock(bursty, 0.4123, 0.9, 0.02, state);
     bursty.setTorque(0.91, Eigen::Vector3d(0.0, 0.5, 0.0), ap::TorqueFrame::Fixed);
     direct.setTorque(0.91, Eigen::Vector3d(0.0, 0.5, 0.0), ap::TorqueFrame::Fixed);
     bursty.advanceTo(1.3);
@@ -173,11 +176,7 @@ TEST(DynPropagator, StateAtStampIsIndependentOfIntermediateStamps) {
     direct.setTorque(1.3031, Eigen::Vector3d(-0.3, 0.0, 0.1), ap::TorqueFrame::Body);
     bursty.advanceTo(1.3045);
     bursty.setTorque(1.3031, Eigen::Vector3d(-0.3, 0.0, 0.1), ap::TorqueFrame::Body);
-    t = 1.3045;
-    while (t < 2.5) {
-      t += 0.011 * uniformRandom(state);
-      bursty.advanceTo(t);
-    }
+    walkBurstyClock(bursty, 1.3045, 2.5, 0.011, state);
     bursty.advanceTo(2.75);
     direct.advanceTo(2.75);
     expectSameState(bursty.state(), direct.state(), 1e-15);
@@ -430,19 +429,11 @@ TEST(DynPropagatorExact, StateAtStampIsIndependentOfIntermediateStamps) {
     ASSERT_EQ(bursty.advanceTo(0.5), ap::StampOutcome::Anchored);
     ASSERT_EQ(direct.advanceTo(0.5), ap::StampOutcome::Anchored);
     std::uint64_t state = 5;
-    double t = 0.5;
-    while (t < 3.1) {
-      t += 0.05 * uniformRandom(state);
-      bursty.advanceTo(t);
-    }
+    walkBurstyClock(bursty, 0.5, 3.1, 0.05, state);
     // The same rate sample for both, late for the bursty one.
     bursty.setRate(3.1, Eigen::Vector3d(0.2, 0.4, -0.6));
     direct.setRate(3.1, Eigen::Vector3d(0.2, 0.4, -0.6));
-    t = bursty.time();
-    while (t < 6.0) {
-      t += 0.07 * uniformRandom(state);
-      bursty.advanceTo(t);
-    }
+    walkBurstyClock(bursty, bursty.time(), 6.0, 0.07, state);
     bursty.advanceTo(6.25);
     direct.advanceTo(6.25);
     expectSameState(bursty.state(), direct.state(), 1e-15);
