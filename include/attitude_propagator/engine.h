@@ -1,0 +1,216 @@
+// The propagation engine: everything between a decoded input and a state to publish, with no
+// ROS in it. It owns the choice of propagator (kinematic or dynamic), the time origin, the
+// dynamic model's queue of inputs stamped ahead of the clock and its publish grid, the
+// orientation covariance, the policy for ROS time (a clock that jumps back resets, a clock that
+// jumps ahead is a gap) and the counters shown in diagnostics. The node decodes messages,
+// submits them here, tells the engine what time it is, and publishes what the engine hands to
+// its sink. See docs/design.md for the data flow.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "attitude_propagator/dynamic_propagator.h"
+#include "attitude_propagator/kinematic_propagator.h"
+#include "attitude_propagator/parameters.h"
+
+namespace attitude_propagator {
+
+/// A point in time: nanoseconds since the epoch, as ROS time. 64 bits hold every ros::Time
+/// and every difference of two, so stamp arithmetic cannot overflow.
+using Stamp = std::int64_t;
+
+/// Where an input came from; chooses what it means and how it is logged.
+enum class Source { Imu, Twist, Torque };
+const char* sourceName(Source source);
+
+/// A decoded input: a body rate w_B (rad/s) from Imu or Twist, or a torque (N m) in `frame`.
+struct Input {
+  Source source = Source::Imu;
+  Stamp stamp = 0;
+  Eigen::Vector3d value = Eigen::Vector3d::Zero();
+  TorqueFrame frame = TorqueFrame::Body;
+  /// Rate noise covariance in the body frame (rad²/s²); zero: the configured default.
+  Eigen::Matrix3d rate_covariance_B = Eigen::Matrix3d::Zero();
+  /// Carried through untouched and handed back with the applied input (the node keeps the
+  /// IMU message here, to republish it with the orientation at its stamp).
+  std::shared_ptr<const void> payload;
+};
+
+/// Largest rate noise variance accepted from a message (rad²/s²): a standard deviation of
+/// 1000 rad/s is already no measurement at all; beyond it the covariance is refused.
+constexpr double kMaxRateVariance = 1e6;
+
+/// A rate noise covariance is usable when it is finite, symmetric (to round-off), has a
+/// non-negative diagonal no larger than kMaxRateVariance, and |R_ij| <= sqrt(R_ii R_jj).
+bool validRateCovariance(const Eigen::Matrix3d& R);
+
+/// The state to publish at a stamp.
+struct EngineState {
+  Stamp stamp = 0;
+  Eigen::Quaterniond q_WB = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d w_B = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d P_B = Eigen::Matrix3d::Zero();  ///< orientation error covariance, body frame
+  double norm_error = 0.0;
+  std::uint64_t steps = 0;
+  // Dynamic model only (zero in the kinematic model).
+  Eigen::Vector3d M_B = Eigen::Vector3d::Zero();  ///< angular momentum, body frame
+  double kinetic_energy = 0.0;
+};
+
+/// Inputs the node turned away before they reached the engine, counted here with the rest.
+enum class Rejection { NoRate, WrongType, NoTransform, NoTime, BadCovariance };
+
+/// What happened to input and time, for diagnostics. Every counter only grows.
+struct EngineCounters {
+  std::uint64_t received = 0;  ///< every input submitted or rejected
+  std::uint64_t accepted = 0;
+  std::uint64_t rejected_non_finite = 0;
+  std::uint64_t rejected_out_of_range = 0;
+  std::uint64_t rejected_no_rate = 0;     ///< REP-145: angular_velocity_covariance[0] == -1
+  std::uint64_t rejected_type = 0;        ///< a message type the topic does not take
+  std::uint64_t rejected_covariance = 0;  ///< not symmetric, negative or huge
+  std::uint64_t dropped_stale = 0;
+  std::uint64_t dropped_no_tf = 0;
+  std::uint64_t dropped_no_time = 0;
+  std::uint64_t late = 0;            ///< dynamic: arrived after the clock passed its stamp
+  std::uint64_t gaps = 0;            ///< longer than max_dt: state held
+  std::uint64_t resets = 0;          ///< backward jumps and reset()
+  std::uint64_t failed_steps = 0;    ///< the integrator could not complete an interval
+  std::uint64_t pending_overflow = 0;  ///< dynamic: queue full, oldest applied early
+  std::uint64_t deferred_ticks = 0;  ///< dynamic: grid stamps left for the next call (budget)
+};
+
+/// Something the node should log (throttled per kind).
+struct EngineNote {
+  enum Kind {
+    Gap,               ///< an input or the clock moved on by more than max_dt: state held
+    StampsJumpedBack,  ///< an input's stamp went back by more than the threshold: reset
+    ClockJumpedBack,   ///< ROS time went back by more than the threshold: reset
+    Stale,
+    NonFinite,
+    OutOfRange,
+    FailedStep,
+    PendingFull,
+    Deferred,
+  };
+  Kind kind = Gap;
+  std::optional<Source> source;  ///< empty: the clock
+  Stamp stamp = 0;
+};
+
+/// Receives what the engine produces. Called synchronously from the engine's methods.
+class EngineSink {
+ public:
+  virtual ~EngineSink() = default;
+  /// A new state, at most once per stamp and with stamps increasing (until a reset).
+  virtual void publishState(const EngineState& state) = 0;
+  /// An input was applied; `state` is the state at its stamp (or where it took effect).
+  virtual void inputApplied(const Input& input, const EngineState& state) = 0;
+  virtual void note(const EngineNote& note) = 0;
+};
+
+struct EngineConfig {
+  Model model = Model::Kinematic;  ///< Kinematic or Dynamic (resolved)
+  KinematicConfig kinematic;
+  std::optional<DynamicConfig> dynamic;
+  double publish_rate = 100.0;  ///< dynamic model: states at multiples of 1/publish_rate
+  double rate_stddev = 0.0;     ///< rad/s, for inputs without a covariance
+  /// Dynamic model: inputs stamped ahead of the clock wait, at most this many.
+  std::size_t max_pending = 4096;
+  /// Dynamic model: grid stamps handled per call at most; the rest wait for the next call.
+  std::size_t grid_budget = 1000;
+
+  /// The engine's part of a validated node configuration.
+  static EngineConfig from(const NodeConfig& node);
+};
+
+class AttitudeEngine {
+ public:
+  /// Throws std::invalid_argument (from the propagators) for an invalid configuration.
+  AttitudeEngine(const EngineConfig& config, EngineSink& sink);
+  ~AttitudeEngine();
+  AttitudeEngine(const AttitudeEngine&) = delete;
+  AttitudeEngine& operator=(const AttitudeEngine&) = delete;
+
+  /// An input. Kinematic model: integrated now, and the state at its stamp published.
+  /// Dynamic model: applied when the clock reaches its stamp (at once when the propagator has
+  /// already passed it). Never throws.
+  void submit(const Input& input);
+
+  /// An input the node turned away (counted).
+  void reject(Rejection why);
+
+  /// One tick of a complete clock record (every /clock message under sim time): a jump back
+  /// by more than the threshold resets; a jump ahead by more than max_dt is a gap, so the grid
+  /// stamps inside it are not published; otherwise every grid stamp up to `now` is.
+  void clockTick(Stamp now);
+  /// A look at the clock from a callback, where ticks may have been missed (wall time, or a
+  /// timer that ran late): jumps back reset, but lateness is never a gap, and every grid
+  /// stamp since the last one published is published (at most grid_budget per call).
+  void poll(Stamp now);
+
+  /// Back to the initial state; the next input (or clock tick) anchors again.
+  void reset();
+  /// Pins the state at `stamp`. Returns an empty string, or why it was refused.
+  std::string setState(Stamp stamp, const Eigen::Quaterniond& q_WB, const Eigen::Vector3d& w_B);
+
+  const EngineCounters& counters() const { return counters_; }
+  std::size_t pending() const { return pending_.size(); }
+  bool dynamicModel() const { return dynamic_.has_value(); }
+  /// "kinematic" or the dynamic propagator's model name.
+  const std::string& modelName() const { return model_name_; }
+  Integrator integrator() const;
+  /// The current state (at the propagator's own time).
+  EngineState state() const;
+  /// Relative drifts of energy and |M| since the anchor (dynamic model; 0 otherwise).
+  double energyDrift() const;
+  double momentumDrift() const;
+  /// Integrator steps not committed because they left the finite numbers (dynamic model).
+  std::uint64_t nonFiniteSteps() const;
+
+  /// The grid stamp with index k: round(k / publish_rate) in ns.
+  Stamp gridStamp(std::int64_t k) const;
+  /// The largest k with gridStamp(k) <= now.
+  std::int64_t gridIndexAtOrBefore(Stamp now) const;
+
+ private:
+  double coreTime(Stamp stamp);
+  void rebaseIfFar(Stamp stamp);
+  /// Counts and notes a propagator outcome; true when the state holds at the stamp.
+  bool handleOutcome(StampOutcome outcome, std::optional<Source> source, Stamp stamp);
+  bool clockWentBack(Stamp now);
+  void advanceClock(Stamp now, bool went_back);
+  void resetState(bool forget_time);
+  void emitState(Stamp stamp);
+  EngineState stateAt(Stamp stamp) const;
+
+  void submitKinematic(const Input& input);
+  void submitDynamic(const Input& input);
+  void applyDynamic(const Input& input);
+  void applyPendingUpTo(Stamp stamp);
+  void publishDue(bool skip_intermediate);
+  void publishGridStamp(Stamp stamp);
+
+  EngineConfig config_;
+  EngineSink& sink_;
+  std::optional<KinematicPropagator> kinematic_;
+  std::optional<DynamicPropagator> dynamic_;
+  std::string model_name_;
+  Eigen::Matrix3d default_R_B_;
+  Eigen::Matrix3d P_B_ = Eigen::Matrix3d::Zero();
+  std::vector<Input> pending_;  // sorted by stamp
+
+  std::optional<Stamp> origin_;          // core time 0, whole seconds; set by the first stamp
+  std::optional<Stamp> last_published_;  // one state per stamp, increasing
+  std::optional<Stamp> clock_;           // the latest ROS time seen
+  EngineCounters counters_;
+};
+
+}  // namespace attitude_propagator
