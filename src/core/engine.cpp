@@ -121,8 +121,9 @@ std::int64_t AttitudeEngine::gridIndexAtOrBefore(Stamp now) const {
   auto k = static_cast<std::int64_t>(std::floor(static_cast<long double>(now) *
                                                 static_cast<long double>(config_.publish_rate) /
                                                 1e9L));
-  while (gridStamp(k) > now) --k;  // rounding of the grid stamp itself
-  while (gridStamp(k + 1) <= now) ++k;
+  // The rounding of the grid stamps themselves moves k by one at most.
+  if (gridStamp(k) > now) --k;
+  if (gridStamp(k + 1) <= now) ++k;
   return k;
 }
 

@@ -1,0 +1,367 @@
+// AttitudeEngine: the scheduling the node relies on, without ROS. Truths are closed forms
+// (constant rate, torque from rest) and the rules of docs/design.md: one state per stamp, grid
+// stamps only, inputs applied at their stamps, clock jumps back reset, clock jumps ahead are
+// gaps while a late callback is not, and bounded work per call.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "attitude_propagator/engine.h"
+#include "rotation_matchers.h"
+
+namespace ap = attitude_propagator;
+
+namespace {
+
+constexpr ap::Stamp kSecond = 1000000000;
+// An epoch stamp like a real ROS time (2026), so the origin handling is exercised.
+constexpr ap::Stamp kEpoch = 1780000000LL * kSecond;
+
+ap::Stamp at(double seconds) { return kEpoch + static_cast<ap::Stamp>(std::llround(seconds * 1e9)); }
+
+Eigen::Quaterniond aboutAxis(const Eigen::Vector3d& axis, double angle) {
+  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis.normalized()));
+}
+
+/// Records what the engine hands on.
+struct Recorder : ap::EngineSink {
+  std::vector<ap::EngineState> states;
+  std::vector<ap::Input> applied;
+  std::vector<ap::EngineNote> notes;
+
+  void publishState(const ap::EngineState& s) override { states.push_back(s); }
+  void inputApplied(const ap::Input& input, const ap::EngineState&) override {
+    applied.push_back(input);
+  }
+  void note(const ap::EngineNote& n) override { notes.push_back(n); }
+
+  const ap::EngineState* stateAt(ap::Stamp stamp) const {
+    for (const auto& s : states) {
+      if (s.stamp == stamp) return &s;
+    }
+    return nullptr;
+  }
+  bool stampsIncrease() const {
+    for (std::size_t i = 1; i < states.size(); ++i) {
+      if (states[i].stamp <= states[i - 1].stamp) return false;
+    }
+    return true;
+  }
+};
+
+ap::EngineConfig kinematicConfig() {
+  ap::EngineConfig c;
+  c.model = ap::Model::Kinematic;
+  return c;
+}
+
+/// A sphere (I = 2 about every axis) with torque input, 50 Hz grid, rk4.
+ap::EngineConfig torqueConfig() {
+  ap::EngineConfig c;
+  c.model = ap::Model::Dynamic;
+  ap::DynamicConfig d;
+  d.body = ap::RigidBody::fromPrincipalMoments(Eigen::Vector3d::Constant(2.0));
+  d.integrator = ap::Integrator::Rk4;
+  d.torque_input = true;
+  d.max_step = 0.02;
+  c.dynamic = d;
+  c.publish_rate = 50.0;
+  return c;
+}
+
+/// A torque-free sphere turning at 0.2 rad/s about z (exact model).
+ap::EngineConfig spinningSphereConfig() {
+  ap::EngineConfig c;
+  c.model = ap::Model::Dynamic;
+  ap::DynamicConfig d;
+  d.body = ap::RigidBody::fromPrincipalMoments(Eigen::Vector3d::Ones());
+  d.initial.w_B = Eigen::Vector3d(0.0, 0.0, 0.2);
+  d.max_step = 0.02;
+  c.dynamic = d;
+  c.publish_rate = 50.0;
+  return c;
+}
+
+ap::Input rate(ap::Stamp stamp, const Eigen::Vector3d& w_B) {
+  ap::Input in;
+  in.source = ap::Source::Imu;
+  in.stamp = stamp;
+  in.value = w_B;
+  return in;
+}
+
+ap::Input torque(ap::Stamp stamp, const Eigen::Vector3d& tau) {
+  ap::Input in;
+  in.source = ap::Source::Torque;
+  in.stamp = stamp;
+  in.value = tau;
+  return in;
+}
+
+/// Ticks a complete clock record from `from` to `to` in steps of `step` seconds.
+void runClock(ap::AttitudeEngine& engine, double from, double to, double step) {
+  const int n = static_cast<int>(std::llround((to - from) / step));
+  for (int k = 1; k <= n; ++k) engine.clockTick(at(from + k * step));
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Kinematic model: one state per input
+// ---------------------------------------------------------------------------------------------
+
+TEST(EngineKinematic, ConstantRateEveryInputPublishesItsStamp) {
+  Recorder sink;
+  ap::AttitudeEngine engine(kinematicConfig(), sink);
+  const Eigen::Vector3d w(0.1, -0.2, 0.3);
+  for (int k = 0; k <= 100; ++k) engine.submit(rate(at(0.01 * k), w));
+  ASSERT_EQ(sink.states.size(), 101u);
+  EXPECT_TRUE(sink.stampsIncrease());
+  EXPECT_EQ(sink.applied.size(), 101u);
+  EXPECT_EQ(engine.counters().accepted, 101u);
+  // cf4 is exact for a constant rate: q(t) = Exp(t w).
+  EXPECT_ROTATION_NEAR(sink.states.back().q_WB, aboutAxis(w, w.norm() * 1.0), 1e-13);
+}
+
+TEST(EngineKinematic, StaleAndDuplicateStampsAreDroppedAndCounted) {
+  Recorder sink;
+  ap::AttitudeEngine engine(kinematicConfig(), sink);
+  engine.submit(rate(at(0.0), Eigen::Vector3d::UnitZ()));
+  engine.submit(rate(at(0.01), Eigen::Vector3d::UnitZ()));
+  engine.submit(rate(at(0.01), Eigen::Vector3d::UnitZ()));   // duplicate
+  engine.submit(rate(at(0.005), Eigen::Vector3d::UnitZ()));  // stale
+  EXPECT_EQ(engine.counters().dropped_stale, 2u);
+  EXPECT_EQ(sink.states.size(), 2u);
+}
+
+TEST(EngineKinematic, NonFiniteAndBadCovarianceAreRejectedWithTheStateUnchanged) {
+  Recorder sink;
+  ap::AttitudeEngine engine(kinematicConfig(), sink);
+  engine.submit(rate(at(0.0), Eigen::Vector3d::UnitZ()));
+  ap::Input nan = rate(at(0.01), Eigen::Vector3d(NAN, 0, 0));
+  engine.submit(nan);
+  EXPECT_EQ(engine.counters().rejected_non_finite, 1u);
+  EXPECT_EQ(sink.states.size(), 1u);
+  EXPECT_FALSE(ap::validRateCovariance(Eigen::Vector3d(-0.5, 1, 1).asDiagonal()));
+  EXPECT_FALSE(ap::validRateCovariance(Eigen::Vector3d(1e308, 1, 1).asDiagonal()));
+  Eigen::Matrix3d asymmetric = Eigen::Matrix3d::Identity();
+  asymmetric(0, 1) = 0.5;
+  EXPECT_FALSE(ap::validRateCovariance(asymmetric));
+  Eigen::Matrix3d correlated = Eigen::Matrix3d::Identity();
+  correlated(0, 1) = correlated(1, 0) = 2.0;  // |R01| > sqrt(R00 R11): not a covariance
+  EXPECT_FALSE(ap::validRateCovariance(correlated));
+  EXPECT_TRUE(ap::validRateCovariance(Eigen::Matrix3d::Zero()));
+  EXPECT_TRUE(ap::validRateCovariance(1e-6 * Eigen::Matrix3d::Identity()));
+}
+
+TEST(EngineKinematic, StampsJumpingBackResetToTheInitialState) {
+  Recorder sink;
+  ap::AttitudeEngine engine(kinematicConfig(), sink);
+  for (int k = 0; k <= 50; ++k) engine.submit(rate(at(10.0 + 0.01 * k), Eigen::Vector3d::UnitX()));
+  engine.submit(rate(at(2.0), Eigen::Vector3d::UnitX()));  // a looped bag
+  EXPECT_EQ(engine.counters().resets, 1u);
+  EXPECT_ROTATION_NEAR(sink.states.back().q_WB, Eigen::Quaterniond::Identity(), 0.0);
+  EXPECT_EQ(sink.states.back().stamp, at(2.0));
+}
+
+TEST(EngineKinematic, AStampYearsAheadIsAGapAndPrecisionIsKeptAfterIt) {
+  Recorder sink;
+  ap::AttitudeEngine engine(kinematicConfig(), sink);
+  const Eigen::Vector3d w(0.0, 0.0, 0.5);
+  engine.submit(rate(at(0.0), w));
+  engine.submit(rate(at(0.01), w));
+  // 2100-01-01: 74 years ahead (beyond a 32-bit count of seconds in a difference).
+  const ap::Stamp far = 4102444800LL * kSecond;
+  engine.submit(rate(far, w));
+  EXPECT_EQ(engine.counters().gaps, 1u);
+  const Eigen::Quaterniond held = sink.states.back().q_WB;
+  for (int k = 1; k <= 100; ++k) engine.submit(rate(far + k * kSecond / 100, w));
+  ASSERT_EQ(sink.states.back().stamp, far + kSecond);
+  // One second at 0.5 rad/s after the held state, to round-off (not to 1e-7 s of stamp noise).
+  EXPECT_ROTATION_NEAR(sink.states.back().q_WB, held * aboutAxis(w, 0.5), 1e-12);
+}
+
+TEST(EngineKinematic, ClockGoingBackResetsAndForgetsTime) {
+  Recorder sink;
+  ap::AttitudeEngine engine(kinematicConfig(), sink);
+  engine.clockTick(at(10.0));
+  engine.submit(rate(at(10.0), Eigen::Vector3d::UnitZ()));
+  engine.submit(rate(at(10.5), Eigen::Vector3d::UnitZ()));
+  engine.clockTick(at(10.4));  // within the threshold: jitter, no reset
+  EXPECT_EQ(engine.counters().resets, 0u);
+  engine.clockTick(at(3.0));
+  EXPECT_EQ(engine.counters().resets, 1u);
+  engine.submit(rate(at(3.0), Eigen::Vector3d::UnitZ()));  // anchors again, published
+  EXPECT_EQ(sink.states.back().stamp, at(3.0));
+  EXPECT_ROTATION_NEAR(sink.states.back().q_WB, Eigen::Quaterniond::Identity(), 0.0);
+}
+
+TEST(EngineKinematic, SetStatePinsAndPublishes) {
+  Recorder sink;
+  ap::AttitudeEngine engine(kinematicConfig(), sink);
+  const Eigen::Quaterniond q = aboutAxis(Eigen::Vector3d(1, 2, 3), 0.7);
+  EXPECT_EQ(engine.setState(at(1.0), q, Eigen::Vector3d(0, 0, 1)), "");
+  ASSERT_EQ(sink.states.size(), 1u);
+  EXPECT_ROTATION_NEAR(sink.states[0].q_WB, q, 1e-15);
+  EXPECT_NE(engine.setState(at(1.5), Eigen::Quaterniond(NAN, 0, 0, 0), Eigen::Vector3d::Zero()),
+            "");
+  EXPECT_NE(engine.setState(0, q, Eigen::Vector3d::Zero()), "");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Dynamic model: the publish grid
+// ---------------------------------------------------------------------------------------------
+
+TEST(EngineDynamic, PublishesEveryGridStampOnceAndOnlyGridStamps) {
+  Recorder sink;
+  ap::AttitudeEngine engine(spinningSphereConfig(), sink);
+  runClock(engine, 0.0, 2.0, 0.007);  // ticks off the grid
+  ASSERT_FALSE(sink.states.empty());
+  EXPECT_TRUE(sink.stampsIncrease());
+  for (const auto& s : sink.states) EXPECT_EQ((s.stamp - kEpoch) % (kSecond / 50), 0);
+  // From the first tick's grid stamp to the last: all of them.
+  const auto n = (sink.states.back().stamp - sink.states.front().stamp) / (kSecond / 50) + 1;
+  EXPECT_EQ(static_cast<std::int64_t>(sink.states.size()), n);
+  // Exact sphere: 0.2 rad/s about z from the first stamp.
+  const double span = static_cast<double>(sink.states.back().stamp - sink.states[0].stamp) * 1e-9;
+  EXPECT_ROTATION_NEAR(sink.states.back().q_WB, aboutAxis(Eigen::Vector3d::UnitZ(), 0.2 * span),
+                       1e-12);
+}
+
+TEST(EngineDynamic, AClockStoppingOnAGridStampPublishesIt) {
+  // The clock jumps 0.07 s (off the grid phase of any timer), then steps 0.01 s to a whole
+  // second and stops there: that stamp is published on the tick that reaches it.
+  Recorder sink;
+  ap::AttitudeEngine engine(spinningSphereConfig(), sink);
+  engine.clockTick(at(0.0));
+  engine.clockTick(at(0.07));
+  runClock(engine, 0.07, 1.0, 0.01);
+  ASSERT_FALSE(sink.states.empty());
+  EXPECT_EQ(sink.states.back().stamp, at(1.0));
+}
+
+TEST(EngineDynamic, TorqueFromRestMatchesTheClosedForm) {
+  // From rest, a torque along a principal axis: w = T t / I, angle = T t^2 / (2 I).
+  Recorder sink;
+  ap::AttitudeEngine engine(torqueConfig(), sink);
+  engine.clockTick(at(0.0));
+  engine.submit(torque(at(0.0), Eigen::Vector3d(0.4, 0.0, 0.0)));
+  runClock(engine, 0.0, 2.0, 0.01);
+  const ap::EngineState* s = sink.stateAt(at(2.0));
+  ASSERT_NE(s, nullptr);
+  EXPECT_NEAR(s->w_B.x(), 0.4, 1e-12);
+  EXPECT_ROTATION_NEAR(s->q_WB, aboutAxis(Eigen::Vector3d::UnitX(), 0.4), 1e-12);
+  EXPECT_EQ(engine.counters().gaps, 0u);
+}
+
+TEST(EngineDynamic, AStarvedCallbackCatchesUpWithoutAGap) {
+  // A timer that ran 3 s late (more than max_dt = 1 s) while the clock moved on smoothly:
+  // poll() publishes every grid stamp in between and integrates the torque across them.
+  Recorder sink;
+  ap::AttitudeEngine engine(torqueConfig(), sink);
+  engine.poll(at(0.0));
+  engine.submit(torque(at(0.0), Eigen::Vector3d(0.4, 0.0, 0.0)));
+  engine.poll(at(3.0));
+  EXPECT_EQ(engine.counters().gaps, 0u);
+  EXPECT_EQ(sink.states.size(), 151u);  // 0, 0.02, ..., 3.0
+  const ap::EngineState* s = sink.stateAt(at(3.0));
+  ASSERT_NE(s, nullptr);
+  EXPECT_NEAR(s->w_B.x(), 0.6, 1e-12);
+  EXPECT_ROTATION_NEAR(s->q_WB, aboutAxis(Eigen::Vector3d::UnitX(), 0.9), 1e-10);
+}
+
+TEST(EngineDynamic, ABurstOfClockTicksIsIntegratedWithoutAGap) {
+  // /clock messages that queued up while the process was starved arrive in one burst: each
+  // is a small step, so nothing is a gap.
+  Recorder sink;
+  ap::AttitudeEngine engine(torqueConfig(), sink);
+  engine.clockTick(at(0.0));
+  engine.submit(torque(at(0.0), Eigen::Vector3d(0.4, 0.0, 0.0)));
+  runClock(engine, 0.0, 3.0, 0.01);
+  EXPECT_EQ(engine.counters().gaps, 0u);
+  const ap::EngineState* s = sink.stateAt(at(3.0));
+  ASSERT_NE(s, nullptr);
+  EXPECT_ROTATION_NEAR(s->q_WB, aboutAxis(Eigen::Vector3d::UnitX(), 0.9), 1e-10);
+}
+
+TEST(EngineDynamic, AClockJumpAheadIsAGapAndTheStateHolds) {
+  Recorder sink;
+  ap::AttitudeEngine engine(spinningSphereConfig(), sink);
+  runClock(engine, 0.0, 1.0, 0.01);
+  const Eigen::Quaterniond before = sink.states.back().q_WB;
+  engine.clockTick(at(6.0));  // a bag skipped ahead by 5 s
+  EXPECT_EQ(engine.counters().gaps, 1u);
+  EXPECT_EQ(sink.states.back().stamp, at(6.0));
+  EXPECT_ROTATION_NEAR(sink.states.back().q_WB, before, 1e-15);
+  // No grid stamp inside the jump was published.
+  for (const auto& s : sink.states) EXPECT_FALSE(s.stamp > at(1.0) && s.stamp < at(6.0));
+}
+
+TEST(EngineDynamic, InputsAheadOfTheClockWaitForIt) {
+  Recorder sink;
+  ap::AttitudeEngine engine(torqueConfig(), sink);
+  engine.clockTick(at(0.0));
+  engine.submit(torque(at(0.5), Eigen::Vector3d(0.4, 0.0, 0.0)));  // stamped ahead
+  EXPECT_EQ(engine.pending(), 1u);
+  EXPECT_TRUE(sink.applied.empty());
+  runClock(engine, 0.0, 2.5, 0.01);
+  EXPECT_EQ(engine.pending(), 0u);
+  ASSERT_EQ(sink.applied.size(), 1u);
+  // The torque acts from its stamp: 2 s of it by t = 2.5.
+  const ap::EngineState* s = sink.stateAt(at(2.5));
+  ASSERT_NE(s, nullptr);
+  EXPECT_ROTATION_NEAR(s->q_WB, aboutAxis(Eigen::Vector3d::UnitX(), 0.4), 1e-12);
+}
+
+TEST(EngineDynamic, ALateInputActsFromTheLastGridPointAndIsCounted) {
+  Recorder sink;
+  ap::AttitudeEngine engine(torqueConfig(), sink);
+  runClock(engine, 0.0, 1.0, 0.01);
+  engine.clockTick(at(1.01));  // the propagator now holds at 1.01 (between grid points)
+  engine.submit(torque(at(0.995), Eigen::Vector3d(0.4, 0.0, 0.0)));
+  EXPECT_EQ(engine.counters().late, 1u);
+  runClock(engine, 1.01, 2.0, 0.01);
+  const ap::EngineState* s = sink.stateAt(at(2.0));
+  ASSERT_NE(s, nullptr);
+  EXPECT_NEAR(s->w_B.x(), 0.2, 1e-12);  // acts from the grid point 1.0
+}
+
+TEST(EngineDynamic, TheClockGoingBackResetsAndPublishesTheInitialStateAtOnce) {
+  Recorder sink;
+  ap::AttitudeEngine engine(spinningSphereConfig(), sink);
+  runClock(engine, 10.0, 12.0, 0.01);
+  engine.clockTick(at(5.0));
+  EXPECT_EQ(engine.counters().resets, 1u);
+  EXPECT_EQ(sink.states.back().stamp, at(5.0));
+  EXPECT_ROTATION_NEAR(sink.states.back().q_WB, Eigen::Quaterniond::Identity(), 0.0);
+  runClock(engine, 5.0, 6.0, 0.01);
+  EXPECT_ROTATION_NEAR(sink.states.back().q_WB, aboutAxis(Eigen::Vector3d::UnitZ(), 0.2), 1e-12);
+}
+
+TEST(EngineDynamic, WorkPerCallIsBoundedAndTheRestFollows) {
+  Recorder sink;
+  ap::EngineConfig config = spinningSphereConfig();
+  config.grid_budget = 10;
+  ap::AttitudeEngine engine(config, sink);
+  engine.poll(at(0.0));
+  engine.poll(at(1.0));  // 50 grid stamps due, 10 per call
+  EXPECT_EQ(sink.states.size(), 11u);
+  EXPECT_EQ(engine.counters().deferred_ticks, 1u);
+  for (int i = 0; i < 4; ++i) engine.poll(at(1.0));
+  EXPECT_EQ(sink.states.size(), 51u);
+  EXPECT_EQ(sink.states.back().stamp, at(1.0));
+}
+
+TEST(EngineDynamic, TheGridIsExactForRatesThatDoNotDivideASecond) {
+  Recorder sink;
+  ap::EngineConfig config = spinningSphereConfig();
+  config.publish_rate = 300.0;  // 3333333.33 ns; k near 2026 in epoch time
+  ap::AttitudeEngine engine(config, sink);
+  for (std::int64_t k = 0; k < 1000; ++k) {
+    const ap::Stamp g = engine.gridStamp(k + 534000000000LL);
+    EXPECT_EQ(engine.gridIndexAtOrBefore(g), k + 534000000000LL);
+    EXPECT_EQ(engine.gridIndexAtOrBefore(g - 1), k + 534000000000LL - 1);
+  }
+}
