@@ -3,6 +3,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include <boost/math/special_functions/ellint_rf.hpp>
@@ -17,10 +18,11 @@ TorqueFreeMotion::TorqueFreeMotion(const RigidBody& body, const DynamicState& x0
   if (!x0.q_WB.coeffs().allFinite() || !x0.w_B.allFinite() || !std::isfinite(t0)) {
     throw std::invalid_argument("TorqueFreeMotion: the initial state must be finite");
   }
-  if (!(x0.q_WB.norm() > 0.0)) {
+  const std::optional<Eigen::Quaterniond> q0_WB = safeNormalized(x0.q_WB);
+  if (!q0_WB) {
     throw std::invalid_argument("TorqueFreeMotion: the initial orientation is a zero quaternion");
   }
-  q0_WP_ = x0.q_WB.normalized() * q_BP_;
+  q0_WP_ = *q0_WB * q_BP_;
   w0_P_ = q_BP_.conjugate() * x0.w_B;
   M0_P_ = I_P_.cwiseProduct(w0_P_);
   if (body.isSphere(kRelativeSymmetry)) {
