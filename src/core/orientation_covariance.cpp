@@ -80,8 +80,8 @@ Eigen::Matrix3d clampOrientationCovariance(const Eigen::Matrix3d& P) {
   const Eigen::Vector3d lambda =
       eigen.eigenvalues().cwiseMax(0.0).cwiseMin(kMaxOrientationVariance);
   const Eigen::Matrix3d& V = eigen.eigenvectors();
-  S = V * lambda.asDiagonal() * V.transpose();
-  S = 0.5 * (S + S.transpose());
+  const Eigen::Matrix3d clamped = V * lambda.asDiagonal() * V.transpose();
+  S = 0.5 * (clamped + clamped.transpose());
   // The reconstruction rounds: keep the diagonal inside the range exactly.
   S.diagonal() = S.diagonal().cwiseMax(0.0).cwiseMin(kMaxOrientationVariance);
   return S;

@@ -257,8 +257,9 @@ NodeConfig validateParameters(const Parameters& p) {
   dynamic.integrator = integrator;
   dynamic.torque_input = p.torque_input;
   dynamic.max_step = p.max_step > 0.0 ? p.max_step : 1.0 / p.publish_rate;
-  if (p.max_dt / dynamic.max_step > kMaxGridStepsPerCall) {
-    // One call may have to cross max_dt in steps of max_step.
+  if (p.max_dt / dynamic.max_step > kMaxGridStepsPerCall * (1.0 + 1e-12)) {
+    // One call may have to cross max_dt in steps of max_step (the slack: 60 / 6e-4 rounds
+    // above 1e5).
     fail("max_step", "invalid value " + formatParameter(dynamic.max_step) + " with max_dt " +
                          formatParameter(p.max_dt) + "; accepted: at least max_dt / 1e5 (s)");
   }
