@@ -48,8 +48,7 @@ DynamicState checkedState(const DynamicState& x, const std::string& what) {
     throw std::invalid_argument(what + ": the orientation must be a finite, non-zero quaternion");
   }
   if (!(x.w_B.norm() <= kMaxBodyRate)) {
-    throw std::invalid_argument(what + ": angular velocity above " + std::to_string(kMaxBodyRate) +
-                                " rad/s (kMaxBodyRate)");
+    throw std::invalid_argument(what + ": angular velocity above kMaxBodyRate = 1e5 rad/s");
   }
   return DynamicState{*q, x.w_B};
 }
@@ -215,8 +214,9 @@ struct DynamicPropagator::Impl {
     return true;
   }
 
-  /// exact: the state at t on the motion through the knot, if it can be evaluated.
-  bool evaluateMotion(double t, DynamicState& x_B) {
+  /// exact: the state at t on the motion through the knot (x_B, and x in P), if it can be
+  /// evaluated. Counts one unit of work; a call evaluates at most three times.
+  bool evaluateMotion(double t, DynamicState& x_B, PrincipalState& x) {
     ++work;
     ++steps;
     if (!motion) {
@@ -229,7 +229,8 @@ struct DynamicPropagator::Impl {
       failure = StepStatus::EvaluationError;
       return false;
     }
-    if (!committable(stepper.toPrincipal(x_B))) {
+    x = stepper.toPrincipal(x_B);
+    if (!committable(x)) {
       failure = StepStatus::NonFinite;
       return false;
     }
@@ -241,9 +242,10 @@ struct DynamicPropagator::Impl {
   bool advanceState(double t) {
     if (exact()) {
       DynamicState x_B;
-      if (!evaluateMotion(t, x_B)) return false;
+      PrincipalState x;
+      if (!evaluateMotion(t, x_B, x)) return false;
+      current = x;
       current_B = x_B;  // the closed form's value, not its round trip through P
-      current = stepper.toPrincipal(x_B);
       time = t;
       return true;
     }
@@ -274,8 +276,9 @@ struct DynamicPropagator::Impl {
     if (t == knot_time) return true;
     if (exact()) {
       DynamicState x_B;
-      if (!evaluateMotion(t, x_B)) return false;
-      setKnot(t, stepper.toPrincipal(x_B));
+      PrincipalState x;
+      if (!evaluateMotion(t, x_B, x)) return false;
+      setKnot(t, x);
       return true;
     }
     PrincipalState x = knot;

@@ -91,8 +91,7 @@ void KinematicPropagator::setState(double t, const Eigen::Quaterniond& q_WB,
     throw std::invalid_argument("set_state: stamp and angular velocity must be finite");
   }
   if (!(w_B.norm() <= kMaxBodyRate)) {
-    throw std::invalid_argument("set_state: angular velocity above " +
-                                std::to_string(kMaxBodyRate) + " rad/s (kMaxBodyRate)");
+    throw std::invalid_argument("set_state: angular velocity above kMaxBodyRate = 1e5 rad/s");
   }
   q_WB_ = checkedUnit(q_WB, "set_state orientation");
   anchor(t, w_B);

@@ -362,7 +362,7 @@ DynamicState TorqueFreeMotion::evaluate(double t) const {
     }
     case Form::Triaxial: {
       // Time and rate of the motion set up at the scaled rate (see the constructor).
-      const double scaled_tau = std::ldexp(tau, rate_exponent_);
+      const double scaled_tau = rate_exponent_ == 0 ? tau : std::ldexp(tau, rate_exponent_);
       if (regime_ == Regime::Steady) {
         q_WP = q0_WP_ * expMap(scaled_tau * w0_P_);
         w_P = w0_P_;
@@ -373,7 +373,9 @@ DynamicState TorqueFreeMotion::evaluate(double t) const {
         q_WP = q_WF * q_PF_.conjugate();
         w_P = q_PF_ * Eigen::Vector3d(M_F.cwiseQuotient(I_F_));
       }
-      for (int i = 0; i < 3; ++i) w_P[i] = std::ldexp(w_P[i], rate_exponent_);
+      if (rate_exponent_ != 0) {
+        for (int i = 0; i < 3; ++i) w_P[i] = std::ldexp(w_P[i], rate_exponent_);
+      }
       break;
     }
   }

@@ -465,7 +465,7 @@ double nextStamp(double t, std::uint64_t& s) {
                                    1.5,        -1e-3,  -3.0,  1e300, -1e300, kNaN,  kInf, 0.0};
   constexpr int kCount = sizeof(kDeltas) / sizeof(kDeltas[0]);
   const double u = uniformRandom(s);
-  if (u < 0.5) return t + 0.05 * uniformRandom(s);  // ordinary
+  if (u < 0.7) return t + 0.05 * uniformRandom(s);  // ordinary
   return t + kDeltas[static_cast<int>(uniformRandom(s) * kCount) % kCount];
 }
 
@@ -541,8 +541,12 @@ TEST(RobustnessProperty, DynamicIntegratorsSurviveExtremeInput) {
           expectSameState(p.state(), before);
           EXPECT_EQ(p.time(), t_before);
         } else {
-          // At the stamp, or for an input a little late (placed behind time()) where it was.
-          EXPECT_EQ(p.time(), t > t_before ? t : p.time() == t_before ? t_before : t);
+          // At the stamp; an input a little late (placed behind time()) leaves time() alone.
+          if (t > t_before) {
+            EXPECT_EQ(p.time(), t);
+          } else {
+            EXPECT_TRUE(p.time() == t || p.time() == t_before) << p.time();
+          }
         }
         if (HasFailure()) return;
       }
