@@ -421,8 +421,8 @@ StepStatus DynamicStepper::dopri5(PrincipalState& x, const PrincipalTorque& torq
     }
     if (!(norm > 0.0) || !std::isfinite(norm)) return StepStatus::NonFinite;
     ++info.iterations;
-    const double next =
-        last ? h : t_try;  // land exactly on h, whatever round-off the sub-steps carry
+    // Land exactly on h, whatever round-off the sub-steps carry.
+    const double next = last ? h : t_try;
     if (next == t) return StepStatus::NoConvergence;
     t = next;
     // A last sub-step shortened to land on h says nothing about the step size to come.

@@ -92,8 +92,8 @@ RigidBody makeBody(const std::vector<double>& inertia) {
   // The moments' range (limits.h, checked by RigidBody) keeps I |w|^2 and the closed forms'
   // squares of I w finite for every rate the door lets in.
   const std::string accepted =
-      "3 principal moments [I1, I2, I3] in [1e-15, 1e15] with each at most the sum of the "
-      "others, or 6 values [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] of a positive definite tensor with "
+      "3 positive principal moments [I1, I2, I3] in [1e-15, 1e15] with each at most the sum of "
+      "the others, or 6 values [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] of a positive definite tensor with "
       "such moments (kg m^2)";
   bool ok = inertia.size() == 3 || inertia.size() == 6;
   for (double x : inertia) ok = ok && std::isfinite(x);
@@ -124,19 +124,20 @@ void checkScalars(const Parameters& p) {
   requireOneOf("rate_input", p.rate_input, {"imu", "twist", "none"});
   requireOneOf("torque_frame", p.torque_frame, {"body", "fixed"});
   requireFinite("torque_timeout", p.torque_timeout, 0.0, true, kMaxTorqueTimeout,
-                "a finite number in [0, 3600] (s)");
+                "a finite number >= 0 and at most 3600 (s)");
   requireFinite("publish_rate", p.publish_rate, 0.0, false, kMaxPublishRate,
-                "a finite number in (0, 1000] (Hz)");
+                "a finite number > 0 and at most 1000 (Hz)");
   const std::string step_range = "0 (1/publish_rate) or a number in [1e-5, 60] (s)";
   requireFinite("max_step", p.max_step, 0.0, true, kMaxMaxDt, step_range);
   if (p.max_step > 0.0 && p.max_step < kMinMaxStep) {
     fail("max_step", "invalid value " + formatParameter(p.max_step) + "; accepted: " + step_range);
   }
-  requireFinite("max_dt", p.max_dt, 0.0, false, kMaxMaxDt, "a finite number in (0, 60] (s)");
+  requireFinite("max_dt", p.max_dt, 0.0, false, kMaxMaxDt,
+                "a finite number > 0 and at most 60 (s)");
   requireFinite("tolerance", p.tolerance, kMinTolerance, true, kMaxTolerance,
                 "a number in [1e-12, 1e-2]");
   requireFinite("angular_velocity_stddev", p.angular_velocity_stddev, 0.0, true, kMaxRateStddev,
-                "a finite number in [0, 1000] (rad/s)");
+                "a finite number >= 0 and at most 1000 (rad/s)");
   const std::string rate_range = "[x, y, z], finite, |w| <= 1e5 (rad/s)";
   const auto& w = p.initial_angular_velocity;
   requireVector("initial_angular_velocity", w, 3, rate_range);
