@@ -13,7 +13,9 @@
 #include <Eigen/Geometry>
 
 #include "attitude_propagator/dynamic_state.h"
+#include "attitude_propagator/dynamic_step.h"
 #include "attitude_propagator/integrator.h"
+#include "attitude_propagator/limits.h"
 #include "attitude_propagator/rigid_body.h"
 #include "attitude_propagator/time_policy.h"
 
@@ -32,13 +34,25 @@ struct DynamicConfig {
   double tolerance = 1e-9;      ///< dopri5 absolute and relative tolerance
   double torque_timeout = 0.0;  ///< s; a torque older than this counts as zero (0: held forever)
   TimePolicy time_policy;
+  /// |w_B| at most kMaxBodyRate; the quaternion is normalised at any finite scale.
   DynamicState initial;
+  /// Integrator work one call (advanceTo, setTorque, setRate) may spend: one unit per fixed
+  /// step or exact evaluation, one per trial sub-step of dopri5. A call that needs more
+  /// returns FailedStep, so every call runs in bounded time. Must cover the fixed steps of
+  /// the longest interval, max_dt / max_step + kBudgetHeadroomSteps.
+  std::uint64_t step_budget = kDefaultStepBudget;
 };
+
+/// Steps a call may need besides max_dt / max_step grid steps: the partial step to the stamp,
+/// a torque's expiry, a late input's knot and the re-integration after it.
+constexpr double kBudgetHeadroomSteps = 8.0;
 
 class DynamicPropagator {
  public:
   /// Throws std::invalid_argument naming the problem (an integrator that is not dynamic,
-  /// `exact` with torque input, non-positive max_step or tolerance, non-finite initial state).
+  /// `exact` with torque input, non-positive max_step or tolerance, a step_budget below
+  /// max_dt / max_step + kBudgetHeadroomSteps, a non-finite or zero initial quaternion, an
+  /// initial rate above kMaxBodyRate, or one the exact motion cannot be evaluated from).
   explicit DynamicPropagator(const DynamicConfig& config);
   ~DynamicPropagator();
   DynamicPropagator(DynamicPropagator&&) noexcept;
@@ -53,23 +67,28 @@ class DynamicPropagator {
   /// Advances the state to time t under DESIGN §6: the first call anchors (the state at t is
   /// the initial one), stale stamps do nothing, gaps over max_dt hold the state, a jump back
   /// by more than the threshold resets to the initial state and anchors at t.
+  /// Never throws: if the integrator cannot complete the interval (see StampOutcome::FailedStep
+  /// and lastFailure()) the state at time() is held and re-anchored at t.
   StampOutcome advanceTo(double t);
 
   /// Torque tau (N m) from time t on, in the body or the fixed frame (T_B = Q^T t_W, notes
   /// eq. 10), held until the next sample (or for torque_timeout). Advances to t first.
-  /// Non-finite input is rejected. A sample stamped at or before time() (it arrived after
-  /// the clock passed its stamp) acts from its stamp if no grid point was committed since,
-  /// else from the last grid point, and returns Advanced; a sample not newer than the previous
-  /// torque sample is DroppedStale. With the exact model a non-zero torque throws
-  /// std::logic_error.
+  /// Non-finite input is RejectedNonFinite, |tau| > kMaxTorque RejectedOutOfRange (state
+  /// unchanged); FailedStep as for advanceTo (the torque then acts from the new anchor). A sample
+  /// stamped at or before time() (it arrived after the clock passed its stamp) acts from its stamp
+  /// if no grid point was committed since, else from the last grid point, and returns Advanced; a
+  /// sample not newer than the previous torque sample is DroppedStale. With the exact model a
+  /// non-zero torque throws std::logic_error.
   StampOutcome setTorque(double t, const Eigen::Vector3d& tau, TorqueFrame frame);
 
   /// A measured body rate at t: advances to t, then sets w_B (the orientation is kept). Late
-  /// samples are placed as for setTorque.
+  /// samples are placed as for setTorque. |w_B| > kMaxBodyRate is RejectedOutOfRange.
   StampOutcome setRate(double t, const Eigen::Vector3d& w_B);
 
-  /// Pins the state at time t (a new anchor). Throws std::invalid_argument on non-finite
-  /// values or a zero quaternion.
+  /// Pins the state at time t (a new anchor); the quaternion is normalised at any finite
+  /// scale. Throws std::invalid_argument, leaving the propagator unchanged, on a non-finite
+  /// stamp or value, a zero quaternion, |w_B| > kMaxBodyRate, or (exact model) a state the
+  /// closed form cannot be evaluated from.
   void setState(double t, const DynamicState& state);
 
   /// Back to the initial state, waiting for an anchoring stamp.
@@ -88,8 +107,12 @@ class DynamicPropagator {
   /// `exact`; meaningful only without torque).
   double energyDrift() const;
   double momentumDrift() const;
-  /// Steps not committed because they left the finite numbers (the state is held instead).
+  /// Calls that returned FailedStep (each held the state and re-anchored).
   std::uint64_t failedSteps() const;
+  /// Why the last FailedStep happened (StepStatus::Ok before the first one).
+  StepStatus lastFailure() const;
+  /// Work units (as for step_budget) the last advanceTo, setTorque or setRate spent.
+  std::uint64_t lastCallWork() const;
 
  private:
   struct Impl;

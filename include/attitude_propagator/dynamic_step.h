@@ -10,6 +10,8 @@
 // allocate.
 #pragma once
 
+#include <cstdint>
+
 #include <Eigen/Geometry>
 
 #include "attitude_propagator/dynamic_state.h"
@@ -54,7 +56,25 @@ struct StepInfo {
   int iterations = 0;
   /// dopri5: rejected trial steps.
   int rejected = 0;
+  /// Work done, in the units of a step budget: dopri5's trial sub-steps (accepted and
+  /// rejected); 1 for the other methods, whose cost per step is bounded.
+  std::uint64_t attempts = 0;
 };
+
+/// Why tryStepPrincipal() did not commit a step.
+enum class StepStatus {
+  Ok,
+  NonFinite,        ///< the result left the finite numbers, the unit sphere or kMaxStateRate
+  OverBudget,       ///< dopri5 needed more trial sub-steps than the budget allowed
+  NoConvergence,    ///< dopri5's step size collapsed below one ulp of the interval
+  EvaluationError,  ///< the closed form threw (Boost.Math evaluation error, torque on exact)
+};
+
+const char* stepStatusName(StepStatus status);
+
+/// Whether a stepped state may be committed: finite, q of unit length to sqrt(eps),
+/// |w_P| <= kMaxStateRate (limits.h).
+bool committable(const PrincipalState& x);
 
 /// A dynamic integrator bound to a body: the "stepper with a declared order" of STYLE.md.
 ///
@@ -93,9 +113,19 @@ class DynamicStepper {
   PrincipalTorque toPrincipal(const TorqueInput& torque) const;
 
   /// Advances x by h (which may be zero or negative for the explicit and symmetric methods),
-  /// in place, in the principal frame.
+  /// in place, in the principal frame. Throws std::runtime_error when dopri5's step-size
+  /// control fails (10^4 rejected trials or a collapsed step size) and lets the closed form's
+  /// exceptions through; callers that must not throw use tryStepPrincipal().
   void stepPrincipal(PrincipalState& x, const PrincipalTorque& torque, double h,
                      StepInfo* info = nullptr) const;
+
+  /// The same step, never throwing and never committing a bad result: x is changed only when
+  /// the status is Ok, i.e. the result is finite, q of unit length (to sqrt(eps)) and
+  /// |w| <= kMaxStateRate. dopri5 gives up after `budget` trial sub-steps (or when its step
+  /// size collapses); the other methods need one unit. info->attempts reports the work done,
+  /// also on failure.
+  StepStatus tryStepPrincipal(PrincipalState& x, const PrincipalTorque& torque, double h,
+                              std::uint64_t budget, StepInfo* info = nullptr) const noexcept;
 
   /// dopri5's step-size suggestion carried from one call to the next (0: start with h). A
   /// caller that needs results independent of its call history (DynamicPropagator) saves it
@@ -115,7 +145,12 @@ class DynamicStepper {
   Eigen::Vector3d momentum(const PrincipalState& x) const;
   void strang(Eigen::Quaterniond& q_WP, Eigen::Vector3d& M_P, const PrincipalTorque& torque,
               double h) const;
-  void dopri5(PrincipalState& x, const PrincipalTorque& torque, double h, StepInfo& info) const;
+  /// Dormand-Prince across h in at most `budget` trial sub-steps; x is left partly advanced
+  /// on failure.
+  StepStatus dopri5(PrincipalState& x, const PrincipalTorque& torque, double h,
+                    std::uint64_t budget, StepInfo& info) const;
+  /// The fixed-cost methods (everything but dopri5).
+  void fixedStep(PrincipalState& x, const PrincipalTorque& torque, double h, StepInfo& info) const;
   void exact(PrincipalState& x, const PrincipalTorque& torque, double h) const;
 
   Integrator method_;

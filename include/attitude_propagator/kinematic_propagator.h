@@ -26,13 +26,16 @@ class KinematicPropagator {
 
   /// Feeds the body rate w_B measured at time t. The first sample anchors time: the state at
   /// its stamp is the initial (or set) state. The orientation then holds at the newest stamp.
+  /// A NaN or infinite stamp or rate is RejectedNonFinite, |w_B| > kMaxBodyRate (limits.h)
+  /// RejectedOutOfRange; neither changes the state. Never throws.
   StampOutcome addSample(double t, const Eigen::Vector3d& w_B);
 
   /// Back to the initial orientation, waiting for an anchoring sample.
   void reset();
 
-  /// Pins the state: orientation q_WB and body rate w_B hold at time t (a new anchor).
-  /// Throws std::invalid_argument for non-finite values or a zero quaternion.
+  /// Pins the state: orientation q_WB (normalised at any finite scale) and body rate w_B hold
+  /// at time t (a new anchor). Throws std::invalid_argument, leaving the state unchanged, for
+  /// non-finite values, a zero quaternion or |w_B| > kMaxBodyRate.
   void setState(double t, const Eigen::Quaterniond& q_WB, const Eigen::Vector3d& w_B);
 
   bool anchored() const { return anchored_; }

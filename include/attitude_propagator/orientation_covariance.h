@@ -10,7 +10,8 @@
 // Preintegration", IEEE T-RO 2017, eqs. 7-8 and 59), so
 //   P <- Phi P Phi^T + h^2 J_r R J_r^T.
 // With a constant rate and zero R the error ellipsoid simply turns with the body; with zero
-// rate P grows by h^2 R per sample (a random walk of the angle).
+// rate P grows by h^2 R per sample (a random walk of the angle), until it saturates at
+// kMaxOrientationVariance (pi^2 rad^2, no knowledge of the orientation; limits.h).
 #pragma once
 
 #include <Eigen/Core>
@@ -22,11 +23,39 @@ namespace attitude_propagator {
 /// the series I - [phi]x/2 + [phi]x^2/6, exact to round-off there and free of 0/0.
 Eigen::Matrix3d rightJacobian(const Eigen::Vector3d& phi);
 
-/// One step of P <- Phi P Phi^T + h^2 J_r R J_r^T for the step h (s) with body rate w_B.
-/// The result is symmetrised so round-off cannot make it drift from symmetry.
+/// One step of P <- Phi P Phi^T + h^2 J_r R J_r^T for the step h (s) with body rate w_B,
+/// passed through clampOrientationCovariance: symmetric, positive semi-definite and at most
+/// kMaxOrientationVariance along any axis, whatever P, h, w_B and R are (non-finite input
+/// gives the ceiling, "orientation unknown").
 Eigen::Matrix3d propagateOrientationCovariance(const Eigen::Matrix3d& P, double h,
                                                const Eigen::Vector3d& w_B,
                                                const Eigen::Matrix3d& R);
+
+/// The nearest (in eigenvalues) covariance of an orientation: symmetrised, eigenvalues clamped
+/// to [0, kMaxOrientationVariance], diagonal in [0, kMaxOrientationVariance] exactly. A matrix
+/// that is already one is returned unchanged but for the symmetrisation; a non-finite one
+/// becomes kMaxOrientationVariance I.
+Eigen::Matrix3d clampOrientationCovariance(const Eigen::Matrix3d& P);
+
+/// What is wrong with a rate noise covariance (rad^2/s^2) taken from a message.
+enum class RateCovarianceCheck {
+  Ok,
+  NonFinite,         ///< a NaN or infinite entry
+  NotSymmetric,      ///< |R_ij - R_ji| above kCovarianceSymmetryTolerance of the largest entry
+  NegativeVariance,  ///< a diagonal entry below zero
+  VarianceTooLarge,  ///< a diagonal entry above kMaxRateVariance (limits.h)
+  NotACovariance,    ///< |R_ij| > sqrt(R_ii R_jj): a correlation beyond one
+};
+
+/// Relative asymmetry tolerated in a message's covariance (drivers that print it with 7
+/// significant digits).
+constexpr double kCovarianceSymmetryTolerance = 1e-6;
+
+/// Checks a rate covariance before it is used. The node rejects a message that fails (and
+/// counts it): NonFinite as StampOutcome::RejectedNonFinite, every other problem as
+/// StampOutcome::RejectedOutOfRange; the all-zero matrix (no covariance given) is Ok.
+RateCovarianceCheck checkRateCovariance(const Eigen::Matrix3d& R);
+const char* rateCovarianceCheckName(RateCovarianceCheck check);
 
 /// The covariance in another frame: C P C^T, C the rotation from the body frame to it.
 Eigen::Matrix3d rotateCovariance(const Eigen::Matrix3d& P, const Eigen::Matrix3d& C);

@@ -12,6 +12,7 @@
 #include "attitude_propagator/dynamic_propagator.h"
 #include "attitude_propagator/integrator.h"
 #include "attitude_propagator/kinematic_propagator.h"
+#include "attitude_propagator/limits.h"
 
 namespace attitude_propagator {
 
@@ -51,24 +52,30 @@ void forEachParameter(P& p, F&& f) {
   f("torque_input", p.torque_input, "", "subscribe to `torque` (dynamic model only)");
   f("torque_frame", p.torque_frame, "", "`body` or `fixed`: the frame of unstamped torque");
   f("torque_timeout", p.torque_timeout, "s",
-    "a torque older than this counts as zero; 0: held until the next one");
+    "a torque older than this counts as zero; 0: held until the next one; at most 3600");
   f("inertia", p.inertia, "kg m²",
-    "3 principal moments, or 6 values Ixx Iyy Izz Ixy Ixz Iyz; empty: none");
+    "3 principal moments, or 6 values Ixx Iyy Izz Ixy Ixz Iyz; moments in [1e-15, 1e15]; "
+    "empty: none");
   f("initial_orientation", p.initial_orientation, "",
-    "q_WB at the first stamp and after a reset, [x, y, z, w] (normalised)");
+    "q_WB at the first stamp and after a reset, [x, y, z, w] (normalised; any finite scale)");
   f("initial_angular_velocity", p.initial_angular_velocity, "rad/s",
-    "body rate at the first stamp (dynamic model), [x, y, z] in the body frame");
+    "body rate at the first stamp (dynamic model), [x, y, z] in the body frame; magnitude at most "
+    "1e5");
   f("fixed_frame", p.fixed_frame, "", "parent frame of the published transform");
   f("body_frame", p.body_frame, "", "child frame; IMU rates in another frame are rotated");
   f("publish_tf", p.publish_tf, "", "publish the transform on /tf");
   f("reverse_tf", p.reverse_tf, "",
     "publish `body_frame → fixed_frame` instead (for a tree rooted at the body)");
-  f("publish_rate", p.publish_rate, "Hz", "dynamic model: publish at multiples of 1/rate");
-  f("max_step", p.max_step, "s", "dynamic model: largest integration step; 0: 1/publish_rate");
-  f("max_dt", p.max_dt, "s", "largest gap between stamps integrated across");
-  f("tolerance", p.tolerance, "", "relative and absolute tolerance of `dopri5`");
+  f("publish_rate", p.publish_rate, "Hz",
+    "dynamic model: publish at multiples of 1/rate; at most 1000");
+  f("max_step", p.max_step, "s",
+    "dynamic model: largest integration step, in [1e-5, 60] and at least max_dt / 1e5; "
+    "0: 1/publish_rate");
+  f("max_dt", p.max_dt, "s", "largest gap between stamps integrated across; at most 60");
+  f("tolerance", p.tolerance, "", "relative and absolute tolerance of `dopri5`, in [1e-12, 1e-2]");
   f("angular_velocity_stddev", p.angular_velocity_stddev, "rad/s",
-    "rate noise used when an input carries no covariance; 0: orientation covariance unknown");
+    "rate noise used when an input carries no covariance; 0: orientation covariance unknown; "
+    "at most 1000");
 }
 
 /// All parameter names, for rejecting unknown ones.

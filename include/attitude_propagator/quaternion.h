@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cmath>
+#include <optional>
 
 #include <Eigen/Geometry>
 
@@ -33,6 +34,12 @@ inline Eigen::Quaterniond expMap(const Eigen::Vector3d& v) {
   }
   return Eigen::Quaterniond(w, s * v.x(), s * v.y(), s * v.z());
 }
+
+/// q / |q| at any finite scale: the components are divided by the largest |component| first
+/// (which leaves a norm in [1, 2]), then by that norm, so neither q = (1e300, 1e300, 0, 0)
+/// (whose |q|^2 overflows) nor (1e-300, 0, 0, 0) (whose |q|^2 underflows to 0) is lost.
+/// nullopt for a non-finite or all-zero q.
+std::optional<Eigen::Quaterniond> safeNormalized(const Eigen::Quaterniond& q);
 
 /// Logarithm map, the inverse of expMap: the rotation vector of q with angle in [0, pi].
 /// q and -q give the same vector (the shorter of the two rotations is returned).

@@ -23,8 +23,9 @@ class RigidBody {
   enum class TriangleInequality { Require, Ignore };
 
   /// Principal moments (kg m^2) along the body axes, so P = B.
-  /// Throws std::invalid_argument naming the problem: non-finite, non-positive, or moments
-  /// that break the triangle inequality (I_i <= I_j + I_k) unless told to ignore it.
+  /// Throws std::invalid_argument naming the problem: non-finite, non-positive, outside
+  /// [kMinInertia, kMaxInertia] (limits.h), or moments that break the triangle inequality (I_i <=
+  /// I_j + I_k) unless told to ignore it.
   static RigidBody fromPrincipalMoments(const Eigen::Vector3d& moments,
                                         TriangleInequality triangle = TriangleInequality::Require);
 
@@ -33,7 +34,8 @@ class RigidBody {
   /// third one flipped if needed so that det R_BP = +1 (q_BP is a proper rotation). A diagonal
   /// tensor keeps P = B. Symmetry is checked to 1e-12 of the largest entry.
   /// Throws std::invalid_argument for a non-symmetric, non-finite or not positive definite
-  /// tensor or one whose principal moments break the triangle inequality.
+  /// tensor or one whose principal moments leave [kMinInertia, kMaxInertia] or break the
+  /// triangle inequality.
   static RigidBody fromTensor(const Eigen::Matrix3d& I_B);
 
   /// The `inertia` parameter: 3 values (principal, Ixx Iyy Izz) or 6 values

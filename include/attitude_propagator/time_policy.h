@@ -12,6 +12,14 @@ enum class StampOutcome {
   HeldGap,            // gap longer than max_dt: not integrated across, state held, re-anchored
   ResetBackwardJump,  // time went back by more than the threshold: initial state, re-anchored
   RejectedNonFinite,  // NaN or infinite value or stamp: ignored, state unchanged
+  /// A finite input beyond the door bounds of limits.h (a rate above kMaxBodyRate, a torque
+  /// above kMaxTorque), whose energy, momentum or step would overflow: ignored, state unchanged.
+  RejectedOutOfRange,
+  /// The integrator could not complete the interval (step-size control failed, the closed form
+  /// could not be evaluated, the result left the finite numbers or kMaxStateRate, or the call
+  /// used up its step budget). Like a gap: the state at the last stamp is held and re-anchored
+  /// at the new stamp; nothing of the failed interval is committed.
+  FailedStep,
 };
 
 /// Thresholds of the policy, in seconds.

@@ -25,6 +25,8 @@
 // 1e-6 rad at m_c = 5e-11.
 #pragma once
 
+#include <cmath>
+
 #include <Eigen/Geometry>
 
 #include "attitude_propagator/dynamic_state.h"
@@ -62,7 +64,7 @@ class TorqueFreeMotion {
   /// Triaxial cases i and ii: the modulus k, the rate lambda of u = lambda t - nu, and the
   /// body period 4 K(k) / |lambda| of M (infinite on the separatrix, 0 when not elliptic).
   double modulus() const { return k_; }
-  double lambda() const { return lambda_; }
+  double lambda() const { return std::ldexp(lambda_, rate_exponent_); }
   double bodyPeriod() const;
 
  private:
@@ -120,6 +122,10 @@ class TorqueFreeMotion {
   double agm_c_[kMaxAgmSteps] = {};
   double agm_scale_ = 0.0;
   double psi_offset_ = 0.0;  // the psi terms at t0, subtracted so that psi(t0) = 0
+  // Triaxial: the constants above describe the motion from w0 / 2^rate_exponent_ (rates
+  // whose binary exponent exceeds kUnscaledRateExponent are brought to order one).
+  static constexpr int kUnscaledRateExponent = 32;
+  int rate_exponent_ = 0;
 };
 
 }  // namespace attitude_propagator

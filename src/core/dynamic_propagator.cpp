@@ -7,6 +7,7 @@
 #include <string>
 
 #include "attitude_propagator/dynamic_step.h"
+#include "attitude_propagator/quaternion.h"
 #include "attitude_propagator/torque_free_motion.h"
 
 namespace attitude_propagator {
@@ -39,19 +40,32 @@ void requirePositiveFinite(double value, const char* name) {
   }
 }
 
-DynamicState checkedState(const DynamicState& x, const char* what) {
-  if (!x.q_WB.coeffs().allFinite() || !x.w_B.allFinite()) {
-    throw std::invalid_argument(std::string(what) + ": non-finite orientation or rate");
+/// x with its quaternion normalised, or std::invalid_argument naming what is wrong.
+DynamicState checkedState(const DynamicState& x, const std::string& what) {
+  if (!x.w_B.allFinite()) throw std::invalid_argument(what + ": non-finite angular velocity");
+  const std::optional<Eigen::Quaterniond> q = safeNormalized(x.q_WB);
+  if (!q) {
+    throw std::invalid_argument(what + ": the orientation must be a finite, non-zero quaternion");
   }
-  if (!(x.q_WB.norm() > 0.0)) {
-    throw std::invalid_argument(std::string(what) + ": the orientation is a zero quaternion");
+  if (!(x.w_B.norm() <= kMaxBodyRate)) {
+    throw std::invalid_argument(what + ": angular velocity above kMaxBodyRate = 1e5 rad/s");
   }
-  DynamicState normalised = x;
-  normalised.q_WB.normalize();
-  return normalised;
+  return DynamicState{*q, x.w_B};
 }
 
-bool finite(const PrincipalState& x) { return x.q_WP.coeffs().allFinite() && x.w_P.allFinite(); }
+/// The exact motion through x at t, or nullopt when the closed form cannot be set up or
+/// evaluated there (Boost.Math errors, constants that left the doubles).
+std::optional<TorqueFreeMotion> motionThrough(const RigidBody& body, const DynamicState& x,
+                                              double t) {
+  try {
+    TorqueFreeMotion motion(body, x, t);
+    const DynamicState check = motion.evaluate(t);
+    if (!check.q_WB.coeffs().allFinite() || !check.w_B.allFinite()) return std::nullopt;
+    return motion;
+  } catch (...) {
+    return std::nullopt;
+  }
+}
 
 }  // namespace
 
@@ -81,7 +95,7 @@ struct DynamicPropagator::Impl {
   double time = 0.0;
   PrincipalState current;
   DynamicState current_B;
-  std::optional<TorqueFreeMotion> motion;  // exact: the motion through the knot
+  std::optional<TorqueFreeMotion> motion;  // exact: the motion through the knot (none: failed)
 
   bool torque_set = false;
   double torque_stamp = -std::numeric_limits<double>::infinity();
@@ -90,6 +104,9 @@ struct DynamicPropagator::Impl {
 
   std::uint64_t steps = 0;
   std::uint64_t failed_steps = 0;
+  StepStatus last_failure = StepStatus::Ok;
+  StepStatus failure = StepStatus::Ok;  // why the current call's integration failed
+  std::uint64_t work = 0;               // work units spent by the current call
   double norm_error = 0.0;
   double energy0 = 0.0;
   double momentum0 = 0.0;
@@ -107,6 +124,17 @@ struct DynamicPropagator::Impl {
     if (!(c.torque_timeout >= 0.0) || !std::isfinite(c.torque_timeout)) {
       throw std::invalid_argument("torque_timeout: must be zero (hold forever) or positive, got " +
                                   std::to_string(c.torque_timeout));
+    }
+    const double needed = c.time_policy.max_dt / c.max_step + kBudgetHeadroomSteps;
+    if (!(static_cast<double>(c.step_budget) >= needed)) {
+      throw std::invalid_argument(
+          "step_budget: " + std::to_string(c.step_budget) + " cannot cover max_dt / max_step + " +
+          std::to_string(static_cast<int>(kBudgetHeadroomSteps)) + " = " + std::to_string(needed) +
+          " steps; raise max_step or step_budget, or lower max_dt");
+    }
+    if (exact() && !motionThrough(c.body, initial, 0.0)) {
+      throw std::invalid_argument(
+          "initial state: the exact torque-free motion cannot be evaluated from it");
     }
     pin(0.0, initial);
     anchored = false;
@@ -143,8 +171,14 @@ struct DynamicPropagator::Impl {
   void setKnot(double t, const PrincipalState& x) {
     knot_time = t;
     knot = x;
-    if (exact()) motion.emplace(config.body, stepper.fromPrincipal(x), t);
+    rebuildMotion();
     setCurrent(t, x);
+  }
+
+  /// exact: the motion through the knot. If the closed form cannot be set up there, no motion,
+  /// and every advance fails (the state is held) until a new state is pinned.
+  void rebuildMotion() {
+    if (exact()) motion = motionThrough(config.body, stepper.fromPrincipal(knot), knot_time);
   }
 
   void setCurrent(double t, const PrincipalState& x) {
@@ -153,31 +187,67 @@ struct DynamicPropagator::Impl {
     current_B = stepper.fromPrincipal(x);
   }
 
-  /// One step from x over h with the torque in force at `from`. False (x unchanged) if the
-  /// step left the finite numbers, so the state never becomes NaN.
+  /// Starts the work count of a public call.
+  void beginCall() {
+    work = 0;
+    failure = StepStatus::Ok;
+  }
+
+  /// One step from x over h with the torque in force at `from`, within the call's budget.
+  /// False (x unchanged, `failure` set) if the integrator could not complete it.
   bool step(PrincipalState& x, double from, double h) {
-    PrincipalState next = x;
-    StepInfo info;
-    stepper.setStepSizeHint(knot_hint);
-    stepper.stepPrincipal(next, torqueAt(from), h, &info);
-    ++steps;
-    if (!finite(next)) {
-      ++failed_steps;
+    if (work >= config.step_budget) {
+      failure = StepStatus::OverBudget;
       return false;
     }
-    x = next;
+    StepInfo info;
+    stepper.setStepSizeHint(knot_hint);
+    const StepStatus status =
+        stepper.tryStepPrincipal(x, torqueAt(from), h, config.step_budget - work, &info);
+    work += info.attempts;
+    ++steps;
+    if (status != StepStatus::Ok) {
+      failure = status;
+      return false;
+    }
     norm_error = info.norm_error;
     return true;
   }
 
-  /// Commits the knots up to t (t >= knot_time) and sets the current state at t.
-  void advanceState(double t) {
+  /// exact: the state at t on the motion through the knot (x_B, and x in P), if it can be
+  /// evaluated. Counts one unit of work; a call evaluates at most three times.
+  bool evaluateMotion(double t, DynamicState& x_B, PrincipalState& x) {
+    ++work;
+    ++steps;
+    if (!motion) {
+      failure = StepStatus::EvaluationError;
+      return false;
+    }
+    try {
+      x_B = motion->evaluate(t);
+    } catch (...) {  // Boost.Math's evaluation and domain errors
+      failure = StepStatus::EvaluationError;
+      return false;
+    }
+    x = stepper.toPrincipal(x_B);
+    if (!committable(x)) {
+      failure = StepStatus::NonFinite;
+      return false;
+    }
+    return true;
+  }
+
+  /// Commits the knots up to t (t >= knot_time) and sets the current state at t. False if a
+  /// step failed: knots up to the failure may be committed, the current state is unchanged.
+  bool advanceState(double t) {
     if (exact()) {
-      ++steps;
-      current_B = motion->evaluate(t);
+      DynamicState x_B;
+      PrincipalState x;
+      if (!evaluateMotion(t, x_B, x)) return false;
+      current = x;
+      current_B = x_B;  // the closed form's value, not its round trip through P
       time = t;
-      current = stepper.toPrincipal(current_B);
-      return;
+      return true;
     }
     for (;;) {
       double next = gridTime(grid_index + 1);
@@ -190,29 +260,42 @@ struct DynamicPropagator::Impl {
         }
       }
       if (next > t) break;
-      if (!step(knot, knot_time, next - knot_time)) break;
+      if (!step(knot, knot_time, next - knot_time)) return false;
       knot_hint = stepper.stepSizeHint();
       knot_time = next;
       if (on_grid) ++grid_index;
     }
     PrincipalState x = knot;
-    if (t > knot_time && !step(x, knot_time, t - knot_time)) x = current;
+    if (t > knot_time && !step(x, knot_time, t - knot_time)) return false;
     setCurrent(t, x);
+    return true;
   }
 
-  /// Commits the state at t (knot_time <= t <= time) as a knot.
-  void commitAt(double t) {
-    if (t == knot_time) return;
+  /// Commits the state at t (knot_time <= t <= time) as a knot. False if the step failed.
+  bool commitAt(double t) {
+    if (t == knot_time) return true;
     if (exact()) {
-      setKnot(t, stepper.toPrincipal(motion->evaluate(t)));
-      return;
+      DynamicState x_B;
+      PrincipalState x;
+      if (!evaluateMotion(t, x_B, x)) return false;
+      setKnot(t, x);
+      return true;
     }
     PrincipalState x = knot;
-    if (step(x, knot_time, t - knot_time)) {
-      knot = x;
-      knot_hint = stepper.stepSizeHint();
-      knot_time = t;
-    }
+    if (!step(x, knot_time, t - knot_time)) return false;
+    knot = x;
+    knot_hint = stepper.stepSizeHint();
+    knot_time = t;
+    return true;
+  }
+
+  /// The integration up to t failed: like a gap, the state held at time() holds at t and
+  /// anchors there.
+  StampOutcome failAndHold(double t, const DynamicState& held) {
+    ++failed_steps;
+    last_failure = failure;
+    pin(t, held);
+    return StampOutcome::FailedStep;
   }
 
   StampOutcome advanceTo(double t) {
@@ -232,9 +315,10 @@ struct DynamicPropagator::Impl {
         // Not integrated across: the state at the last stamp holds at t, a new anchor.
         pin(t, current_B);
         return StampOutcome::HeldGap;
-      case StampClass::Forward:
-        advanceState(t);
-        return StampOutcome::Advanced;
+      case StampClass::Forward: {
+        const DynamicState held = current_B;
+        return advanceState(t) ? StampOutcome::Advanced : failAndHold(t, held);
+      }
     }
     return StampOutcome::DroppedStale;
   }
@@ -252,21 +336,27 @@ struct DynamicPropagator::Impl {
     return StampOutcome::Advanced;
   }
 
-  /// Applies an input at max(t, knot_time) when t <= time(); see placeInput.
+  /// Applies an input at max(t, knot_time) when t <= time(); see placeInput. If the steps to
+  /// the input's knot or on from it fail, the state held at time() anchors there and the
+  /// input applies from that anchor; returns false then.
   template <typename Apply>
-  void insertKnot(double t, Apply apply) {
+  bool insertKnot(double t, Apply apply) {
     const double now = time;
-    const double at = std::max(t, knot_time);
-    commitAt(at);
-    apply();
-    if (exact()) {
-      motion.emplace(config.body, stepper.fromPrincipal(knot), knot_time);
+    const DynamicState held = current_B;
+    if (commitAt(std::max(t, knot_time))) {
+      apply();
+      rebuildMotion();
+      if (now <= knot_time) {
+        setCurrent(knot_time, knot);
+        return true;
+      }
+      if (advanceState(now)) return true;
     }
-    if (now > knot_time) {
-      advanceState(now);
-    } else {
-      setCurrent(knot_time, knot);
-    }
+    failAndHold(now, held);
+    apply();  // at the new anchor: knot_time == now
+    rebuildMotion();
+    setCurrent(knot_time, knot);
+    return false;
   }
 
   void clearInputs() {
@@ -296,11 +386,16 @@ std::string DynamicPropagator::modelName() const {
   return "exact_triaxial";
 }
 
-StampOutcome DynamicPropagator::advanceTo(double t) { return impl_->advanceTo(t); }
+StampOutcome DynamicPropagator::advanceTo(double t) {
+  impl_->beginCall();
+  return impl_->advanceTo(t);
+}
 
 StampOutcome DynamicPropagator::setTorque(double t, const Eigen::Vector3d& tau, TorqueFrame frame) {
   Impl& d = *impl_;
+  d.beginCall();
   if (!std::isfinite(t) || !tau.allFinite()) return StampOutcome::RejectedNonFinite;
+  if (!(tau.norm() <= kMaxTorque)) return StampOutcome::RejectedOutOfRange;
   if (d.exact() && !tau.isZero(0.0)) {
     throw std::logic_error(
         "DynamicPropagator::setTorque: the exact torque-free model cannot take a torque");
@@ -310,32 +405,39 @@ StampOutcome DynamicPropagator::setTorque(double t, const Eigen::Vector3d& tau, 
   TorqueInput input;
   input.tau = tau;
   input.frame = frame;
-  d.insertKnot(t, [&d, &input, t]() {
+  const bool ok = d.insertKnot(t, [&d, &input, t]() {
     d.torque = d.stepper.toPrincipal(input);
     d.torque_set = true;
     d.torque_stamp = std::max(t, d.knot_time);
   });
-  return outcome;
+  return ok ? outcome : StampOutcome::FailedStep;
 }
 
 StampOutcome DynamicPropagator::setRate(double t, const Eigen::Vector3d& w_B) {
   Impl& d = *impl_;
+  d.beginCall();
   if (!std::isfinite(t) || !w_B.allFinite()) return StampOutcome::RejectedNonFinite;
+  if (!(w_B.norm() <= kMaxBodyRate)) return StampOutcome::RejectedOutOfRange;
   const StampOutcome outcome = d.placeInput(t, d.rate_stamp);
   if (!stateHoldsAtStamp(outcome)) return outcome;
-  d.insertKnot(t, [&d, &w_B, t]() {
+  const bool ok = d.insertKnot(t, [&d, &w_B, t]() {
     d.knot.w_P = d.config.body.q_BP().conjugate() * w_B;
     d.rate_stamp = std::max(t, d.knot_time);
     const DynamicState x = d.stepper.fromPrincipal(d.knot);
     d.energy0 = d.config.body.kineticEnergy(x.w_B);
     d.momentum0 = d.config.body.angularMomentum_B(x.w_B).norm();
   });
-  return outcome;
+  return ok ? outcome : StampOutcome::FailedStep;
 }
 
 void DynamicPropagator::setState(double t, const DynamicState& state) {
   if (!std::isfinite(t)) throw std::invalid_argument("set_state: non-finite stamp");
-  impl_->pin(t, checkedState(state, "set_state"));
+  const DynamicState x = checkedState(state, "set_state");
+  if (impl_->exact() && !motionThrough(impl_->config.body, x, t)) {
+    throw std::invalid_argument(
+        "set_state: the exact torque-free motion cannot be evaluated from this state");
+  }
+  impl_->pin(t, x);
 }
 
 void DynamicPropagator::reset() {
@@ -349,6 +451,8 @@ double DynamicPropagator::time() const { return impl_->time; }
 const DynamicState& DynamicPropagator::state() const { return impl_->current_B; }
 std::uint64_t DynamicPropagator::steps() const { return impl_->steps; }
 std::uint64_t DynamicPropagator::failedSteps() const { return impl_->failed_steps; }
+StepStatus DynamicPropagator::lastFailure() const { return impl_->last_failure; }
+std::uint64_t DynamicPropagator::lastCallWork() const { return impl_->work; }
 double DynamicPropagator::normError() const { return impl_->norm_error; }
 
 double DynamicPropagator::kineticEnergy() const {

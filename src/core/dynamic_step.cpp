@@ -10,6 +10,7 @@
 #include <boost/numeric/odeint/stepper/generation.hpp>
 #include <boost/numeric/odeint/stepper/runge_kutta_dopri5.hpp>
 
+#include "attitude_propagator/limits.h"
 #include "attitude_propagator/torque_free_motion.h"
 
 namespace attitude_propagator {
@@ -26,6 +27,9 @@ constexpr double kYoshidaW1 = 1.0 / (2.0 - kCubeRootOfTwo);
 constexpr double kYoshidaW0 = -kCubeRootOfTwo * kYoshidaW1;
 // dopri5 gives up (rather than loop forever) after this many rejected trials in one step.
 constexpr int kMaxRejectedSubsteps = 10000;
+// A committed quaternion is of unit length to round-off; sqrt(eps) leaves room for the
+// rounding of denormal components and catches any step that broke.
+const double kUnitTolerance = std::sqrt(kEpsilon);
 
 /// 1/2 q (x) (0, w) (notes eq. 9), for any q (RK stages are not exactly unit).
 Eigen::Quaterniond halfProductWithRate(const Eigen::Quaterniond& q, const Eigen::Vector3d& w) {
@@ -123,6 +127,22 @@ struct EulerSystem {
 
 }  // namespace
 
+const char* stepStatusName(StepStatus status) {
+  switch (status) {
+    case StepStatus::Ok:
+      return "ok";
+    case StepStatus::NonFinite:
+      return "non_finite";
+    case StepStatus::OverBudget:
+      return "over_budget";
+    case StepStatus::NoConvergence:
+      return "no_convergence";
+    case StepStatus::EvaluationError:
+      return "evaluation_error";
+  }
+  return "unknown";
+}
+
 DynamicStepper::DynamicStepper(Integrator method, const RigidBody& body, double tolerance)
     : method_(method),
       body_(body),
@@ -175,7 +195,49 @@ void DynamicStepper::stepPrincipal(PrincipalState& x, const PrincipalTorque& tor
   StepInfo local;
   StepInfo& report = info ? *info : local;
   report = StepInfo{};
+  if (method_ != Integrator::Dopri5) {
+    fixedStep(x, torque, h, report);
+    return;
+  }
+  const StepStatus status = dopri5(x, torque, h, UINT64_MAX, report);
+  if (status != StepStatus::Ok) {
+    throw std::runtime_error(std::string("dopri5: step size control failed (") +
+                             stepStatusName(status) + ")");
+  }
+}
+
+StepStatus DynamicStepper::tryStepPrincipal(PrincipalState& x, const PrincipalTorque& torque,
+                                            double h, std::uint64_t budget,
+                                            StepInfo* info) const noexcept {
+  StepInfo local;
+  StepInfo& report = info ? *info : local;
+  report = StepInfo{};
+  if (budget == 0) return StepStatus::OverBudget;
+  PrincipalState y = x;
+  StepStatus status = StepStatus::Ok;
+  try {
+    if (method_ == Integrator::Dopri5) {
+      status = dopri5(y, torque, h, budget, report);
+    } else {
+      fixedStep(y, torque, h, report);
+    }
+  } catch (...) {  // Boost.Math's evaluation and domain errors in the closed form, or a torque
+    status = StepStatus::EvaluationError;
+  }
+  if (status == StepStatus::Ok && !committable(y)) status = StepStatus::NonFinite;
+  if (status == StepStatus::Ok) x = y;
+  return status;
+}
+
+bool committable(const PrincipalState& x) {
+  return x.q_WP.coeffs().allFinite() && x.w_P.allFinite() && x.M_P.allFinite() &&
+         std::abs(x.q_WP.squaredNorm() - 1.0) <= kUnitTolerance && x.w_P.norm() <= kMaxStateRate;
+}
+
+void DynamicStepper::fixedStep(PrincipalState& x, const PrincipalTorque& torque, double h,
+                               StepInfo& report) const {
   report.iterations = 1;
+  report.attempts = 1;
   switch (method_) {
     case Integrator::Rk4:
       rk4(x, torque, h, report);
@@ -201,9 +263,6 @@ void DynamicStepper::stepPrincipal(PrincipalState& x, const PrincipalTorque& tor
       report.norm_error = normaliseAndReport(x.q_WP);
       return;
     }
-    case Integrator::Dopri5:
-      dopri5(x, torque, h, report);
-      return;
     case Integrator::Exact:
       exact(x, torque, h);
       return;
@@ -315,11 +374,12 @@ void DynamicStepper::strang(Eigen::Quaterniond& q_WP, Eigen::Vector3d& M_P,
   if (torqued) M_P += h2 * torque.inP(q_WP);
 }
 
-// Dormand-Prince 5(4) with step-size control across [0, h]; q renormalised after each
-// accepted sub-step (and the FSAL derivative recomputed, since renormalising changed the
-// state it belongs to).
-void DynamicStepper::dopri5(PrincipalState& x, const PrincipalTorque& torque, double h,
-                            StepInfo& info) const {
+// Dormand-Prince 5(4) with step-size control across [0, h], driven trial by trial so that the
+// work is counted and a failure is a status, not an exception or an endless loop; q
+// renormalised after each accepted sub-step (and the FSAL derivative recomputed, since
+// renormalising changed the state it belongs to).
+StepStatus DynamicStepper::dopri5(PrincipalState& x, const PrincipalTorque& torque, double h,
+                                  std::uint64_t budget, StepInfo& info) const {
   namespace odeint = boost::numeric::odeint;
   using Stepper = odeint::runge_kutta_dopri5<OdeState>;
   auto controlled = odeint::make_controlled(tolerance_, tolerance_, Stepper());
@@ -327,12 +387,18 @@ void DynamicStepper::dopri5(PrincipalState& x, const PrincipalTorque& torque, do
   OdeState y{x.q_WP.w(), x.q_WP.x(), x.q_WP.y(), x.q_WP.z(), x.w_P.x(), x.w_P.y(), x.w_P.z()};
 
   info.iterations = 0;
-  if (h == 0.0) return;
+  if (h == 0.0) return StepStatus::Ok;
+  if (!std::isfinite(h)) return StepStatus::NonFinite;
   const double direction = h > 0.0 ? 1.0 : -1.0;
+  // A sub-step below one ulp of the interval cannot move t: the control has collapsed (a
+  // tolerance below round-off, or a right-hand side that left the doubles).
+  const double smallest = kEpsilon * std::abs(h);
   double t = 0.0;
   double dt = dopri5_dt_ > 0.0 ? direction * std::min(dopri5_dt_, std::abs(h)) : h;
   double worst_norm_error = 0.0;
   while (t != h) {
+    if (info.attempts >= budget) return StepStatus::OverBudget;
+    ++info.attempts;
     const double remaining = h - t;
     const bool last = std::abs(dt) >= std::abs(remaining);
     double try_dt = last ? remaining : dt;
@@ -340,19 +406,28 @@ void DynamicStepper::dopri5(PrincipalState& x, const PrincipalTorque& torque, do
     // in try_dt; on failure it only shrinks try_dt.
     double t_try = t;
     if (controlled.try_step(system, y, t_try, try_dt) == odeint::fail) {
-      if (++info.rejected > kMaxRejectedSubsteps) {
-        throw std::runtime_error("dopri5: step size control failed to converge");
+      if (++info.rejected > kMaxRejectedSubsteps || !(std::abs(try_dt) > smallest)) {
+        return StepStatus::NoConvergence;
       }
       dt = try_dt;
       continue;
     }
-    ++info.iterations;
-    t = last ? h : t_try;  // land exactly on h, whatever round-off the sub-steps carry
-    // A last sub-step shortened to land on h says nothing about the step size to come.
-    if (!last || std::abs(try_dt) > std::abs(dt)) dt = try_dt;
+    // A NaN error estimate passes the controller's test (NaN > 1 is false): check the state.
     double norm = 0.0;
     for (int i = 0; i < 4; ++i) norm += y[i] * y[i];
     norm = std::sqrt(norm);
+    for (double v : y) {
+      if (!std::isfinite(v)) return StepStatus::NonFinite;
+    }
+    if (!(norm > 0.0) || !std::isfinite(norm)) return StepStatus::NonFinite;
+    ++info.iterations;
+    // Land exactly on h, whatever round-off the sub-steps carry.
+    const double next = last ? h : t_try;
+    if (next == t) return StepStatus::NoConvergence;
+    t = next;
+    // A last sub-step shortened to land on h says nothing about the step size to come.
+    if (!last || std::abs(try_dt) > std::abs(dt)) dt = try_dt;
+    if (!(std::abs(dt) > smallest) && t != h) return StepStatus::NoConvergence;
     for (int i = 0; i < 4; ++i) y[i] /= norm;
     if (std::abs(norm - 1.0) > std::abs(worst_norm_error)) worst_norm_error = norm - 1.0;
     controlled.reset();
@@ -361,6 +436,7 @@ void DynamicStepper::dopri5(PrincipalState& x, const PrincipalTorque& torque, do
   info.norm_error = worst_norm_error;
   x.q_WP = Eigen::Quaterniond(y[0], y[1], y[2], y[3]);
   x.w_P = Eigen::Vector3d(y[4], y[5], y[6]);
+  return StepStatus::Ok;
 }
 
 void DynamicStepper::exact(PrincipalState& x, const PrincipalTorque& torque, double h) const {

@@ -1,8 +1,12 @@
 #include "attitude_propagator/kinematic_propagator.h"
 
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <string>
+
+#include "attitude_propagator/limits.h"
+#include "attitude_propagator/quaternion.h"
 
 namespace attitude_propagator {
 
@@ -27,12 +31,13 @@ void checkPolicy(const TimePolicy& policy) {
   }
 }
 
+/// q normalised at any finite scale (safeNormalized), or std::invalid_argument.
 Eigen::Quaterniond checkedUnit(const Eigen::Quaterniond& q, const std::string& what) {
-  const double n = q.norm();
-  if (!std::isfinite(n) || n < 1e-9) {
+  const std::optional<Eigen::Quaterniond> unit = safeNormalized(q);
+  if (!unit) {
     throw std::invalid_argument(what + ": must be a finite, non-zero quaternion [x, y, z, w]");
   }
-  return Eigen::Quaterniond(q.coeffs() / n);
+  return *unit;
 }
 
 }  // namespace
@@ -47,10 +52,9 @@ KinematicPropagator::KinematicPropagator(const KinematicConfig& config)
 }
 
 StampOutcome KinematicPropagator::addSample(double t, const Eigen::Vector3d& w_B) {
-  // A rate whose squared magnitude overflows (|w| > 1e154 rad/s) is as unusable as a NaN.
-  if (!std::isfinite(t) || !std::isfinite(w_B.squaredNorm())) {
-    return StampOutcome::RejectedNonFinite;
-  }
+  if (!std::isfinite(t) || !w_B.allFinite()) return StampOutcome::RejectedNonFinite;
+  // The door bound of limits.h: |w| h stays far inside the doubles, so no step turns NaN.
+  if (!(w_B.norm() <= kMaxBodyRate)) return StampOutcome::RejectedOutOfRange;
   if (!anchored_) {
     anchor(t, w_B);
     return StampOutcome::Anchored;
@@ -85,6 +89,9 @@ void KinematicPropagator::setState(double t, const Eigen::Quaterniond& q_WB,
                                    const Eigen::Vector3d& w_B) {
   if (!std::isfinite(t) || !w_B.allFinite()) {
     throw std::invalid_argument("set_state: stamp and angular velocity must be finite");
+  }
+  if (!(w_B.norm() <= kMaxBodyRate)) {
+    throw std::invalid_argument("set_state: angular velocity above kMaxBodyRate = 1e5 rad/s");
   }
   q_WB_ = checkedUnit(q_WB, "set_state orientation");
   anchor(t, w_B);

@@ -1,9 +1,12 @@
 #include "attitude_propagator/orientation_covariance.h"
 
+#include <algorithm>
 #include <cmath>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
+#include "attitude_propagator/limits.h"
 #include "attitude_propagator/quaternion.h"
 
 namespace attitude_propagator {
@@ -48,7 +51,79 @@ Eigen::Matrix3d propagateOrientationCovariance(const Eigen::Matrix3d& P, double 
   const Eigen::Matrix3d Phi = expMap(phi).toRotationMatrix().transpose();
   const Eigen::Matrix3d G = h * rightJacobian(phi);
   const Eigen::Matrix3d next = Phi * P * Phi.transpose() + G * R * G.transpose();
-  return 0.5 * (next + next.transpose());
+  return clampOrientationCovariance(next);
+}
+
+namespace {
+
+/// Sylvester's criterion for semi-definiteness: every principal minor >= 0 (the 3 diagonal
+/// entries, the 3 2x2 minors and the determinant).
+bool principalMinorsNonNegative(const Eigen::Matrix3d& S) {
+  if (!(S.diagonal().minCoeff() >= 0.0)) return false;
+  for (int i = 0; i < 3; ++i) {
+    const int j = (i + 1) % 3;
+    if (!(S(i, i) * S(j, j) - S(i, j) * S(j, i) >= 0.0)) return false;
+  }
+  return S.determinant() >= 0.0;
+}
+
+}  // namespace
+
+Eigen::Matrix3d clampOrientationCovariance(const Eigen::Matrix3d& P) {
+  const Eigen::Matrix3d ceiling = kMaxOrientationVariance * Eigen::Matrix3d::Identity();
+  if (!P.allFinite()) return ceiling;
+  Eigen::Matrix3d S = 0.5 * (P + P.transpose());
+  // Semi-definite with trace <= ceiling: every eigenvalue is in [0, ceiling] already.
+  if (principalMinorsNonNegative(S) && S.trace() <= kMaxOrientationVariance) return S;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(S);
+  if (eigen.info() != Eigen::Success) return ceiling;
+  const Eigen::Vector3d lambda =
+      eigen.eigenvalues().cwiseMax(0.0).cwiseMin(kMaxOrientationVariance);
+  const Eigen::Matrix3d& V = eigen.eigenvectors();
+  const Eigen::Matrix3d clamped = V * lambda.asDiagonal() * V.transpose();
+  S = 0.5 * (clamped + clamped.transpose());
+  // The reconstruction rounds: keep the diagonal inside the range exactly.
+  S.diagonal() = S.diagonal().cwiseMax(0.0).cwiseMin(kMaxOrientationVariance);
+  return S;
+}
+
+RateCovarianceCheck checkRateCovariance(const Eigen::Matrix3d& R) {
+  if (!R.allFinite()) return RateCovarianceCheck::NonFinite;
+  const double largest = R.cwiseAbs().maxCoeff();
+  if (!((R - R.transpose()).cwiseAbs().maxCoeff() <= kCovarianceSymmetryTolerance * largest)) {
+    return RateCovarianceCheck::NotSymmetric;
+  }
+  if (!(R.diagonal().minCoeff() >= 0.0)) return RateCovarianceCheck::NegativeVariance;
+  if (!(R.diagonal().maxCoeff() <= kMaxRateVariance)) {
+    return RateCovarianceCheck::VarianceTooLarge;
+  }
+  for (int i = 0; i < 3; ++i) {
+    const int j = (i + 1) % 3;
+    // Both entries, at the symmetry tolerance: R_ij^2 <= R_ii R_jj (1 + tol).
+    const double r = std::max(std::abs(R(i, j)), std::abs(R(j, i)));
+    if (!(r * r <= R(i, i) * R(j, j) * (1.0 + kCovarianceSymmetryTolerance))) {
+      return RateCovarianceCheck::NotACovariance;
+    }
+  }
+  return RateCovarianceCheck::Ok;
+}
+
+const char* rateCovarianceCheckName(RateCovarianceCheck check) {
+  switch (check) {
+    case RateCovarianceCheck::Ok:
+      return "ok";
+    case RateCovarianceCheck::NonFinite:
+      return "non_finite";
+    case RateCovarianceCheck::NotSymmetric:
+      return "not_symmetric";
+    case RateCovarianceCheck::NegativeVariance:
+      return "negative_variance";
+    case RateCovarianceCheck::VarianceTooLarge:
+      return "variance_too_large";
+    case RateCovarianceCheck::NotACovariance:
+      return "not_a_covariance";
+  }
+  return "unknown";
 }
 
 Eigen::Matrix3d rotateCovariance(const Eigen::Matrix3d& P, const Eigen::Matrix3d& C) {

@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include "attitude_propagator/quaternion.h"
+
 namespace attitude_propagator {
 
 namespace {
@@ -16,9 +18,11 @@ namespace {
   throw std::invalid_argument(name + ": " + problem);
 }
 
+/// A finite value above min (or at it, if min_inclusive) and at most max.
 void requireFinite(const std::string& name, double value, double min, bool min_inclusive,
-                   const std::string& accepted) {
-  const bool ok = std::isfinite(value) && (min_inclusive ? value >= min : value > min);
+                   double max, const std::string& accepted) {
+  const bool ok =
+      std::isfinite(value) && (min_inclusive ? value >= min : value > min) && value <= max;
   if (!ok) fail(name, "invalid value " + formatParameter(value) + "; accepted: " + accepted);
 }
 
@@ -85,9 +89,12 @@ Integrator resolveIntegrator(const Parameters& p, Model model) {
 }
 
 RigidBody makeBody(const std::vector<double>& inertia) {
+  // The moments' range (limits.h, checked by RigidBody) keeps I |w|^2 and the closed forms'
+  // squares of I w finite for every rate the door lets in.
   const std::string accepted =
-      "3 positive principal moments [I1, I2, I3] with each at most the sum of the others, or "
-      "6 values [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] of a positive definite tensor (kg m^2)";
+      "3 positive principal moments [I1, I2, I3] in [1e-15, 1e15] with each at most the sum of "
+      "the others, or 6 values [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] of a positive definite tensor with "
+      "such moments (kg m^2)";
   bool ok = inertia.size() == 3 || inertia.size() == 6;
   for (double x : inertia) ok = ok && std::isfinite(x);
   for (std::size_t i = 0; ok && i < 3; ++i) ok = inertia[i] > 0.0;
@@ -100,25 +107,44 @@ RigidBody makeBody(const std::vector<double>& inertia) {
 }
 
 Eigen::Quaterniond initialOrientation(const std::vector<double>& v) {
-  const std::string accepted = "[x, y, z, w], finite, not all zero";
+  const std::string accepted = "[x, y, z, w], finite, not all zero (any scale)";
   requireVector("initial_orientation", v, 4, accepted);
-  const Eigen::Quaterniond q(v[3], v[0], v[1], v[2]);
-  if (!(q.norm() > 1e-9)) fail("initial_orientation", "zero quaternion; accepted: " + accepted);
-  return q.normalized();
+  const std::optional<Eigen::Quaterniond> q =
+      safeNormalized(Eigen::Quaterniond(v[3], v[0], v[1], v[2]));
+  if (!q) fail("initial_orientation", "zero quaternion; accepted: " + accepted);
+  return *q;
 }
 
+// The bounds below (limits.h) make every accepted set run in bounded CPU and finite numbers:
+// publish_rate bounds the timer's calls per second, max_step from below and max_dt / max_step
+// the grid steps per call, tolerance from below the dopri5 sub-steps (below 1e-12 its error
+// control is round-off and only shrinks the step), max_dt and torque_timeout keep stamps plus
+// intervals exact sums, the initial rate the energy.
 void checkScalars(const Parameters& p) {
   requireOneOf("rate_input", p.rate_input, {"imu", "twist", "none"});
   requireOneOf("torque_frame", p.torque_frame, {"body", "fixed"});
-  requireFinite("torque_timeout", p.torque_timeout, 0.0, true, "a finite number >= 0 (s)");
-  requireFinite("publish_rate", p.publish_rate, 0.0, false, "a finite number > 0 (Hz)");
-  requireFinite("max_step", p.max_step, 0.0, true, "a finite number >= 0 (s; 0: 1/publish_rate)");
-  requireFinite("max_dt", p.max_dt, 0.0, false, "a finite number > 0 (s)");
-  requireFinite("tolerance", p.tolerance, 0.0, false, "a finite number > 0");
-  requireFinite("angular_velocity_stddev", p.angular_velocity_stddev, 0.0, true,
-                "a finite number >= 0 (rad/s)");
-  requireVector("initial_angular_velocity", p.initial_angular_velocity, 3,
-                "[x, y, z], finite (rad/s)");
+  requireFinite("torque_timeout", p.torque_timeout, 0.0, true, kMaxTorqueTimeout,
+                "a finite number >= 0 and at most 3600 (s)");
+  requireFinite("publish_rate", p.publish_rate, 0.0, false, kMaxPublishRate,
+                "a finite number > 0 and at most 1000 (Hz)");
+  const std::string step_range = "0 (1/publish_rate) or a number in [1e-5, 60] (s)";
+  requireFinite("max_step", p.max_step, 0.0, true, kMaxMaxDt, step_range);
+  if (p.max_step > 0.0 && p.max_step < kMinMaxStep) {
+    fail("max_step", "invalid value " + formatParameter(p.max_step) + "; accepted: " + step_range);
+  }
+  requireFinite("max_dt", p.max_dt, 0.0, false, kMaxMaxDt,
+                "a finite number > 0 and at most 60 (s)");
+  requireFinite("tolerance", p.tolerance, kMinTolerance, true, kMaxTolerance,
+                "a number in [1e-12, 1e-2]");
+  requireFinite("angular_velocity_stddev", p.angular_velocity_stddev, 0.0, true, kMaxRateStddev,
+                "a finite number >= 0 and at most 1000 (rad/s)");
+  const std::string rate_range = "[x, y, z], finite, |w| <= 1e5 (rad/s)";
+  const auto& w = p.initial_angular_velocity;
+  requireVector("initial_angular_velocity", w, 3, rate_range);
+  if (!(Eigen::Vector3d(w[0], w[1], w[2]).norm() <= kMaxBodyRate)) {
+    fail("initial_angular_velocity",
+         "invalid value " + formatParameter(w) + "; accepted: " + rate_range);
+  }
   requireFrameName("fixed_frame", p.fixed_frame);
   requireFrameName("body_frame", p.body_frame);
   if (p.fixed_frame == p.body_frame) {
@@ -232,12 +258,27 @@ NodeConfig validateParameters(const Parameters& p) {
   dynamic.integrator = integrator;
   dynamic.torque_input = p.torque_input;
   dynamic.max_step = p.max_step > 0.0 ? p.max_step : 1.0 / p.publish_rate;
+  if (p.max_dt / dynamic.max_step > kMaxGridStepsPerCall * (1.0 + 1e-12)) {
+    // One call may have to cross max_dt in steps of max_step (the slack: 60 / 6e-4 rounds
+    // above 1e5).
+    fail("max_step", "invalid value " + formatParameter(dynamic.max_step) + " with max_dt " +
+                         formatParameter(p.max_dt) + "; accepted: at least max_dt / 1e5 (s)");
+  }
   dynamic.tolerance = p.tolerance;
   dynamic.torque_timeout = p.torque_timeout;
   dynamic.time_policy = policy;
   dynamic.initial.q_WB = q0_WB;
   const auto& w = p.initial_angular_velocity;
   dynamic.initial.w_B = Eigen::Vector3d(w[0], w[1], w[2]);
+  try {
+    // What the propagator refuses at construction (an initial state its exact motion cannot
+    // be evaluated from) is refused here, before the node starts.
+    DynamicPropagator probe(dynamic);
+  } catch (const std::invalid_argument& e) {
+    fail("initial_angular_velocity", std::string(e.what()) +
+                                         "; accepted: [x, y, z], finite, "
+                                         "|w| <= 1e5 (rad/s)");
+  }
   config.dynamic = dynamic;
   return config;
 }

@@ -1,9 +1,23 @@
 #include "attitude_propagator/quaternion.h"
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace attitude_propagator {
+
+std::optional<Eigen::Quaterniond> safeNormalized(const Eigen::Quaterniond& q) {
+  const Eigen::Vector4d& c = q.coeffs();
+  if (!c.allFinite()) return std::nullopt;
+  const double n2 = c.squaredNorm();
+  if (n2 >= std::numeric_limits<double>::min() && n2 <= std::numeric_limits<double>::max()) {
+    return Eigen::Quaterniond(Eigen::Vector4d(c / std::sqrt(n2)));  // as Eigen's normalized()
+  }
+  const double largest = c.cwiseAbs().maxCoeff();
+  if (!(largest > 0.0)) return std::nullopt;
+  const Eigen::Vector4d scaled = c / largest;  // each |component| <= 1, the largest exactly 1
+  return Eigen::Quaterniond(Eigen::Vector4d(scaled / scaled.norm()));
+}
 
 Eigen::Vector3d logMap(const Eigen::Quaterniond& q) {
   // q and -q are one rotation: take w >= 0 so that the angle is in [0, pi].

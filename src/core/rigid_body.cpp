@@ -9,6 +9,8 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "attitude_propagator/limits.h"
+
 namespace attitude_propagator {
 
 namespace {
@@ -34,6 +36,14 @@ void checkMoments(const Eigen::Vector3d& moments, bool triangle = true) {
     throw std::invalid_argument(
         "inertia: principal moments must be positive (the tensor positive definite), got " +
         describe(moments));
+  }
+  if (!(moments.minCoeff() >= kMinInertia && moments.maxCoeff() <= kMaxInertia)) {
+    // The door bound of limits.h: beyond it I |w|^2 and the closed forms' squares of I w may
+    // leave the doubles.
+    std::ostringstream range;
+    range << "[" << kMinInertia << ", " << kMaxInertia << "]";
+    throw std::invalid_argument("inertia: principal moments must lie in " + range.str() +
+                                " kg m^2, got " + describe(moments));
   }
   if (!triangle) return;
   const double sum = moments.sum();

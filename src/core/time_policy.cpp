@@ -15,9 +15,11 @@ bool stateHoldsAtStamp(StampOutcome outcome) {
     case StampOutcome::Advanced:
     case StampOutcome::HeldGap:
     case StampOutcome::ResetBackwardJump:
+    case StampOutcome::FailedStep:
       return true;
     case StampOutcome::DroppedStale:
     case StampOutcome::RejectedNonFinite:
+    case StampOutcome::RejectedOutOfRange:
       return false;
   }
   return false;
@@ -37,6 +39,10 @@ const char* outcomeName(StampOutcome outcome) {
       return "reset_backward_jump";
     case StampOutcome::RejectedNonFinite:
       return "rejected_non_finite";
+    case StampOutcome::RejectedOutOfRange:
+      return "rejected_out_of_range";
+    case StampOutcome::FailedStep:
+      return "failed_step";
   }
   return "unknown";
 }

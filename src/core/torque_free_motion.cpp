@@ -3,6 +3,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include <boost/math/special_functions/ellint_rf.hpp>
@@ -17,10 +18,11 @@ TorqueFreeMotion::TorqueFreeMotion(const RigidBody& body, const DynamicState& x0
   if (!x0.q_WB.coeffs().allFinite() || !x0.w_B.allFinite() || !std::isfinite(t0)) {
     throw std::invalid_argument("TorqueFreeMotion: the initial state must be finite");
   }
-  if (!(x0.q_WB.norm() > 0.0)) {
+  const std::optional<Eigen::Quaterniond> q0_WB = safeNormalized(x0.q_WB);
+  if (!q0_WB) {
     throw std::invalid_argument("TorqueFreeMotion: the initial orientation is a zero quaternion");
   }
-  q0_WP_ = x0.q_WB.normalized() * q_BP_;
+  q0_WP_ = *q0_WB * q_BP_;
   w0_P_ = q_BP_.conjugate() * x0.w_B;
   M0_P_ = I_P_.cwiseProduct(w0_P_);
   if (body.isSphere(kRelativeSymmetry)) {
@@ -30,6 +32,18 @@ TorqueFreeMotion::TorqueFreeMotion(const RigidBody& body, const DynamicState& x0
     initSymmetricTop(M0_P_, body.symmetryAxis(kRelativeSymmetry));
   } else {
     form_ = Form::Triaxial;
+    // The triaxial constants square I w (G^2, Delta_j ~ I^2 |w|^2), which under- or
+    // overflows for rates far from 1 rad/s (1e-159 rad/s on I = (1, 2, 3)). The motion from
+    // s w0 is the motion from w0 run s times faster, w(t; s w0) = s w(s t; w0), so it is set
+    // up at a rate of order one and evaluate() scales time and rate back; s is a power of two,
+    // so the scaling itself is exact.
+    int exponent = 0;
+    std::frexp(w0_P_.cwiseAbs().maxCoeff(), &exponent);
+    if (std::abs(exponent) > kUnscaledRateExponent) {
+      rate_exponent_ = exponent;
+      for (int i = 0; i < 3; ++i) w0_P_[i] = std::ldexp(w0_P_[i], -exponent);
+      M0_P_ = I_P_.cwiseProduct(w0_P_);
+    }
     initTriaxial(body, M0_P_);
   }
 }
@@ -49,7 +63,7 @@ const char* TorqueFreeMotion::formName() const {
 double TorqueFreeMotion::bodyPeriod() const {
   if (regime_ == Regime::Separatrix) return std::numeric_limits<double>::infinity();
   if (regime_ == Regime::Steady) return 0.0;
-  return 4.0 * K_ / std::abs(lambda_);
+  return 4.0 * K_ / std::abs(lambda());
 }
 
 void TorqueFreeMotion::initSymmetricTop(const Eigen::Vector3d& M_P, int axis) {
@@ -347,16 +361,21 @@ DynamicState TorqueFreeMotion::evaluate(double t) const {
       break;
     }
     case Form::Triaxial: {
+      // Time and rate of the motion set up at the scaled rate (see the constructor).
+      const double scaled_tau = rate_exponent_ == 0 ? tau : std::ldexp(tau, rate_exponent_);
       if (regime_ == Regime::Steady) {
-        q_WP = q0_WP_ * expMap(tau * w0_P_);
+        q_WP = q0_WP_ * expMap(scaled_tau * w0_P_);
         w_P = w0_P_;
-        break;
+      } else {
+        Eigen::Vector3d M_F;
+        Eigen::Quaterniond q_WF;
+        triaxialAt(scaled_tau, M_F, q_WF);
+        q_WP = q_WF * q_PF_.conjugate();
+        w_P = q_PF_ * Eigen::Vector3d(M_F.cwiseQuotient(I_F_));
       }
-      Eigen::Vector3d M_F;
-      Eigen::Quaterniond q_WF;
-      triaxialAt(tau, M_F, q_WF);
-      q_WP = q_WF * q_PF_.conjugate();
-      w_P = q_PF_ * Eigen::Vector3d(M_F.cwiseQuotient(I_F_));
+      if (rate_exponent_ != 0) {
+        for (int i = 0; i < 3; ++i) w_P[i] = std::ldexp(w_P[i], rate_exponent_);
+      }
       break;
     }
   }

@@ -1,0 +1,90 @@
+// The ranges the core accepts from outside, in one place.
+//
+// Inside them every computation stays in the finite doubles and every call does bounded work;
+// outside them an input is refused before it touches the state: a sample or torque returns
+// StampOutcome::RejectedOutOfRange, a setter or constructor throws std::invalid_argument, the
+// parameter validator throws naming the parameter. Numeric trouble that slips through anyway
+// (an integrator that cannot finish an interval) is StampOutcome::FailedStep, never a NaN
+// state and never an exception.
+//
+// How the bounds keep the arithmetic finite: with |w| <= kMaxStateRate and
+// kMinInertia <= I <= kMaxInertia, the energy I |w|^2 / 2 <= 5e30 J and |M| = |I w| <= 1e23
+// N m s; the squares the closed forms take (G^2, Delta_j ~ I^2 |w|^2 <= 1e46) are far from the
+// double range (1.8e308).
+#pragma once
+
+#include <cstdint>
+
+namespace attitude_propagator {
+
+// ---- Parameter bounds of the validator (parameters.cpp) --------------------------------------
+
+/// Largest `publish_rate` (Hz). The dynamic model advances on every timer tick; 1 kHz is above
+/// any consumer of tf and keeps the timer's own work under a few percent of a core.
+constexpr double kMaxPublishRate = 1000.0;
+
+/// Smallest `max_step` (s) other than 0. With kMaxGridStepsPerCall it bounds the work of one
+/// call; below it the grid only burns CPU (a 100 kHz grid is already finer than any input).
+constexpr double kMinMaxStep = 1e-5;
+
+/// Largest `max_dt` (s), and largest `max_step`. A longer silence is an outage: the state is
+/// held, not integrated across minutes of extrapolated input.
+constexpr double kMaxMaxDt = 60.0;
+
+/// Largest max_dt / max_step: the fixed-step grid points one call may have to cross (about
+/// 10 ms of rk4 at 100 ns a step).
+constexpr double kMaxGridStepsPerCall = 1e5;
+
+/// `tolerance` of dopri5 in [kMinTolerance, kMaxTolerance]. Below 1e-12 the error estimate is
+/// round-off (ten ulps of a unit quaternion per sub-step), so step-size control cannot succeed
+/// and only shrinks the step; above 1e-2 the result is not worth integrating.
+constexpr double kMinTolerance = 1e-12;
+constexpr double kMaxTolerance = 1e-2;
+
+/// Largest `torque_timeout` (s): an hour. Keeps stamp + timeout an ordinary, exact sum.
+constexpr double kMaxTorqueTimeout = 3600.0;
+
+/// Largest `angular_velocity_stddev` (rad/s), and the root of the largest per-axis variance a
+/// rate covariance may carry (checkRateCovariance). A MEMS gyro's noise is about 1e-2 rad/s
+/// per sample; 1e3 rad/s is noise no sensor reports, only a unit mistake or an attack.
+constexpr double kMaxRateStddev = 1e3;
+constexpr double kMaxRateVariance = kMaxRateStddev * kMaxRateStddev;
+
+// ---- Door bounds of the propagators ----------------------------------------------------------
+
+/// Largest body rate |w| (rad/s) a rate sample, a set state or an initial state may carry.
+/// 1e5 rad/s (about 1e6 rpm) is above any machine (turbine and dental-drill rotors reach
+/// 1e4 rad/s; gyros measure up to about 70 rad/s).
+constexpr double kMaxBodyRate = 1e5;
+
+/// Principal moments of inertia (kg m^2) a body may have: from a gram-sized part at a
+/// millimetre (1e-10) with margin, up to far beyond a space station (1e8).
+constexpr double kMinInertia = 1e-15;
+constexpr double kMaxInertia = 1e15;
+
+/// Largest |w| (rad/s) a propagated state may reach. Above kMaxBodyRate because a free body
+/// that starts below the door may legitimately speed up about an axis of small moment (by up to
+/// sqrt(I_max / I_min)) and a torque may spin it up; a step whose result leaves this bound is a
+/// failed step (the state is held), which keeps every later product finite.
+constexpr double kMaxStateRate = 1e3 * kMaxBodyRate;
+
+/// Largest |torque| (N m) a torque sample may carry: the torque that spins the heaviest body
+/// from rest to kMaxStateRate within the shortest grid step, I_max w_max / kMinMaxStep = 1e28.
+/// A larger torque can only produce failed steps.
+constexpr double kMaxTorque = kMaxInertia * kMaxStateRate / kMinMaxStep;
+
+/// Default DynamicConfig::step_budget: the integrator work one call of a DynamicPropagator may
+/// spend (one unit per fixed step or exact evaluation, per trial sub-step of dopri5). 2^20
+/// units are about 0.1 s of rk4 or dopri5 and 1 s of the worst implicit midpoint step (100
+/// iterations); a call that needs more returns FailedStep. It covers kMaxGridStepsPerCall
+/// fixed steps ten times over.
+constexpr std::uint64_t kDefaultStepBudget = std::uint64_t{1} << 20;
+
+// ---- Covariance ------------------------------------------------------------------------------
+
+/// Ceiling of the orientation variance (rad^2) per axis: pi^2, an error of one half-turn, i.e.
+/// no knowledge of the orientation at all. propagateOrientationCovariance saturates there
+/// instead of growing without bound (and overflowing).
+constexpr double kMaxOrientationVariance = 3.14159265358979323846 * 3.14159265358979323846;
+
+}  // namespace attitude_propagator
