@@ -191,9 +191,9 @@ void KinematicPropagator::rememberInterval(double interval) {
 int KinematicPropagator::lostSamples(double interval) const {
   const std::size_t n = std::min(interval_count_, intervals_.size());
   if (n < 3) return 0;
-  std::array<double, 5> sorted = intervals_;
-  const double shortest = *std::min_element(sorted.begin(), sorted.begin() + n);
+  const double shortest = *std::min_element(intervals_.begin(), intervals_.begin() + n);
   if (interval < 1.5 * shortest) return 0;  // the common case: no median needed
+  std::array<double, 5> sorted = intervals_;
   std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.begin() + n);
   const double periods = interval / sorted[n / 2];
   const double m = std::round(periods);

@@ -39,45 +39,72 @@ Eigen::Quaterniond rk4Step(const Eigen::Quaterniond& q, const Eigen::Vector3d& w
   return Eigen::Quaterniond(y + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4));
 }
 
-// Weights c_j such that the rate at time x (relative to tau[0]) is sum_j c_j w_j over the n
-// samples with stamps tau[0..n-1].
-// Instantaneous: the Lagrange basis, c_j = L_j(x).
-// IntervalAverage: the derivative of the polynomial through the accumulated delta-angles,
-// theta(x) = sum_j theta_j L_j(x) with theta_j = sum_{m=1..j} w_m h_m, so
-// c_m = h_m sum_{j>=m} L_j'(x) and c_0 = 0 (the first sample's interval precedes tau[0]).
-void rateWeights(RateSamples kind, const double* tau, std::size_t n, double x, double* c) {
+// Weights c_j such that the rates at times x_a and x_b (relative to tau[0]) are sum_j c_j w_j
+// over the n <= 4 samples with stamps tau[0..n-1].
+//
+// Instantaneous: the Lagrange basis, c_j = L_j(x) (the denominators shared by both times).
+//
+// IntervalAverage: the derivative of the Newton polynomial through the accumulated
+// delta-angles theta_j, whose first divided differences are the means themselves,
+// theta[t_{j-1}, t_j] = w_j:
+//   w(x) = w_1 + theta[0,1,2] S1(x) + theta[0,1,2,3] S2(x),
+//   theta[0,1,2] = (w_2 - w_1)/(tau_2 - tau_0),  theta[1,2,3] = (w_3 - w_2)/(tau_3 - tau_1),
+//   theta[0,1,2,3] = (theta[1,2,3] - theta[0,1,2])/(tau_3 - tau_0),
+//   S1 = (x - tau_0) + (x - tau_1),  S2 = sum of the pairwise products of (x - tau_0..2);
+// so w = w_1 + a (w_2 - w_1) + b (w_3 - w_2) with a = (S1 - S2/(tau_3 - tau_0))/(tau_2 - tau_0)
+// and b = S2/((tau_3 - tau_1)(tau_3 - tau_0)). c_0 = 0: the first sample's interval precedes
+// tau_0.
+void instantaneousWeights(const double* tau, std::size_t n, double x_a, double x_b, double* ca,
+                          double* cb) {
   for (std::size_t j = 0; j < n; ++j) {
     double denominator = 1.0;
+    double numerator_a = 1.0;
+    double numerator_b = 1.0;
     for (std::size_t m = 0; m < n; ++m) {
-      if (m != j) denominator *= tau[j] - tau[m];
+      if (m == j) continue;
+      denominator *= tau[j] - tau[m];
+      numerator_a *= x_a - tau[m];
+      numerator_b *= x_b - tau[m];
     }
-    double numerator = 0.0;
-    if (kind == RateSamples::Instantaneous) {
-      numerator = 1.0;
-      for (std::size_t m = 0; m < n; ++m) {
-        if (m != j) numerator *= x - tau[m];
-      }
+    const double inverse = 1.0 / denominator;
+    ca[j] = numerator_a * inverse;
+    cb[j] = numerator_b * inverse;
+  }
+}
+
+void averagedWeights(const double* tau, std::size_t n, double x, double r20, double r31,
+                     double r30, double* c) {
+  double a = 0.0;
+  double b = 0.0;
+  if (n >= 3) {
+    const double u0 = x - tau[0], u1 = x - tau[1];
+    const double s1 = u0 + u1;
+    if (n == 4) {
+      const double u2 = x - tau[2];
+      const double s2 = u0 * u1 + (u0 + u1) * u2;
+      a = (s1 - s2 * r30) * r20;
+      b = s2 * r31 * r30;
     } else {
-      // L_j'(x) = sum_{m != j} prod_{l != j, m} (x - tau_l) / denominator
-      for (std::size_t m = 0; m < n; ++m) {
-        if (m == j) continue;
-        double product = 1.0;
-        for (std::size_t l = 0; l < n; ++l) {
-          if (l != j && l != m) product *= x - tau[l];
-        }
-        numerator += product;
-      }
+      a = s1 * r20;
     }
-    c[j] = numerator / denominator;
   }
-  if (kind == RateSamples::IntervalAverage) {
-    double suffix = 0.0;
-    for (std::size_t j = n - 1; j >= 1; --j) {
-      suffix += c[j];
-      c[j] = (tau[j] - tau[j - 1]) * suffix;
-    }
-    c[0] = 0.0;
+  c[0] = 0.0;
+  c[1] = 1.0 - a;
+  if (n >= 3) c[2] = a - b;
+  if (n == 4) c[3] = b;
+}
+
+void rateWeights(RateSamples kind, const double* tau, std::size_t n, double x_a, double x_b,
+                 double* ca, double* cb) {
+  if (kind == RateSamples::Instantaneous) {
+    instantaneousWeights(tau, n, x_a, x_b, ca, cb);
+    return;
   }
+  const double r20 = n >= 3 ? 1.0 / (tau[2] - tau[0]) : 0.0;
+  const double r31 = n == 4 ? 1.0 / (tau[3] - tau[1]) : 0.0;
+  const double r30 = n == 4 ? 1.0 / (tau[3] - tau[0]) : 0.0;
+  averagedWeights(tau, n, x_a, r20, r31, r30, ca);
+  averagedWeights(tau, n, x_b, r20, r31, r30, cb);
 }
 
 // Noise gains of the Gauss-point weights ca, cb: of the step's mean rate (A + B)/2, which
@@ -105,8 +132,7 @@ void gaussRates(const RateWindow& window, std::size_t i, double h, RateSamples k
     const double origin = window[first].t;
     for (std::size_t j = 0; j < n; ++j) tau[j] = window[first + j].t - origin;
     const double x0 = window[i].t - origin;
-    rateWeights(kind, tau.data(), n, x0 + kGauss1 * h, ca.data());
-    rateWeights(kind, tau.data(), n, x0 + kGauss2 * h, cb.data());
+    rateWeights(kind, tau.data(), n, x0 + kGauss1 * h, x0 + kGauss2 * h, ca.data(), cb.data());
     if (n == 2 || wellConditioned(ca.data(), cb.data(), n)) {
       a.setZero();
       b.setZero();
@@ -177,10 +203,11 @@ std::string rateSamplesName(RateSamples kind) {
 }
 
 Eigen::Vector3d RateWindow::averagedRate(double t) const {
-  std::array<double, kCapacity> tau{}, c{};
+  std::array<double, kCapacity> tau{}, c{}, unused{};
   const double origin = (*this)[0].t;
   for (std::size_t j = 0; j < size_; ++j) tau[j] = (*this)[j].t - origin;
-  rateWeights(RateSamples::IntervalAverage, tau.data(), size_, t - origin, c.data());
+  rateWeights(RateSamples::IntervalAverage, tau.data(), size_, t - origin, t - origin, c.data(),
+              unused.data());
   Eigen::Vector3d w = Eigen::Vector3d::Zero();
   for (std::size_t j = 1; j < size_; ++j) w += c[j] * (*this)[j].w_B;
   return w;
