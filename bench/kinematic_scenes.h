@@ -103,4 +103,17 @@ inline KinematicScene fastSpinScene() {
   return scene;
 }
 
+/// tumbling: a fast tumbling body, spinning at 2 rev/s about body e3 while that axis, tilted
+/// by 1 rad, precesses at 3 rad/s about world z (|w_B| up to 15.6 rad/s: |w| dt = 0.08 at 200 Hz).
+inline KinematicScene tumblingScene() {
+  TwoAxisMotion m;
+  m.spin = 2.0 * M_PI * 2.0;
+  m.precession = 3.0;
+  m.q0 = Eigen::AngleAxisd(1.0, Eigen::Vector3d(1.0, 0.5, 0.0).normalized());
+  KinematicScene scene = fromTwoAxis("tumbling", m);
+  scene.duration = 20.0;
+  scene.sample_rates = {200.0};
+  return scene;
+}
+
 }  // namespace bench

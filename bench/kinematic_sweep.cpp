@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "attitude_propagator/kinematic_propagator.h"
 #include "attitude_propagator/quaternion.h"
@@ -151,6 +152,197 @@ void runKinematicStability(const KinematicScene& scene, double duration, std::FI
       r.status = classify(r);
       writeRow(out, r);
     }
+  }
+}
+
+}  // namespace bench
+
+// ---------------------------------------------------------------------------------------------
+// Real streams. Each stream model turns the scene's closed-form rate into what a gyro driver
+// delivers; the error is measured against the closed form at the stamp each state is reported
+// at (what a tf listener sees).
+// ---------------------------------------------------------------------------------------------
+
+namespace bench {
+
+namespace {
+
+// Mean of the scene's rate over [a, b] by 5-point Gauss-Legendre (exact to degree 9).
+Eigen::Vector3d intervalMean(const KinematicScene& scene, double a, double b) {
+  static const double x[5] = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831,
+                              0.9061798459386640};
+  static const double w[5] = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889,
+                              0.4786286704993665, 0.2369268850561891};
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (int i = 0; i < 5; ++i) sum += w[i] * scene.rate(0.5 * (a + b) + 0.5 * (b - a) * x[i]);
+  return 0.5 * sum;
+}
+
+struct StreamModel {
+  std::string name;
+  double rate_hz = 200.0;
+  bool averaged = false;     // the gyro delivers interval means
+  bool mid_stamp = false;    // ... stamped at the interval's midpoint (else at its end)
+  double jitter = 0.0;       // s, receipt jitter (standard deviation)
+  double drop = 0.0;         // probability a sample is lost
+  bool mems = false;         // angle random walk and 16-bit quantization
+  ap::RateSamples setting = ap::RateSamples::Instantaneous;
+  ap::StampFilter filter = ap::StampFilter::None;
+  int max_gap_fill = 4;
+};
+
+// Noisy MEMS gyro: angle random walk 0.1 deg/sqrt(h), 16-bit output over +-2000 deg/s.
+constexpr double kArw = 0.1 * M_PI / 180.0 / 60.0;                     // rad/sqrt(s)
+constexpr double kLsb = 4000.0 / 65536.0 * M_PI / 180.0;               // rad/s
+constexpr double kDeg2000 = 2000.0 * M_PI / 180.0;                     // rad/s
+
+std::vector<StreamModel> streamModels() {
+  using RS = ap::RateSamples;
+  std::vector<StreamModel> m(11);
+  m[0].name = "point";
+  m[1].name = "averaged_end";
+  m[1].averaged = true;
+  m[1].setting = RS::IntervalAverage;
+  m[2].name = "averaged_end_as_point";  // the same data read as point samples (the old default)
+  m[2].averaged = true;
+  m[3].name = "averaged_mid";
+  m[3].averaged = true;
+  m[3].mid_stamp = true;
+  m[4].name = "jitter_0.1ms";
+  m[4].jitter = 1e-4;
+  m[5].name = "jitter_0.1ms_sensor_clock";
+  m[5].jitter = 1e-4;
+  m[5].filter = ap::StampFilter::SensorClock;
+  m[6].name = "jitter_1ms_400Hz";
+  m[6].jitter = 1e-3;
+  m[6].rate_hz = 400.0;
+  m[7].name = "drops_5pct_averaged";
+  m[7].averaged = true;
+  m[7].drop = 0.05;
+  m[7].setting = RS::IntervalAverage;
+  m[8] = m[7];
+  m[8].name = "drops_5pct_averaged_no_fill";
+  m[8].max_gap_fill = 0;
+  m[9].name = "mems_averaged";
+  m[9].averaged = true;
+  m[9].mems = true;
+  m[9].setting = RS::IntervalAverage;
+  m[10] = m[9];
+  m[10].name = "mems_averaged_jitter_0.1ms_sensor_clock";
+  m[10].jitter = 1e-4;
+  m[10].filter = ap::StampFilter::SensorClock;
+  return m;
+}
+
+// Reproducible noise: a 64-bit LCG (Knuth's MMIX constants) and Box-Muller.
+struct Noise {
+  std::uint64_t state;
+  double uniform() {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(state >> 11) * 0x1.0p-53;
+  }
+  double normal() {
+    const double u1 = 1.0 - uniform(), u2 = uniform();
+    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
+  }
+};
+
+// Sample k is taken at k h. The anchor keeps its exact stamp and rate so every method starts
+// from the truth.
+std::vector<RateSample> makeStream(const KinematicScene& scene, const StreamModel& model,
+                                   std::uint64_t seed) {
+  Noise noise{seed};
+  const double h = 1.0 / model.rate_hz;
+  const long n = std::lround(scene.duration * model.rate_hz);
+  std::vector<RateSample> samples;
+  for (long k = 0; k <= n; ++k) {
+    const double t = k * h;
+    Eigen::Vector3d w = model.averaged ? intervalMean(scene, t - h, t) : scene.rate(t);
+    double stamp = model.mid_stamp ? t - 0.5 * h : t;
+    if (k > 0) {
+      if (model.mems) {
+        for (int i = 0; i < 3; ++i) {
+          const double noisy = w[i] + kArw / std::sqrt(h) * noise.normal();
+          w[i] = std::clamp(kLsb * std::round(noisy / kLsb), -kDeg2000, kDeg2000);
+        }
+      }
+      stamp += model.jitter * noise.normal();
+      if (k > 3 && noise.uniform() < model.drop) continue;
+    }
+    samples.push_back({stamp, w});
+  }
+  return samples;
+}
+
+// Error the stream's noise alone leaves after the scene's duration T (1 sigma), rad:
+// MEMS: angle random walk and quantization, sqrt(ARW^2 T + (LSB^2/12) h T);
+// jitter: each stamp error e moves the rate by dw/dt e, sigma |dw/dt|_rms sqrt(h T).
+double noiseFloor(const KinematicScene& scene, const StreamModel& model) {
+  const double h = 1.0 / model.rate_hz, T = scene.duration;
+  double floor2 = 0.0;
+  if (model.mems) floor2 += kArw * kArw * T + kLsb * kLsb / 12.0 * h * T;
+  if (model.jitter > 0.0 && model.filter == ap::StampFilter::None) {
+    double sum = 0.0;
+    const int n = 1000;
+    for (int i = 0; i < n; ++i) {
+      const double t = T * i / n, dt = 1e-5;
+      sum += ((scene.rate(t + dt) - scene.rate(t - dt)) / (2 * dt)).squaredNorm();
+    }
+    floor2 += model.jitter * model.jitter * (sum / n) * h * T;
+  }
+  return floor2 > 0.0 ? std::sqrt(floor2) : NAN;
+}
+
+double streamError(const KinematicScene& scene, const StreamModel& model, Integrator method,
+                   const std::vector<RateSample>& samples) {
+  ap::KinematicConfig config;
+  config.integrator = method;
+  config.initial_q_WB = scene.attitude(samples.front().t);
+  config.rate_samples = model.setting;
+  config.stamp_filter = model.filter;
+  config.max_gap_fill = model.max_gap_fill;
+  ap::KinematicPropagator propagator(config);
+  double worst = 0.0;
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    propagator.addSample(samples[k].t, samples[k].w_B);
+    if (static_cast<long>(k) < kStartUpSamples) continue;
+    // Midpoint stamps: the state at stamp s is the attitude half a period later.
+    const double shift = model.mid_stamp ? 0.5 / model.rate_hz : 0.0;
+    worst = std::max(worst, ap::rotationAngle(propagator.orientation(),
+                                              scene.attitude(propagator.time() + shift)));
+  }
+  return worst;
+}
+
+}  // namespace
+
+void runStreamSweep(const std::vector<KinematicScene>& scenes, std::FILE* out) {
+  std::fputs("scene,stream,method,auto,rate_hz,rate_samples,stamp_filter,max_gap_fill,seeds,"
+             "err_rad,err_rad_max,floor_rad\n",
+             out);
+  constexpr int kSeeds = 5;  // median over seeds for the random streams
+  for (const KinematicScene& scene : scenes) {
+    for (const StreamModel& model : streamModels()) {
+      const bool random = model.jitter > 0.0 || model.drop > 0.0 || model.mems;
+      const int seeds = random ? kSeeds : 1;
+      std::vector<std::vector<RateSample>> streams;
+      for (int s = 1; s <= seeds; ++s) streams.push_back(makeStream(scene, model, s));
+      for (Integrator method : methodsFor(ap::Model::Kinematic)) {
+        std::vector<double> errors;
+        for (const auto& samples : streams) {
+          errors.push_back(streamError(scene, model, method, samples));
+        }
+        std::sort(errors.begin(), errors.end());
+        std::fprintf(out, "%s,%s,%s,%d,%g,%s,%s,%d,%d,%s,%s,%s\n", scene.name.c_str(),
+                     model.name.c_str(), ap::integratorName(method).c_str(),
+                     method == autoChoice() ? 1 : 0, model.rate_hz,
+                     ap::rateSamplesName(model.setting).c_str(),
+                     ap::stampFilterName(model.filter).c_str(), model.max_gap_fill, seeds,
+                     field(errors[errors.size() / 2]).c_str(), field(errors.back()).c_str(),
+                     field(noiseFloor(scene, model)).c_str());
+      }
+    }
+    std::fprintf(stderr, "bench: streams on %s done\n", scene.name.c_str());
   }
 }
 

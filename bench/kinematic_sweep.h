@@ -17,6 +17,11 @@ void runKinematicSweep(const std::vector<KinematicScene>& scenes, const TimingOp
 /// Error after a fixed time against |w| dt, log-spaced from 1e-3 to 10.
 void runKinematicStability(const KinematicScene& scene, double duration, std::FILE* out);
 
+/// Every kinematic method on the streams real gyros deliver (averaged rates, receipt jitter,
+/// lost samples, a noisy MEMS gyro), one CSV row each: scene, stream, method, settings, largest
+/// error along the path, and the error floor the stream's noise alone sets (empty if none).
+void runStreamSweep(const std::vector<KinematicScene>& scenes, std::FILE* out);
+
 /// Aborts (returns false, with a message) if a scene's closed form does not satisfy
 /// dq/dt = 1/2 q (x) (0, w_B): the truth must be checked before it judges anything.
 bool checkClosedForm(const KinematicScene& scene);

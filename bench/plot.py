@@ -4,7 +4,7 @@
 Usage: plot.py DATA_DIR DOCS_DIR [README]
 
 Reads DATA_DIR/sweep.csv, stability.csv, invariants.csv, step_costs.json and, when present,
-node_bench.csv; writes DOCS_DIR/*.png and DOCS_DIR/results.md, and, given README, replaces the
+node_bench.csv and real_streams.csv; writes DOCS_DIR/*.png and DOCS_DIR/results.md, and, given README, replaces the
 text between its `<!-- >>> results -->` and `<!-- <<< results -->` markers.
 
 Runs with Debian's /usr/bin/python3 and python3-matplotlib; no other dependency.
@@ -614,6 +614,50 @@ def splice_readme(readme, text):
         f.write(head + begin + "\n" + text + end + tail)
 
 
+KINEMATIC_METHODS = ["euler", "exp", "exp2", "rk4", "cf4"]
+
+
+def real_streams_chart(rows, path):
+    """Accuracy on real streams: error per method and stream (median over seeds, whisker to
+    the worst seed), one panel per scene, with the error the stream's noise alone sets."""
+    scenes = sorted({r["scene"] for r in rows}, key=lambda s: (s != "coning", s))
+    fig, axes = plt.subplots(len(scenes), 1, figsize=(13, 4.2 * len(scenes)), squeeze=False)
+    width = 0.8 / len(KINEMATIC_METHODS)
+    for ax, scene in zip(axes[:, 0], scenes):
+        mine = [r for r in rows if r["scene"] == scene]
+        streams = list(dict.fromkeys(r["stream"] for r in mine))
+        for m, method in enumerate(KINEMATIC_METHODS):
+            xs, ys, tops = [], [], []
+            for i, stream in enumerate(streams):
+                row = next((r for r in mine if r["stream"] == stream and r["method"] == method),
+                           None)
+                if row is None:
+                    continue
+                xs.append(i - 0.4 + (m + 0.5) * width)
+                ys.append(max(num(row, "err_rad"), FLOOR))
+                tops.append(max(num(row, "err_rad_max"), FLOOR))
+            color, _ = style(method)
+            ax.bar(xs, ys, width, color=color, label=method, log=True)
+            ax.vlines(xs, ys, tops, color="black", linewidth=0.6)
+        labelled = False
+        for i, stream in enumerate(streams):
+            floor = num(next(r for r in mine if r["stream"] == stream), "floor_rad")
+            if not math.isnan(floor):
+                ax.hlines(floor, i - 0.45, i + 0.45, color="black", linestyles="dashed",
+                          label=None if labelled else "noise floor (1 sigma at the end)")
+                labelled = True
+        ax.set_xticks(range(len(streams)))
+        ax.set_xticklabels([s.replace("_", " ") for s in streams], rotation=20, ha="right",
+                           fontsize=8)
+        ax.set_ylabel("largest error along the path (rad)")
+        ax.set_title(f"accuracy on real streams: {scene}, 200 Hz (jitter 1 ms: 400 Hz)")
+        ax.grid(True, axis="y", which="major", alpha=0.3)
+        ax.legend(fontsize=8, ncol=3, loc="lower left")
+    fig.tight_layout()
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
+
+
 def main(argv):
     data_dir, docs_dir = argv[1], argv[2]
     readme = argv[3] if len(argv) > 3 else None
@@ -624,6 +668,9 @@ def main(argv):
                      os.path.join(docs_dir, "invariants.png"))
     stability_chart(read_csv(os.path.join(data_dir, "stability.csv")),
                     os.path.join(docs_dir, "stability.png"))
+    streams_path = os.path.join(data_dir, "real_streams.csv")
+    if os.path.exists(streams_path):
+        real_streams_chart(read_csv(streams_path), os.path.join(docs_dir, "real_streams.png"))
     costs_path = os.path.join(data_dir, "step_costs.json")
     medians = gbench_medians(costs_path) if os.path.exists(costs_path) else {}
     node_path = os.path.join(data_dir, "node_bench.csv")

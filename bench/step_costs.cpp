@@ -7,6 +7,8 @@
 //
 //   kinematicStep/<method>   one kinematicStep on a four-sample window, then normalise
 //   addSample/<method>       KinematicPropagator::addSample, the node's path per message
+//   addSample/cf4_interval_average[_sensor_clock]   the same on averaged samples (and with the
+//                            stamp filter)
 //   dynamicStep/<method>     DynamicStepper::stepPrincipal on the free body (dopri5: one
 //                            output step of 0.01 s at tolerance 1e-9)
 //   exact/<form>             one TorqueFreeMotion::evaluate at a new time
@@ -51,12 +53,16 @@ void kinematicStepCost(benchmark::State& state, Integrator method) {
   benchmark::ClobberMemory();
 }
 
-void addSampleCost(benchmark::State& state, Integrator method) {
+void addSampleCost(benchmark::State& state, Integrator method,
+                   ap::RateSamples kind = ap::RateSamples::Instantaneous,
+                   ap::StampFilter filter = ap::StampFilter::None) {
   // Rates cycle through a table (cheap to read, not constant); time keeps increasing.
   std::vector<Eigen::Vector3d> rates(1024);
   for (std::size_t i = 0; i < rates.size(); ++i) rates[i] = rateAt(i * kDt);
   ap::KinematicConfig config;
   config.integrator = method;
+  config.rate_samples = kind;
+  config.stamp_filter = filter;
   ap::KinematicPropagator propagator(config);
   double t = 0.0;
   std::size_t i = 0;
@@ -72,8 +78,16 @@ void registerKinematic() {
   for (Integrator m : bench::methodsFor(ap::Model::Kinematic)) {
     const std::string name = ap::integratorName(m);
     benchmark::RegisterBenchmark(("kinematicStep/" + name).c_str(), kinematicStepCost, m);
-    benchmark::RegisterBenchmark(("addSample/" + name).c_str(), addSampleCost, m);
+    benchmark::RegisterBenchmark(("addSample/" + name).c_str(), addSampleCost, m,
+                                 ap::RateSamples::Instantaneous, ap::StampFilter::None);
   }
+  // The real-stream paths, next to addSample/cf4 in the same run: averaged samples (delta-angle
+  // cubic, gap check), and the same with the sensor-clock stamp filter.
+  benchmark::RegisterBenchmark("addSample/cf4_interval_average", addSampleCost, Integrator::Cf4,
+                               ap::RateSamples::IntervalAverage, ap::StampFilter::None);
+  benchmark::RegisterBenchmark("addSample/cf4_interval_average_sensor_clock", addSampleCost,
+                               Integrator::Cf4, ap::RateSamples::IntervalAverage,
+                               ap::StampFilter::SensorClock);
 }
 
 ap::RigidBody bodyOf(const bench::DynamicScene& scene) {

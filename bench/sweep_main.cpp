@@ -3,7 +3,10 @@
 //   sweep.csv       work-precision: error and median cost per step for every (scene, method, dt)
 //   stability.csv   error after a fixed time against |w| dt from 1e-3 to 10
 //   invariants.csv  energy and |M| drift against time on a long free-body run
-// Usage: bench_sweep [out_dir] [--quick]   (--quick: fewer repetitions, for a smoke test)
+//   real_streams.csv  every kinematic method on real gyro streams (averaged, jittered, lost
+//                     samples, noisy MEMS) on the coning and tumbling scenes
+// Usage: bench_sweep [out_dir] [--quick] [--streams]   (--quick: fewer repetitions, for a smoke
+// test; --streams: only real_streams.csv)
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -20,13 +23,16 @@ namespace {
 
 struct Options {
   std::string out_dir = ".";
+  bool streams_only = false;
   bench::TimingOptions timing;
 };
 
 Options parse(int argc, char** argv) {
   Options options;
   for (int i = 1; i < argc; ++i) {
-    if (std::strcmp(argv[i], "--quick") == 0) {
+    if (std::strcmp(argv[i], "--streams") == 0) {
+      options.streams_only = true;
+    } else if (std::strcmp(argv[i], "--quick") == 0) {
       options.timing.rounds = 1;
       options.timing.min_chunk_ms = 0.0;
     } else {
@@ -75,7 +81,13 @@ int main(int argc, char** argv) {
     for (const auto& scene : scenes) {
       if (!bench::checkClosedForm(scene)) return 1;
     }
+    if (!bench::checkClosedForm(bench::tumblingScene())) return 1;
     if (!checkReferences()) return 1;
+    std::FILE* streams = std::fopen((options.out_dir + "/real_streams.csv").c_str(), "w");
+    if (streams == nullptr) throw std::runtime_error("cannot write real_streams.csv");
+    bench::runStreamSweep({bench::coningScene(), bench::tumblingScene()}, streams);
+    std::fclose(streams);
+    if (options.streams_only) return 0;
     std::FILE* sweep = openCsv(options.out_dir + "/sweep.csv");
     bench::runKinematicSweep(scenes, options.timing, sweep);
     auto dynamic = dynamicScenes();

@@ -2,12 +2,14 @@
 // bad-input policy of DESIGN §6. No ROS: the node forwards stamps and rates to addSample().
 #pragma once
 
+#include <array>
 #include <cstdint>
 
 #include <Eigen/Geometry>
 
 #include "attitude_propagator/integrator.h"
 #include "attitude_propagator/kinematic_step.h"
+#include "attitude_propagator/stamp_filter.h"
 #include "attitude_propagator/time_policy.h"
 
 namespace attitude_propagator {
@@ -16,6 +18,15 @@ struct KinematicConfig {
   Integrator integrator = Integrator::Auto;  ///< Auto resolves to Cf4
   TimePolicy time_policy;
   Eigen::Quaterniond initial_q_WB = Eigen::Quaterniond::Identity();
+  /// What a sample's rate means (point value, or mean over the interval it closes).
+  RateSamples rate_samples = RateSamples::Instantaneous;
+  /// Interval-averaged samples: up to this many lost samples in a row are filled from the
+  /// polynomial fitted to the neighbouring means (0: never). Longer gaps follow max_dt.
+  int max_gap_fill = 4;
+  /// Replace receipt stamps by the sensor-clock model's (SensorClockFilter).
+  StampFilter stamp_filter = StampFilter::None;
+  /// Gyro bias (rad/s, body frame), subtracted from every rate before integration.
+  Eigen::Vector3d gyro_bias_B = Eigen::Vector3d::Zero();
 };
 
 class KinematicPropagator {
@@ -24,7 +35,8 @@ class KinematicPropagator {
   /// non-finite max_dt or backward_jump, or a zero / non-finite initial orientation.
   explicit KinematicPropagator(const KinematicConfig& config);
 
-  /// Feeds the body rate w_B measured at time t. The first sample anchors time: the state at
+  /// Feeds the body rate w_B measured at time t (the gyro bias is subtracted; with the stamp
+  /// filter on, t is a receipt stamp and the filtered stamp is used). The first sample anchors time: the state at
   /// its stamp is the initial (or set) state. The orientation then holds at the newest stamp.
   /// A NaN or infinite stamp or rate is RejectedNonFinite, |w_B| > kMaxBodyRate (limits.h)
   /// RejectedOutOfRange; neither changes the state. Never throws.
@@ -42,7 +54,7 @@ class KinematicPropagator {
   /// Stamp the state holds at (0 before the first sample).
   double time() const { return window_.size() > 0 ? window_.newest().t : 0.0; }
   const Eigen::Quaterniond& orientation() const { return q_WB_; }
-  /// Body rate of the newest sample.
+  /// Body rate of the newest sample (bias subtracted; interval-averaged: the interval's mean).
   Eigen::Vector3d rate() const {
     return window_.size() > 0 ? window_.newest().w_B : Eigen::Vector3d::Zero();
   }
@@ -50,11 +62,27 @@ class KinematicPropagator {
   double normError() const { return norm_error_; }
   std::uint64_t steps() const { return steps_; }
   Integrator integrator() const { return integrator_; }
+  RateSamples rateSamples() const { return rate_samples_; }
+
+  /// Subtracted from the rates of the samples that follow. Throws std::invalid_argument for
+  /// non-finite values.
+  void setGyroBias(const Eigen::Vector3d& bias_B);
+  const Eigen::Vector3d& gyroBias() const { return gyro_bias_B_; }
+
+  /// Samples filled in for lost ones (interval-averaged samples only), since construction.
+  std::uint64_t filledSamples() const { return filled_samples_; }
+  /// The stamp filter, or nullptr when `stamp_filter` is none.
+  const SensorClockFilter* stampFilter() const {
+    return stamp_filter_ == StampFilter::SensorClock ? &clock_ : nullptr;
+  }
 
  private:
   void anchor(double t, const Eigen::Vector3d& w_B);
   StampOutcome integrate(const RateSample& sample);
   Eigen::Quaterniond cf4FromAnchor(const RateWindow& window) const;
+  StampOutcome fillAndIntegrate(const RateSample& sample);
+  int lostSamples(double interval) const;
+  void rememberInterval(double interval);
 
   Integrator integrator_;
   TimePolicy policy_;
@@ -66,6 +94,14 @@ class KinematicPropagator {
   bool anchored_ = false;
   double norm_error_ = 0.0;
   std::uint64_t steps_ = 0;
+  RateSamples rate_samples_;
+  int max_gap_fill_;
+  StampFilter stamp_filter_;
+  SensorClockFilter clock_;
+  Eigen::Vector3d gyro_bias_B_;
+  std::uint64_t filled_samples_ = 0;
+  std::array<double, 5> intervals_{};  // the last intervals integrated, for the nominal period
+  std::size_t interval_count_ = 0;     // since the anchor
 };
 
 }  // namespace attitude_propagator

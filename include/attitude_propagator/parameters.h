@@ -36,6 +36,9 @@ struct Parameters {
   double max_dt = 1.0;
   double tolerance = 1e-9;
   double angular_velocity_stddev = 0.0;
+  std::string rate_samples = "instantaneous";
+  std::string stamp_filter = "none";
+  std::vector<double> gyro_bias{0.0, 0.0, 0.0};
 };
 
 /// Calls f(name, field, unit, description) for every parameter, in the README's order.
@@ -76,6 +79,12 @@ void forEachParameter(P& p, F&& f) {
   f("angular_velocity_stddev", p.angular_velocity_stddev, "rad/s",
     "rate noise used when an input carries no covariance; 0: orientation covariance unknown; "
     "at most 1000");
+  f("rate_samples", p.rate_samples, "",
+    "`instantaneous` (rate at the stamp) or `interval_average` (mean over the interval the "
+    "sample closes: delta-angle / dt)");
+  f("stamp_filter", p.stamp_filter, "",
+    "`none` or `sensor_clock`: replace receipt stamps by a fitted sensor clock");
+  f("gyro_bias", p.gyro_bias, "rad/s", "subtracted from every rate, [x, y, z] in the body frame");
 }
 
 /// All parameter names, for rejecting unknown ones.

@@ -1,5 +1,6 @@
 #include "attitude_propagator/kinematic_propagator.h"
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <stdexcept>
@@ -40,6 +41,51 @@ Eigen::Quaterniond checkedUnit(const Eigen::Quaterniond& q, const std::string& w
   return *unit;
 }
 
+// A gap is taken for lost samples only when it is this close to a whole number of periods.
+constexpr double kWholePeriods = 0.25;
+
+Eigen::Vector3d checkedBias(const Eigen::Vector3d& bias_B) {
+  if (!bias_B.allFinite()) {
+    throw std::invalid_argument("gyro_bias: must be finite, [x, y, z] rad/s in the body frame");
+  }
+  return bias_B;
+}
+
+// Mean over [a, b] of s^p, p = 0..k-1: (b^(p+1) - a^(p+1)) / ((p + 1)(b - a)).
+Eigen::RowVector4d powerMeans(double a, double b, int k) {
+  Eigen::RowVector4d means = Eigen::RowVector4d::Zero();
+  double pa = a, pb = b;
+  for (int p = 0; p < k; ++p, pa *= a, pb *= b) means[p] = (pb - pa) / ((p + 1) * (b - a));
+  return means;
+}
+
+// Means of the rate over the lost intervals (t_last + (j-1) h, t_last + j h], j = 1..lost, from
+// the polynomial w(s), s = (t - t_last)/h, whose means over the window's newest intervals and
+// over the new sample's interval (t - h, t] are the samples' rates: interpolation across the
+// gap, of degree up to three (one condition per known mean).
+void fillMeans(const RateWindow& window, const RateSample& next, double h, int lost,
+               std::array<Eigen::Vector3d, 8>& means) {
+  using Conditions = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 4, 4>;
+  using Rates = Eigen::Matrix<double, Eigen::Dynamic, 3, 0, 4, 3>;
+  const std::size_t known = std::min<std::size_t>(window.size() - 1, 3);
+  const int k = static_cast<int>(known) + 1;
+  const double t_last = window.newest().t;
+  Conditions m(k, k);
+  Rates w(k, 3);
+  for (std::size_t j = 0; j < known; ++j) {
+    const RateSample& close = window[window.size() - 1 - j];
+    const RateSample& open = window[window.size() - 2 - j];
+    m.row(j) = powerMeans((open.t - t_last) / h, (close.t - t_last) / h, k).head(k);
+    w.row(j) = close.w_B.transpose();
+  }
+  m.row(k - 1) = powerMeans(lost, lost + 1.0, k).head(k);
+  w.row(k - 1) = next.w_B.transpose();
+  const Rates coefficients = m.colPivHouseholderQr().solve(w);
+  for (int j = 0; j < lost; ++j) {
+    means[j] = (powerMeans(j, j + 1.0, k).head(k) * coefficients).transpose();
+  }
+}
+
 }  // namespace
 
 KinematicPropagator::KinematicPropagator(const KinematicConfig& config)
@@ -47,7 +93,11 @@ KinematicPropagator::KinematicPropagator(const KinematicConfig& config)
       policy_(config.time_policy),
       initial_q_WB_(checkedUnit(config.initial_q_WB, "initial_orientation")),
       q_WB_(initial_q_WB_),
-      anchor_q_WB_(initial_q_WB_) {
+      anchor_q_WB_(initial_q_WB_),
+      rate_samples_(config.rate_samples),
+      max_gap_fill_(std::clamp(config.max_gap_fill, 0, 8)),
+      stamp_filter_(config.stamp_filter),
+      gyro_bias_B_(checkedBias(config.gyro_bias_B)) {
   checkPolicy(policy_);
 }
 
@@ -55,8 +105,10 @@ StampOutcome KinematicPropagator::addSample(double t, const Eigen::Vector3d& w_B
   if (!std::isfinite(t) || !w_B.allFinite()) return StampOutcome::RejectedNonFinite;
   // The door bound of limits.h: |w| h stays far inside the doubles, so no step turns NaN.
   if (!(w_B.norm() <= kMaxBodyRate)) return StampOutcome::RejectedOutOfRange;
+  if (stamp_filter_ == StampFilter::SensorClock) t = clock_.filter(t).t;
+  const Eigen::Vector3d w = w_B - gyro_bias_B_;
   if (!anchored_) {
-    anchor(t, w_B);
+    anchor(t, w);
     return StampOutcome::Anchored;
   }
   switch (classifyStamp(time(), t, policy_)) {
@@ -64,15 +116,22 @@ StampOutcome KinematicPropagator::addSample(double t, const Eigen::Vector3d& w_B
       return StampOutcome::DroppedStale;
     case StampClass::BackwardJump:
       q_WB_ = initial_q_WB_;
-      anchor(t, w_B);
+      anchor(t, w);
       return StampOutcome::ResetBackwardJump;
     case StampClass::Gap:
-      anchor(t, w_B);  // the orientation is held across the gap
+      anchor(t, w);  // the orientation is held across the gap
       return StampOutcome::HeldGap;
     case StampClass::Forward:
       break;
   }
-  return integrate({t, w_B});
+  if (rate_samples_ == RateSamples::IntervalAverage && max_gap_fill_ > 0) {
+    return fillAndIntegrate({t, w});
+  }
+  return integrate({t, w});
+}
+
+void KinematicPropagator::setGyroBias(const Eigen::Vector3d& bias_B) {
+  gyro_bias_B_ = checkedBias(bias_B);
 }
 
 void KinematicPropagator::reset() {
@@ -83,6 +142,7 @@ void KinematicPropagator::reset() {
   anchored_ = false;
   norm_error_ = 0.0;
   steps_ = 0;
+  clock_.reset();
 }
 
 void KinematicPropagator::setState(double t, const Eigen::Quaterniond& q_WB,
@@ -104,6 +164,7 @@ void KinematicPropagator::anchor(double t, const Eigen::Vector3d& w_B) {
   samples_since_anchor_ = 1;
   anchored_ = true;
   steps_ = 0;
+  interval_count_ = 0;
 }
 
 // The step is committed only when finite: a finite rate can still overflow (|w| h beyond the
@@ -113,7 +174,7 @@ StampOutcome KinematicPropagator::integrate(const RateSample& sample) {
   const bool restart =
       integrator_ == Integrator::Cf4 && samples_since_anchor_ + 1 == RateWindow::kCapacity;
   const Eigen::Quaterniond q =
-      restart ? cf4FromAnchor(window_) : kinematicStep(integrator_, q_WB_, window_);
+      restart ? cf4FromAnchor(window_) : kinematicStep(integrator_, q_WB_, window_, rate_samples_);
   const double n = q.norm();
   if (!std::isfinite(n) || n == 0.0) {
     window_.undoPush(evicted);
@@ -123,7 +184,47 @@ StampOutcome KinematicPropagator::integrate(const RateSample& sample) {
   ++steps_;
   norm_error_ = n - 1.0;
   q_WB_ = Eigen::Quaterniond(q.coeffs() / n);
+  rememberInterval(sample.t - window_[window_.size() - 2].t);
   return StampOutcome::Advanced;
+}
+
+void KinematicPropagator::rememberInterval(double interval) {
+  intervals_[interval_count_++ % intervals_.size()] = interval;
+}
+
+// Samples lost before one that arrives `interval` after the newest: m - 1 when the interval is
+// within kWholePeriods of m nominal periods (the median of the last intervals), m >= 2, and
+// m - 1 <= max_gap_fill; 0 otherwise (no drop, an irregular gap, or too long a one).
+int KinematicPropagator::lostSamples(double interval) const {
+  const std::size_t n = std::min(interval_count_, intervals_.size());
+  if (n < 3) return 0;
+  const double shortest = *std::min_element(intervals_.begin(), intervals_.begin() + n);
+  if (interval < 1.5 * shortest) return 0;  // the common case: no median needed
+  std::array<double, 5> sorted = intervals_;
+  std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.begin() + n);
+  const double periods = interval / sorted[n / 2];
+  const double m = std::round(periods);
+  if (m < 2.0 || m > max_gap_fill_ + 1.0 || std::abs(periods - m) > kWholePeriods) return 0;
+  return static_cast<int>(m) - 1;
+}
+
+// Interval-averaged samples: a sample after lost ones holds the mean over its own period only,
+// so the rotation over the lost periods is filled in first, from the means of the polynomial
+// fitted across the gap, as samples of their own.
+StampOutcome KinematicPropagator::fillAndIntegrate(const RateSample& sample) {
+  const double t_last = time();
+  const int lost = lostSamples(sample.t - t_last);
+  if (lost > 0) {
+    const double h = (sample.t - t_last) / (lost + 1);
+    std::array<Eigen::Vector3d, 8> means;
+    fillMeans(window_, sample, h, lost, means);
+    for (int j = 0; j < lost; ++j) {
+      if (!means[j].allFinite()) return integrate(sample);
+      if (integrate({t_last + (j + 1) * h, means[j]}) != StampOutcome::Advanced) break;
+      ++filled_samples_;
+    }
+  }
+  return integrate(sample);
 }
 
 // The first intervals after an anchor had fewer than four samples, so cf4 ran at lower order
@@ -133,9 +234,9 @@ StampOutcome KinematicPropagator::integrate(const RateSample& sample) {
 Eigen::Quaterniond KinematicPropagator::cf4FromAnchor(const RateWindow& window) const {
   Eigen::Quaterniond q = anchor_q_WB_;
   for (std::size_t i = 0; i + 2 < RateWindow::kCapacity; ++i) {
-    q = kinematicStep(Integrator::Cf4, q, window, i).normalized();
+    q = kinematicStep(Integrator::Cf4, q, window, i, rate_samples_).normalized();
   }
-  return kinematicStep(Integrator::Cf4, q, window, RateWindow::kCapacity - 2);
+  return kinematicStep(Integrator::Cf4, q, window, RateWindow::kCapacity - 2, rate_samples_);
 }
 
 }  // namespace attitude_propagator

@@ -153,6 +153,17 @@ void checkScalars(const Parameters& p) {
   }
 }
 
+// Real-stream settings of the kinematic model: what a rate sample means, the stamp filter and
+// the gyro bias. Checked whatever the model, so a misspelt value always refuses start.
+void applyStreamParameters(const Parameters& p, KinematicConfig& kinematic) {
+  requireOneOf("rate_samples", p.rate_samples, {"instantaneous", "interval_average"});
+  requireOneOf("stamp_filter", p.stamp_filter, {"none", "sensor_clock"});
+  requireVector("gyro_bias", p.gyro_bias, 3, "[x, y, z], finite (rad/s, body frame)");
+  kinematic.rate_samples = rateSamplesFromName(p.rate_samples);
+  kinematic.stamp_filter = stampFilterFromName(p.stamp_filter);
+  kinematic.gyro_bias_B = Eigen::Vector3d(p.gyro_bias[0], p.gyro_bias[1], p.gyro_bias[2]);
+}
+
 }  // namespace
 
 std::vector<std::string> parameterNames() {
@@ -213,6 +224,7 @@ NodeConfig validateParameters(const Parameters& p) {
   NodeConfig config;
   config.parameters = p;
   checkScalars(p);
+  applyStreamParameters(p, config.kinematic);
   config.model = resolveModel(p);
   const Integrator integrator = resolveIntegrator(p, config.model);
   config.rate_input = p.rate_input == "imu"     ? RateInput::Imu

@@ -1,0 +1,63 @@
+// The real-stream parameters (rate_samples, stamp_filter, gyro_bias): defaults, the values
+// they turn into, and refusal of bad values with the accepted list.
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "attitude_propagator/parameters.h"
+
+namespace ap = attitude_propagator;
+
+namespace {
+
+void expectRefused(const ap::Parameters& p, const std::string& name, const std::string& list) {
+  try {
+    ap::validateParameters(p);
+    ADD_FAILURE() << "accepted a bad " << name;
+  } catch (const std::invalid_argument& e) {
+    const std::string message = e.what();
+    EXPECT_EQ(message.rfind(name + ": ", 0), 0u) << message;
+    EXPECT_NE(message.find("accepted: " + list), std::string::npos) << message;
+  }
+}
+
+}  // namespace
+
+TEST(StreamParameters, DefaultsArePointSamplesUnfilteredWithoutBias) {
+  const ap::KinematicConfig k = ap::validateParameters(ap::Parameters{}).kinematic;
+  EXPECT_EQ(k.rate_samples, ap::RateSamples::Instantaneous);
+  EXPECT_EQ(k.stamp_filter, ap::StampFilter::None);
+  EXPECT_EQ(k.gyro_bias_B, Eigen::Vector3d::Zero());
+}
+
+TEST(StreamParameters, ReachTheKinematicConfig) {
+  ap::Parameters p;
+  p.rate_samples = "interval_average";
+  p.stamp_filter = "sensor_clock";
+  p.gyro_bias = {0.01, -0.02, 0.03};
+  const ap::KinematicConfig k = ap::validateParameters(p).kinematic;
+  EXPECT_EQ(k.rate_samples, ap::RateSamples::IntervalAverage);
+  EXPECT_EQ(k.stamp_filter, ap::StampFilter::SensorClock);
+  EXPECT_EQ(k.gyro_bias_B, Eigen::Vector3d(0.01, -0.02, 0.03));
+}
+
+TEST(StreamParameters, RefuseUnknownValuesWithTheAcceptedList) {
+  ap::Parameters p;
+  p.rate_samples = "averaged";
+  expectRefused(p, "rate_samples", "instantaneous interval_average");
+  p = {};
+  p.stamp_filter = "kalman";
+  expectRefused(p, "stamp_filter", "none sensor_clock");
+  p = {};
+  p.gyro_bias = {0.0, 0.0};
+  expectRefused(p, "gyro_bias", "[x, y, z]");
+  p.gyro_bias = {0.0, NAN, 0.0};
+  expectRefused(p, "gyro_bias", "[x, y, z]");
+  p = {};
+  p.model = "dynamic";  // refused whatever the model
+  p.inertia = {1.0, 2.0, 3.0};
+  p.rate_samples = "x";
+  expectRefused(p, "rate_samples", "instantaneous interval_average");
+}
