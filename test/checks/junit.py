@@ -5,6 +5,7 @@ results. The check's output goes to the terminal and, when it fails, into the re
 
     junit.py CHECK.sh RESULT.xml
 """
+import os
 import pathlib
 import subprocess
 import sys
@@ -16,8 +17,11 @@ def main():
     check, result = pathlib.Path(sys.argv[1]), pathlib.Path(sys.argv[2])
     name = check.stem
     start = time.monotonic()
+    # catkin runs this in the environment of the workspace under test: the checks use it
+    # instead of sourcing the workspace that scripts/common.sh would pick.
+    env = dict(os.environ, AP_CATKIN_ENV="1")
     run = subprocess.run(["bash", str(check)], stdout=subprocess.PIPE,
-                         stderr=subprocess.STDOUT, text=True, errors="replace")
+                         stderr=subprocess.STDOUT, text=True, errors="replace", env=env)
     elapsed = time.monotonic() - start
     sys.stdout.write(run.stdout)
 
