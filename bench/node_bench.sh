@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Node benchmark (issue 5, DESIGN §7): the IMU load generator publishes sensor_msgs/Imu at
+# Node benchmark: the IMU load generator publishes sensor_msgs/Imu at
 # 1 kHz .. 200 kHz, 3 s each, to attitude_propagator_node (separate processes, TCP) and to the
 # nodelet (generator loaded in the same manager, shared-pointer publish), and records the
 # fraction of messages that reached imu/data and the input-to-output latency p50/p99, one CSV
@@ -21,6 +21,29 @@ export ROS_LOG_DIR="${ROS_LOG_DIR:-$(mktemp -d)}"
 mkdir -p "$(dirname "$OUT")"
 TMP="$(mktemp -d)"
 trap 'rm -rf "$TMP"' EXIT
+
+# The load generator's nodelet is a benchmark tool, not a plugin of the package, which neither
+# installs nor exports it. A throwaway package that only this script's ROS_PACKAGE_PATH sees
+# exports its description (bench/bench_nodelets.xml); pluginlib finds the library in the devel
+# space through CMAKE_PREFIX_PATH.
+plugin_pkg="$TMP/packages/attitude_propagator_bench"
+mkdir -p "$plugin_pkg"
+cp "$REPO_DIR/bench/bench_nodelets.xml" "$plugin_pkg/"
+cat >"$plugin_pkg/package.xml" <<'XML'
+<?xml version="1.0"?>
+<package format="3">
+  <name>attitude_propagator_bench</name>
+  <version>0.0.0</version>
+  <description>The node benchmark's IMU load generator nodelet (bench/node_bench.sh).</description>
+  <maintainer email="attitude-propagator@users.noreply.github.com">attitude_propagator maintainers</maintainer>
+  <license>BSD-3-Clause</license>
+  <exec_depend>nodelet</exec_depend>
+  <export>
+    <nodelet plugin="${prefix}/bench_nodelets.xml"/>
+  </export>
+</package>
+XML
+export ROS_PACKAGE_PATH="$TMP/packages:${ROS_PACKAGE_PATH:-}"
 
 run_mode() {
   local mode="$1" csv="$TMP/$1.csv"

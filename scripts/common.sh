@@ -14,7 +14,8 @@ DEBIAN_PACKAGES=(
   ros-base-dev ros-message-generation ros-message-runtime
   libroscpp-dev libstd-msgs-dev libstd-srvs-dev libgeometry-msgs-dev libsensor-msgs-dev
   libdiagnostic-msgs-dev libdiagnostic-updater-dev
-  libtf2-ros-dev libtf2-eigen-dev libtf2-geometry-msgs-dev
+  libtf2-ros-dev libtf2-eigen-dev libtf2-msgs-dev tf2-tools libros-rosgraph-msgs-dev
+  libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
   libnodelet-dev pluginlib-dev libtopic-tools-dev
   librostest-dev python3-rostest python3-rospy python3-roslaunch python3-rosnode
   python3-rostopic python3-tf2-ros python3-tf2-msgs python3-sensor-msgs python3-diagnostic-msgs

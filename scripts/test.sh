@@ -14,18 +14,5 @@ results="${WORKSPACE}/build/test_results/attitude_propagator"
 rm -rf "$results"
 catkin_make -j1 run_tests 2>&1 | tail -n 80
 
-# Repository checks, counted like tests.
-checks_passed=0
-checks_failed=0
-for check in "$REPO_DIR"/test/checks/*.sh; do
-  [ -e "$check" ] || continue
-  if bash "$check"; then
-    checks_passed=$((checks_passed + 1))
-  else
-    echo "CHECK FAILED: $(basename "$check")"
-    checks_failed=$((checks_failed + 1))
-  fi
-done
-
-/usr/bin/python3 "$REPO_DIR/scripts/count_test_results.py" "$results" \
-  --extra-passed "$checks_passed" --extra-failed "$checks_failed"
+# The repository checks (test/checks) run inside run_tests and are counted with the rest.
+/usr/bin/python3 "$REPO_DIR/scripts/count_test_results.py" "$results"

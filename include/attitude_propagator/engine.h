@@ -12,6 +12,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -42,14 +43,6 @@ struct Input {
   /// IMU message here, to republish it with the orientation at its stamp).
   std::shared_ptr<const void> payload;
 };
-
-/// Largest rate noise variance accepted from a message (rad²/s²): a standard deviation of
-/// 1000 rad/s is already no measurement at all; beyond it the covariance is refused.
-constexpr double kMaxRateVariance = 1e6;
-
-/// A rate noise covariance is usable when it is finite, symmetric (to round-off), has a
-/// non-negative diagonal no larger than kMaxRateVariance, and |R_ij| <= sqrt(R_ii R_jj).
-bool validRateCovariance(const Eigen::Matrix3d& R);
 
 /// The state to publish at a stamp.
 struct EngineState {
@@ -85,6 +78,7 @@ struct EngineCounters {
   std::uint64_t failed_steps = 0;    ///< the integrator could not complete an interval
   std::uint64_t pending_overflow = 0;  ///< dynamic: queue full, oldest applied early
   std::uint64_t deferred_ticks = 0;  ///< dynamic: grid stamps left for the next call (budget)
+  std::uint64_t rejected_bias = 0;   ///< gyro bias samples: non-finite, too large or bad frame
 };
 
 /// Something the node should log (throttled per kind).
@@ -122,6 +116,7 @@ struct EngineConfig {
   std::optional<DynamicConfig> dynamic;
   double publish_rate = 100.0;  ///< dynamic model: states at multiples of 1/publish_rate
   double rate_stddev = 0.0;     ///< rad/s, for inputs without a covariance
+  Eigen::Vector3d gyro_bias_B = Eigen::Vector3d::Zero();  ///< rad/s, until a bias sample
   /// Dynamic model: inputs stamped ahead of the clock wait, at most this many.
   std::size_t max_pending = 4096;
   /// Dynamic model: grid stamps handled per call at most; the rest wait for the next call.
@@ -147,6 +142,16 @@ class AttitudeEngine {
   /// An input the node turned away (counted).
   void reject(Rejection why);
 
+  /// A gyro bias b_B (rad/s, body frame) in force for rate inputs stamped at or after
+  /// `stamp`; subtracted before integration. False (counted) when non-finite or larger than
+  /// the largest accepted body rate. The `gyro_bias` parameter is the bias before any sample.
+  bool submitBias(Stamp stamp, const Eigen::Vector3d& b_B);
+  void rejectBias() { ++counters_.rejected_bias; }
+  /// The bias subtracted from the latest rate input.
+  const Eigen::Vector3d& gyroBias() const { return bias_B_; }
+  /// The kinematic propagator (nullptr in the dynamic model), for its diagnostics.
+  const KinematicPropagator* kinematic() const { return kinematic_ ? &*kinematic_ : nullptr; }
+
   /// One tick of a complete clock record (every /clock message under sim time): a jump back
   /// by more than the threshold resets; a jump ahead by more than max_dt is a gap, so the grid
   /// stamps inside it are not published; otherwise every grid stamp up to `now` is.
@@ -155,6 +160,12 @@ class AttitudeEngine {
   /// timer that ran late): jumps back reset, but lateness is never a gap, and every grid
   /// stamp since the last one published is published (at most grid_budget per call).
   void poll(Stamp now);
+
+  /// Live reconfiguration (same model): the rate noise, the time policy, the torque timeout
+  /// and the integrator. A new propagator is built from `next` and started from the current
+  /// state at the current time (a held torque stays in force); the past is not re-integrated.
+  /// Returns an empty string, or why `next` was refused (then nothing changes).
+  std::string reconfigure(const EngineConfig& next);
 
   /// Back to the initial state; the next input (or clock tick) anchors again.
   void reset();
@@ -191,6 +202,8 @@ class AttitudeEngine {
   void emitState(Stamp stamp);
   EngineState stateAt(Stamp stamp) const;
 
+  /// The bias in force at `stamp` (bias samples up to it take effect).
+  const Eigen::Vector3d& biasAt(Stamp stamp);
   void submitKinematic(const Input& input);
   void submitDynamic(const Input& input);
   void applyDynamic(const Input& input);
@@ -206,6 +219,9 @@ class AttitudeEngine {
   Eigen::Matrix3d default_R_B_;
   Eigen::Matrix3d P_B_ = Eigen::Matrix3d::Zero();
   std::vector<Input> pending_;  // sorted by stamp
+  std::optional<Input> held_torque_;  // the last torque applied, for reconfigure()
+  Eigen::Vector3d bias_B_ = Eigen::Vector3d::Zero();
+  std::vector<std::pair<Stamp, Eigen::Vector3d>> pending_bias_;  // sorted by stamp, bounded
 
   std::optional<Stamp> origin_;          // core time 0, whole seconds; set by the first stamp
   std::optional<Stamp> last_published_;  // one state per stamp, increasing

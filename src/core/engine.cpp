@@ -5,6 +5,7 @@
 #include <exception>
 #include <stdexcept>
 
+#include "attitude_propagator/limits.h"
 #include "attitude_propagator/orientation_covariance.h"
 #include "attitude_propagator/quaternion.h"
 
@@ -35,20 +36,6 @@ const char* sourceName(Source source) {
   return "input";
 }
 
-bool validRateCovariance(const Eigen::Matrix3d& R) {
-  if (!R.allFinite()) return false;
-  const double scale = R.cwiseAbs().maxCoeff();
-  if ((R - R.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) return false;
-  for (int i = 0; i < 3; ++i) {
-    if (!(R(i, i) >= 0.0) || R(i, i) > kMaxRateVariance) return false;
-    for (int j = 0; j < i; ++j) {
-      // Cauchy-Schwarz, with room for round-off in a matrix written with few digits.
-      if (R(i, j) * R(i, j) > R(i, i) * R(j, j) * (1.0 + 1e-6) + 1e-300) return false;
-    }
-  }
-  return true;
-}
-
 EngineConfig EngineConfig::from(const NodeConfig& node) {
   EngineConfig config;
   config.model = node.model;
@@ -56,6 +43,9 @@ EngineConfig EngineConfig::from(const NodeConfig& node) {
   config.dynamic = node.dynamic;
   config.publish_rate = node.parameters.publish_rate;
   config.rate_stddev = node.parameters.angular_velocity_stddev;
+  // The engine subtracts the bias (the parameter, then the bias topic) for both models.
+  config.gyro_bias_B = node.kinematic.gyro_bias_B;
+  config.kinematic.gyro_bias_B.setZero();
   return config;
 }
 
@@ -72,6 +62,11 @@ AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink)
   if (!(config_.publish_rate > 0.0) || !std::isfinite(config_.publish_rate)) {
     throw std::invalid_argument("publish_rate: must be positive and finite");
   }
+  if (!config_.gyro_bias_B.allFinite() || config_.gyro_bias_B.norm() > kMaxBodyRate) {
+    throw std::invalid_argument("gyro_bias: must be finite, each magnitude at most the largest "
+                                "accepted body rate");
+  }
+  bias_B_ = config_.gyro_bias_B;
   default_R_B_ = config_.rate_stddev * config_.rate_stddev * Eigen::Matrix3d::Identity();
   pending_.reserve(config_.max_pending);
 }
@@ -184,17 +179,45 @@ void AttitudeEngine::reject(Rejection why) {
   }
 }
 
-void AttitudeEngine::submit(const Input& input) {
+void AttitudeEngine::submit(const Input& raw) {
   ++counters_.received;
-  if (!input.value.allFinite() || !input.rate_covariance_B.allFinite()) {
-    handleOutcome(StampOutcome::RejectedNonFinite, input.source, input.stamp);
+  if (!raw.value.allFinite() || !raw.rate_covariance_B.allFinite()) {
+    handleOutcome(StampOutcome::RejectedNonFinite, raw.source, raw.stamp);
     return;
   }
+  Input input = raw;
+  if (input.source != Source::Torque) input.value -= biasAt(input.stamp);
   if (kinematic_) {
     submitKinematic(input);
   } else {
     submitDynamic(input);
   }
+}
+
+bool AttitudeEngine::submitBias(Stamp stamp, const Eigen::Vector3d& b_B) {
+  // A bias sample stream should be slow (a calibration): more than this many ahead of the
+  // rates means the stamps are wrong; the oldest then takes effect early.
+  constexpr std::size_t kMaxPendingBias = 64;
+  if (!b_B.allFinite() || !(b_B.norm() <= kMaxBodyRate)) {
+    ++counters_.rejected_bias;
+    return false;
+  }
+  if (pending_bias_.size() >= kMaxPendingBias) {
+    bias_B_ = pending_bias_.front().second;
+    pending_bias_.erase(pending_bias_.begin());
+  }
+  const auto at = std::upper_bound(
+      pending_bias_.begin(), pending_bias_.end(), stamp,
+      [](Stamp s, const std::pair<Stamp, Eigen::Vector3d>& other) { return s < other.first; });
+  pending_bias_.insert(at, {stamp, b_B});
+  return true;
+}
+
+const Eigen::Vector3d& AttitudeEngine::biasAt(Stamp stamp) {
+  std::size_t n = 0;
+  while (n < pending_bias_.size() && pending_bias_[n].first <= stamp) bias_B_ = pending_bias_[n++].second;
+  pending_bias_.erase(pending_bias_.begin(), pending_bias_.begin() + n);
+  return bias_B_;
 }
 
 bool AttitudeEngine::handleOutcome(StampOutcome outcome, std::optional<Source> source,
@@ -226,7 +249,6 @@ bool AttitudeEngine::handleOutcome(StampOutcome outcome, std::optional<Source> s
       ++counters_.rejected_non_finite;
       sink_.note({EngineNote::NonFinite, source, stamp});
       return false;
-#ifdef ATTITUDE_PROPAGATOR_HAS_OUT_OF_RANGE
     case StampOutcome::RejectedOutOfRange:
       ++counters_.rejected_out_of_range;
       sink_.note({EngineNote::OutOfRange, source, stamp});
@@ -235,7 +257,6 @@ bool AttitudeEngine::handleOutcome(StampOutcome outcome, std::optional<Source> s
       ++counters_.failed_steps;
       sink_.note({EngineNote::FailedStep, source, stamp});
       return true;  // held and re-anchored at the stamp, like a gap
-#endif
   }
   return false;
 }
@@ -257,8 +278,12 @@ void AttitudeEngine::submitKinematic(const Input& input) {
   } else if (outcome != StampOutcome::HeldGap) {
     P_B_.setZero();  // a new anchor: the state there is the given one
   }
-  emitState(input.stamp);
-  sink_.inputApplied(input, stateAt(input.stamp));
+  // With the stamp filter on, the state holds at the filtered stamp, not the receipt stamp.
+  const Stamp stamp = kinematic_->stampFilter() && origin_
+                          ? *origin_ + static_cast<Stamp>(std::llround(kinematic_->time() * 1e9))
+                          : input.stamp;
+  emitState(stamp);
+  sink_.inputApplied(input, stateAt(stamp));
 }
 
 void AttitudeEngine::submitDynamic(const Input& input) {
@@ -297,6 +322,7 @@ void AttitudeEngine::applyDynamic(const Input& input) {
     outcome = StampOutcome::RejectedNonFinite;
   }
   if (late && outcome == StampOutcome::Advanced) ++counters_.late;
+  if (input.source == Source::Torque && stateHoldsAtStamp(outcome)) held_torque_ = input;
   if (handleOutcome(outcome, input.source, input.stamp)) {
     sink_.inputApplied(input, stateAt(input.stamp));
   }
@@ -406,11 +432,44 @@ void AttitudeEngine::resetState(bool forget_time) {
   if (kinematic_) kinematic_->reset();
   if (dynamic_) dynamic_->reset();
   pending_.clear();
+  held_torque_.reset();
   P_B_.setZero();
   if (forget_time) {
     origin_.reset();
     last_published_.reset();
   }
+}
+
+std::string AttitudeEngine::reconfigure(const EngineConfig& next) {
+  if (next.model != config_.model) return "model: cannot change while running";
+  try {
+    if (kinematic_) {
+      KinematicPropagator k(next.kinematic);
+      if (kinematic_->anchored()) {
+        k.setState(kinematic_->time(), kinematic_->orientation(), kinematic_->rate());
+      }
+      kinematic_.emplace(k);
+    } else {
+      DynamicPropagator d(*next.dynamic);
+      if (dynamic_->anchored()) {
+        const double t = dynamic_->time();
+        d.setState(t, dynamic_->state());
+        const double timeout = next.dynamic->torque_timeout;
+        if (held_torque_ && !(timeout > 0.0 && t - coreTime(held_torque_->stamp) >= timeout)) {
+          d.setTorque(t, held_torque_->value, held_torque_->frame);
+        }
+      }
+      dynamic_ = std::move(d);
+      model_name_ = dynamic_->modelName();
+    }
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  const Eigen::Vector3d bias_B = config_.gyro_bias_B;  // the topic's bias stays in force
+  config_ = next;
+  config_.gyro_bias_B = bias_B;
+  default_R_B_ = config_.rate_stddev * config_.rate_stddev * Eigen::Matrix3d::Identity();
+  return {};
 }
 
 void AttitudeEngine::reset() {

@@ -7,6 +7,7 @@
 #include <boost/make_shared.hpp>
 
 #include "attitude_propagator/AttitudeState.h"
+#include "attitude_propagator/limits.h"
 #include "attitude_propagator/orientation_covariance.h"
 #include "attitude_propagator/ros/conversions.h"
 #include "attitude_propagator/ros/parameter_loader.h"
@@ -76,6 +77,9 @@ AttitudePropagatorRos::AttitudePropagatorRos(ros::NodeHandle nh, ros::NodeHandle
   last_diagnosis_ = ros::WallTime::now();
   watchdog_timer_ = nh_.createWallTimer(ros::WallDuration(kWatchdogPeriod),
                                         &AttitudePropagatorRos::onWatchdog, this);
+  reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<AttitudePropagatorConfig>>(pnh_);
+  reconfigure_server_->setCallback(
+      [this](AttitudePropagatorConfig& live, std::uint32_t level) { onReconfigure(live, level); });
   if (engine_->dynamicModel()) {
     dynamic_timer_ = nh_.createTimer(ros::Duration(1.0 / config_.parameters.publish_rate),
                                      &AttitudePropagatorRos::onDynamicTimer, this);
@@ -107,6 +111,9 @@ void AttitudePropagatorRos::subscribe() {
   if (engine_->dynamicModel() && config_.torque_input) {
     torque_sub_ =
         nh_.subscribe("torque", kQueueSize, &AttitudePropagatorRos::onTorque, this, hints);
+  }
+  if (config_.rate_input != RateInput::None) {
+    bias_sub_ = nh_.subscribe("gyro_bias", 100, &AttitudePropagatorRos::onGyroBias, this, hints);
   }
   if (sim_time_) {
     // Under sim time /clock is the time source: every tick is seen, in order with the inputs
@@ -165,12 +172,15 @@ void AttitudePropagatorRos::onImu(const ros::MessageEvent<const sensor_msgs::Imu
       return;
     }
     const Eigen::Matrix3d R_I = covarianceFromMsg(msg->angular_velocity_covariance);
-    if (R_I.allFinite() && !validRateCovariance(R_I)) {
+    const RateCovarianceCheck check = checkRateCovariance(R_I);
+    if (check != RateCovarianceCheck::Ok && check != RateCovarianceCheck::NonFinite) {
+      // (Non-finite values are the engine's to reject and count as such.)
       engine_->reject(Rejection::BadCovariance);
       ROS_WARN_THROTTLE(kWarnPeriod,
-                        "imu/data_raw: angular_velocity_covariance not symmetric, negative or "
-                        "above %g rad^2/s^2: rejected (%lu so far)",
-                        kMaxRateVariance, engine_->counters().rejected_covariance);
+                        "imu/data_raw: angular_velocity_covariance rejected (%s; accepted: "
+                        "symmetric, variances in [0, %g] rad^2/s^2) (%lu so far)",
+                        rateCovarianceCheckName(check), kMaxRateVariance,
+                        engine_->counters().rejected_covariance);
       return;
     }
     const auto stamp = stampOf(msg->header.stamp, event.getReceiptTime(), "imu/data_raw");
@@ -271,6 +281,32 @@ void AttitudePropagatorRos::onTorque(
     }
     last_input_ = ros::WallTime::now();
     engine_->submit(input);
+  });
+}
+
+void AttitudePropagatorRos::onGyroBias(const geometry_msgs::Vector3Stamped::ConstPtr& msg) {
+  guarded("gyro_bias", [&] {
+    const std::string& frame = msg->header.frame_id;
+    const bool in_body = frame.empty() || frame == config_.parameters.body_frame;
+    const bool in_mount = mount_known_ && frame == mount_frame_;
+    if (!in_body && !in_mount) {
+      engine_->rejectBias();
+      ROS_WARN_THROTTLE(kWarnPeriod,
+                        "gyro_bias: frame '%s' rejected; accepted: '%s' (the body), the rate "
+                        "messages' frame once known, or empty (%lu rejected so far)",
+                        frame.c_str(), config_.parameters.body_frame.c_str(),
+                        engine_->counters().rejected_bias);
+      return;
+    }
+    const Eigen::Vector3d b = toEigen(msg->vector);
+    const Eigen::Vector3d b_B = in_mount ? Eigen::Vector3d(q_B_mount_ * b) : b;
+    // Unstamped: from now on (ROS time; zero before the first /clock: from the start).
+    const Stamp stamp = toStamp(msg->header.stamp.isZero() ? ros::Time::now() : msg->header.stamp);
+    if (!engine_->submitBias(stamp, b_B)) {
+      ROS_WARN_THROTTLE(kWarnPeriod,
+                        "gyro_bias: non-finite or larger than %g rad/s: rejected (%lu so far)",
+                        kMaxBodyRate, engine_->counters().rejected_bias);
+    }
   });
 }
 
@@ -536,6 +572,45 @@ bool AttitudePropagatorRos::onSetState(SetState::Request& request, SetState::Res
   return true;
 }
 
+void AttitudePropagatorRos::onReconfigure(AttitudePropagatorConfig& live, std::uint32_t) {
+  Parameters p = config_.parameters;
+  p.angular_velocity_stddev = live.angular_velocity_stddev;
+  p.max_dt = live.max_dt;
+  p.torque_timeout = live.torque_timeout;
+  p.publish_tf = live.publish_tf;
+  p.reverse_tf = live.reverse_tf;
+  p.integrator = live.integrator;
+  const Parameters& now = config_.parameters;
+  const bool engine_changes = p.angular_velocity_stddev != now.angular_velocity_stddev ||
+                              p.max_dt != now.max_dt || p.torque_timeout != now.torque_timeout ||
+                              p.integrator != now.integrator;
+  std::string error;
+  guarded("reconfigure", [&] {
+    try {
+      NodeConfig next = validateParameters(p);
+      if (engine_changes) error = engine_->reconfigure(EngineConfig::from(next));
+      if (error.empty()) config_ = std::move(next);
+    } catch (const std::invalid_argument& e) {
+      error = e.what();
+    }
+  });
+  if (!error.empty()) {
+    ROS_WARN("reconfigure refused: %s; keeping the values in force", error.c_str());
+  } else if (engine_changes) {
+    ROS_INFO("reconfigured: integrator %s, max_dt %g s, torque_timeout %g s, "
+             "angular_velocity_stddev %g rad/s (the propagator goes on from the current state)",
+             integratorName(engine_->integrator()).c_str(), config_.parameters.max_dt,
+             config_.parameters.torque_timeout, config_.parameters.angular_velocity_stddev);
+  }
+  const Parameters& in_force = config_.parameters;
+  live.angular_velocity_stddev = in_force.angular_velocity_stddev;
+  live.max_dt = in_force.max_dt;
+  live.torque_timeout = in_force.torque_timeout;
+  live.publish_tf = in_force.publish_tf;
+  live.reverse_tf = in_force.reverse_tf;
+  live.integrator = in_force.integrator;
+}
+
 void AttitudePropagatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   const EngineCounters& c = engine_->counters();
   const ros::WallTime now = ros::WallTime::now();
@@ -573,6 +648,21 @@ void AttitudePropagatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   status.add("pending_overflow", c.pending_overflow);
   status.add("deferred_ticks", c.deferred_ticks);
   status.add("callback_errors", callback_errors_);
+  status.add("rejected_bias", c.rejected_bias);
+  const Eigen::Vector3d& b = engine_->gyroBias();
+  status.addf("gyro_bias", "[%g, %g, %g]", b.x(), b.y(), b.z());
+  if (const KinematicPropagator* k = engine_->kinematic()) {
+    status.add("rate_samples", config_.parameters.rate_samples);
+    status.add("filled_samples", k->filledSamples());
+    if (const SensorClockFilter* f = k->stampFilter()) {
+      status.add("stamp_filter_period_s", f->period());
+      status.add("stamp_filter_offset_s", f->offset());
+      status.add("stamp_filter_jitter_s", f->jitter());
+      status.add("stamp_filter_rejected", f->rejected());
+      status.add("stamp_filter_missed_periods", f->missed());
+      status.add("stamp_filter_restarts", f->restarts());
+    }
+  }
   status.add("norm_error", state.norm_error);
   if (engine_->dynamicModel()) {
     status.add("kinetic_energy", state.kinetic_energy);

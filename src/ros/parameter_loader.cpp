@@ -92,7 +92,11 @@ NodeConfig loadParameters(const ros::NodeHandle& pnh) {
     XmlRpc::XmlRpcValue value;
     if (pnh.getParam(name, value)) read(name, value, field);
   });
-  return validateParameters(parameters);
+  NodeConfig config = validateParameters(parameters);
+  // Every parameter in use, defaults included, on the server: `rosparam get` shows what runs.
+  forEachParameter(config.parameters, [&pnh](const char* name, const auto& field, const char*,
+                                             const char*) { pnh.setParam(name, field); });
+  return config;
 }
 
 }  // namespace attitude_propagator

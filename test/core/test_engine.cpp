@@ -144,16 +144,21 @@ TEST(EngineKinematic, NonFiniteAndBadCovarianceAreRejectedWithTheStateUnchanged)
   engine.submit(nan);
   EXPECT_EQ(engine.counters().rejected_non_finite, 1u);
   EXPECT_EQ(sink.states.size(), 1u);
-  EXPECT_FALSE(ap::validRateCovariance(Eigen::Vector3d(-0.5, 1, 1).asDiagonal()));
-  EXPECT_FALSE(ap::validRateCovariance(Eigen::Vector3d(1e308, 1, 1).asDiagonal()));
-  Eigen::Matrix3d asymmetric = Eigen::Matrix3d::Identity();
-  asymmetric(0, 1) = 0.5;
-  EXPECT_FALSE(ap::validRateCovariance(asymmetric));
-  Eigen::Matrix3d correlated = Eigen::Matrix3d::Identity();
-  correlated(0, 1) = correlated(1, 0) = 2.0;  // |R01| > sqrt(R00 R11): not a covariance
-  EXPECT_FALSE(ap::validRateCovariance(correlated));
-  EXPECT_TRUE(ap::validRateCovariance(Eigen::Matrix3d::Zero()));
-  EXPECT_TRUE(ap::validRateCovariance(1e-6 * Eigen::Matrix3d::Identity()));
+}
+
+TEST(EngineKinematic, GyroBiasIsSubtractedFromItsStampOn) {
+  Recorder sink;
+  ap::EngineConfig config = kinematicConfig();
+  config.gyro_bias_B = Eigen::Vector3d(0.0, 0.0, 0.1);
+  ap::AttitudeEngine engine(config, sink);
+  const Eigen::Vector3d w(0.0, 0.0, 0.6);
+  // 0.5 rad/s net for 1 s, then a bias sample of 0.2 from t = 1: 0.4 rad/s for 1 s.
+  EXPECT_TRUE(engine.submitBias(at(1.0), Eigen::Vector3d(0.0, 0.0, 0.2)));
+  for (int k = 0; k <= 200; ++k) engine.submit(rate(at(0.01 * k), w));
+  EXPECT_ROTATION_NEAR(sink.states.back().q_WB, aboutAxis(Eigen::Vector3d::UnitZ(), 0.9), 1e-2);
+  EXPECT_FALSE(engine.submitBias(at(3.0), Eigen::Vector3d(NAN, 0, 0)));
+  EXPECT_FALSE(engine.submitBias(at(3.0), Eigen::Vector3d(1e200, 0, 0)));
+  EXPECT_EQ(engine.counters().rejected_bias, 2u);
 }
 
 TEST(EngineKinematic, StampsJumpingBackResetToTheInitialState) {

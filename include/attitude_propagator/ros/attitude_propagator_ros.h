@@ -21,7 +21,9 @@
 #include <vector>
 
 #include <diagnostic_updater/diagnostic_updater.h>
+#include <dynamic_reconfigure/server.h>
 #include <geometry_msgs/Twist.h>
+#include <geometry_msgs/Vector3Stamped.h>
 #include <geometry_msgs/TwistStamped.h>
 #include <geometry_msgs/Wrench.h>
 #include <geometry_msgs/WrenchStamped.h>
@@ -35,6 +37,7 @@
 
 #include <Eigen/Geometry>
 
+#include "attitude_propagator/AttitudePropagatorConfig.h"
 #include "attitude_propagator/SetState.h"
 #include "attitude_propagator/engine.h"
 #include "attitude_propagator/parameters.h"
@@ -72,6 +75,8 @@ class AttitudePropagatorRos : public EngineSink {
   void onTwist(const ros::MessageEvent<const topic_tools::ShapeShifter>& event);
   void onTorque(const ros::MessageEvent<const topic_tools::ShapeShifter>& event);
   void onClock(const rosgraph_msgs::Clock::ConstPtr& msg);
+  /// A gyro bias, in force for rates stamped at or after its stamp.
+  void onGyroBias(const geometry_msgs::Vector3Stamped::ConstPtr& msg);
 
   /// The vector a Twist/Wrench input carries, with the header of its stamped form if it had one.
   struct VectorInput {
@@ -121,6 +126,9 @@ class AttitudePropagatorRos : public EngineSink {
   bool onReset(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
   bool onSetState(SetState::Request& request, SetState::Response& response);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
+  /// dynamic_reconfigure: validated like the start-up parameters; a refused change is
+  /// logged and the values shown in rqt_reconfigure go back to those in force.
+  void onReconfigure(AttitudePropagatorConfig& live, std::uint32_t level);
 
   ros::NodeHandle nh_;
   ros::NodeHandle pnh_;
@@ -148,6 +156,7 @@ class AttitudePropagatorRos : public EngineSink {
   ros::Subscriber rate_sub_;
   ros::Subscriber torque_sub_;
   ros::Subscriber clock_sub_;
+  ros::Subscriber bias_sub_;
   ros::Publisher tf_pub_;
   ros::Publisher imu_pub_;
   ros::Publisher state_pub_;
@@ -157,6 +166,7 @@ class AttitudePropagatorRos : public EngineSink {
   ros::WallTimer watchdog_timer_;
 
   diagnostic_updater::Updater updater_;
+  std::unique_ptr<dynamic_reconfigure::Server<AttitudePropagatorConfig>> reconfigure_server_;
   std::uint64_t callback_errors_ = 0;
   std::uint64_t accepted_at_last_diagnosis_ = 0;
   ros::WallTime last_diagnosis_;
