@@ -116,6 +116,8 @@ struct EngineConfig {
   std::optional<DynamicConfig> dynamic;
   double publish_rate = 100.0;  ///< dynamic model: states at multiples of 1/publish_rate
   double rate_stddev = 0.0;     ///< rad/s, for inputs without a covariance
+  /// Orientation uncertainty (rad) at an anchor of the initial state: P_B = stddev² I.
+  double initial_orientation_stddev = 0.0;
   Eigen::Vector3d gyro_bias_B = Eigen::Vector3d::Zero();  ///< rad/s, until a bias sample
   /// Dynamic model: inputs stamped ahead of the clock wait, at most this many.
   std::size_t max_pending = 4096;
@@ -199,6 +201,7 @@ class AttitudeEngine {
   bool clockWentBack(Stamp now);
   void advanceClock(Stamp now, bool went_back);
   void resetState(bool forget_time);
+  Eigen::Matrix3d initialCovariance() const;
   void emitState(Stamp stamp);
   EngineState stateAt(Stamp stamp) const;
 

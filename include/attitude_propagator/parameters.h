@@ -35,7 +35,9 @@ struct Parameters {
   double max_step = 0.0;  // 0: 1 / publish_rate
   double max_dt = 1.0;
   double tolerance = 1e-9;
-  double angular_velocity_stddev = 0.0;
+  double angular_velocity_stddev = 0.01;
+  double initial_orientation_stddev = 3.141592653589793;  // pi: unknown until pinned
+  std::string tf_conflict = "warn";
   std::string rate_samples = "instantaneous";
   std::string stamp_filter = "none";
   std::vector<double> gyro_bias{0.0, 0.0, 0.0};
@@ -69,6 +71,9 @@ void forEachParameter(P& p, F&& f) {
   f("publish_tf", p.publish_tf, "", "publish the transform on /tf");
   f("reverse_tf", p.reverse_tf, "",
     "publish `body_frame → fixed_frame` instead (for a tree rooted at the body)");
+  f("tf_conflict", p.tf_conflict, "",
+    "another node publishes a parent of our child frame: `warn` (once, counted) or `stop` "
+    "(also stop publishing tf)");
   f("publish_rate", p.publish_rate, "Hz",
     "dynamic model: publish at multiples of 1/rate; at most 1000");
   f("max_step", p.max_step, "s",
@@ -77,8 +82,11 @@ void forEachParameter(P& p, F&& f) {
   f("max_dt", p.max_dt, "s", "largest gap between stamps integrated across; at most 60");
   f("tolerance", p.tolerance, "", "relative and absolute tolerance of `dopri5`, in [1e-12, 1e-2]");
   f("angular_velocity_stddev", p.angular_velocity_stddev, "rad/s",
-    "rate noise used when an input carries no covariance; 0: orientation covariance unknown; "
-    "at most 1000");
+    "rate noise used when an input carries no covariance (drives the growth of the orientation "
+    "covariance); at most 1000");
+  f("initial_orientation_stddev", p.initial_orientation_stddev, "rad",
+    "orientation uncertainty at the first stamp and after a reset (π: unknown, the default); "
+    "0 when `fixed_frame` is defined by the start; `~set_state` pins it to 0");
   f("rate_samples", p.rate_samples, "",
     "`instantaneous` (rate at the stamp) or `interval_average` (mean over the interval the "
     "sample closes: delta-angle / dt)");

@@ -43,6 +43,7 @@ EngineConfig EngineConfig::from(const NodeConfig& node) {
   config.dynamic = node.dynamic;
   config.publish_rate = node.parameters.publish_rate;
   config.rate_stddev = node.parameters.angular_velocity_stddev;
+  config.initial_orientation_stddev = node.parameters.initial_orientation_stddev;
   // The engine subtracts the bias (the parameter, then the bias topic) for both models.
   config.gyro_bias_B = node.kinematic.gyro_bias_B;
   config.kinematic.gyro_bias_B.setZero();
@@ -69,6 +70,12 @@ AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink)
   bias_B_ = config_.gyro_bias_B;
   default_R_B_ = config_.rate_stddev * config_.rate_stddev * Eigen::Matrix3d::Identity();
   pending_.reserve(config_.max_pending);
+  P_B_ = initialCovariance();
+}
+
+Eigen::Matrix3d AttitudeEngine::initialCovariance() const {
+  const double s = config_.initial_orientation_stddev;
+  return clampOrientationCovariance(s * s * Eigen::Matrix3d::Identity());
 }
 
 AttitudeEngine::~AttitudeEngine() = default;
@@ -238,7 +245,7 @@ bool AttitudeEngine::handleOutcome(StampOutcome outcome, std::optional<Source> s
       if (input) ++counters_.accepted;
       ++counters_.resets;
       sink_.note({EngineNote::StampsJumpedBack, source, stamp});
-      P_B_.setZero();
+      P_B_ = initialCovariance();
       last_published_.reset();
       return true;
     case StampOutcome::DroppedStale:
@@ -275,8 +282,8 @@ void AttitudeEngine::submitKinematic(const Input& input) {
     const Eigen::Matrix3d& R_B =
         input.rate_covariance_B.isZero(0.0) ? default_R_B_ : input.rate_covariance_B;
     P_B_ = propagateOrientationCovariance(P_B_, h, w_step, R_B);
-  } else if (outcome != StampOutcome::HeldGap) {
-    P_B_.setZero();  // a new anchor: the state there is the given one
+  } else if (outcome == StampOutcome::Anchored || outcome == StampOutcome::ResetBackwardJump) {
+    P_B_ = initialCovariance();  // the initial state again, as uncertain as configured
   }
   // With the stamp filter on, the state holds at the filtered stamp, not the receipt stamp.
   const Stamp stamp = kinematic_->stampFilter() && origin_
@@ -433,7 +440,7 @@ void AttitudeEngine::resetState(bool forget_time) {
   if (dynamic_) dynamic_->reset();
   pending_.clear();
   held_torque_.reset();
-  P_B_.setZero();
+  P_B_ = initialCovariance();
   if (forget_time) {
     origin_.reset();
     last_published_.reset();
@@ -469,7 +476,7 @@ std::string AttitudeEngine::reconfigure(const EngineConfig& next) {
   config_ = next;
   config_.gyro_bias_B = bias_B;
   default_R_B_ = config_.rate_stddev * config_.rate_stddev * Eigen::Matrix3d::Identity();
-  return {};
+  return {};  // P_B carries on: the new propagator starts from the current state
 }
 
 void AttitudeEngine::reset() {
@@ -490,7 +497,7 @@ std::string AttitudeEngine::setState(Stamp stamp, const Eigen::Quaterniond& q_WB
   } catch (const std::exception& e) {
     return e.what();
   }
-  P_B_.setZero();
+  P_B_.setZero();  // pinned: the state is what the caller says it is
   emitState(stamp);
   return {};
 }

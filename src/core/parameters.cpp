@@ -138,6 +138,10 @@ void checkScalars(const Parameters& p) {
                 "a number in [1e-12, 1e-2]");
   requireFinite("angular_velocity_stddev", p.angular_velocity_stddev, 0.0, true, kMaxRateStddev,
                 "a finite number >= 0 and at most 1000 (rad/s)");
+  // Beyond pi the angle is no more unknown than at pi (the covariance is capped at pi^2).
+  requireFinite("initial_orientation_stddev", p.initial_orientation_stddev, 0.0, true, M_PI,
+                "a finite number in [0, pi] (rad)");
+  requireOneOf("tf_conflict", p.tf_conflict, {"warn", "stop"});
   const std::string rate_range = "[x, y, z], finite, |w| <= 1e5 (rad/s)";
   const auto& w = p.initial_angular_velocity;
   requireVector("initial_angular_velocity", w, 3, rate_range);

@@ -3,7 +3,6 @@
 #include <exception>
 #include <string>
 
-#include <tf2_msgs/TFMessage.h>
 #include <boost/make_shared.hpp>
 
 #include "attitude_propagator/AttitudeState.h"
@@ -114,6 +113,11 @@ void AttitudePropagatorRos::subscribe() {
   }
   if (config_.rate_input != RateInput::None) {
     bias_sub_ = nh_.subscribe("gyro_bias", 100, &AttitudePropagatorRos::onGyroBias, this, hints);
+  }
+  if (config_.parameters.publish_tf) {
+    tf_watch_sub_ = nh_.subscribe("/tf", kQueueSize, &AttitudePropagatorRos::onTfSeen, this);
+    tf_static_watch_sub_ =
+        nh_.subscribe("/tf_static", 100, &AttitudePropagatorRos::onTfSeen, this);
   }
   if (sim_time_) {
     // Under sim time /clock is the time source: every tick is seen, in order with the inputs
@@ -510,7 +514,32 @@ void AttitudePropagatorRos::note(const EngineNote& note) {
   }
 }
 
+void AttitudePropagatorRos::onTfSeen(const ros::MessageEvent<const tf2_msgs::TFMessage>& event) {
+  guarded("/tf watch", [&] {
+    if (event.getPublisherName() == ros::this_node::getName()) return;  // our own
+    const auto& p = config_.parameters;
+    const std::string& child = p.reverse_tf ? p.fixed_frame : p.body_frame;
+    const std::string& parent = p.reverse_tf ? p.body_frame : p.fixed_frame;
+    for (const auto& t : event.getConstMessage()->transforms) {
+      if (t.child_frame_id != child) continue;
+      if (++tf_conflicts_ == 1) {
+        ROS_WARN(
+            "tf: %s also publishes '%s' as the child of '%s' (we publish %s -> %s): a frame "
+            "has one parent. Publish our transform to a frame of its own (body_frame:=%s_attitude), "
+            "or reverse_tf:=true for a tree rooted at the body, or publish_tf:=false%s",
+            event.getPublisherName().c_str(), child.c_str(), t.header.frame_id.c_str(),
+            parent.c_str(), child.c_str(), child.c_str(),
+            p.tf_conflict == "stop" ? "; tf_conflict is stop: no more tf from this node"
+                                    : "; tf_conflict:=stop would stop our tf instead");
+      }
+      if (p.tf_conflict == "stop") tf_stopped_ = true;
+      return;
+    }
+  });
+}
+
 void AttitudePropagatorRos::publishTf(const ros::Time& stamp, const Eigen::Quaterniond& q_WB) {
+  if (tf_stopped_) return;
   const auto& p = config_.parameters;
   auto msg = boost::make_shared<tf2_msgs::TFMessage>();
   msg->transforms.resize(1);
@@ -649,6 +678,8 @@ void AttitudePropagatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   status.add("deferred_ticks", c.deferred_ticks);
   status.add("callback_errors", callback_errors_);
   status.add("rejected_bias", c.rejected_bias);
+  status.add("tf_conflicts", tf_conflicts_);
+  status.add("tf_stopped", tf_stopped_);
   const Eigen::Vector3d& b = engine_->gyroBias();
   status.addf("gyro_bias", "[%g, %g, %g]", b.x(), b.y(), b.z());
   if (const KinematicPropagator* k = engine_->kinematic()) {

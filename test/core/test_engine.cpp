@@ -4,6 +4,7 @@
 // gaps while a late callback is not, and bounded work per call.
 #include <gtest/gtest.h>
 
+#include <cfloat>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -159,6 +160,32 @@ TEST(EngineKinematic, GyroBiasIsSubtractedFromItsStampOn) {
   EXPECT_FALSE(engine.submitBias(at(3.0), Eigen::Vector3d(NAN, 0, 0)));
   EXPECT_FALSE(engine.submitBias(at(3.0), Eigen::Vector3d(1e200, 0, 0)));
   EXPECT_EQ(engine.counters().rejected_bias, 2u);
+}
+
+TEST(EngineKinematic, OrientationCovarianceStartsAsConfiguredAndGrowsWithRateNoise) {
+  Recorder sink;
+  ap::EngineConfig config = kinematicConfig();
+  config.initial_orientation_stddev = 0.1;
+  config.rate_stddev = 0.01;
+  ap::AttitudeEngine engine(config, sink);
+  // At rest Phi = I and J_r = I: P = P0 + n h^2 R (a random walk of the angle).
+  for (int k = 0; k <= 50; ++k) engine.submit(rate(at(0.01 * k), Eigen::Vector3d::Zero()));
+  const double expected = 0.1 * 0.1 + 50 * 0.01 * 0.01 * 1e-4;
+  EXPECT_NEAR(sink.states.front().P_B(0, 0), 0.01, 4 * DBL_EPSILON * 0.01);
+  EXPECT_NEAR(sink.states.back().P_B(2, 2), expected, 64 * DBL_EPSILON * expected);
+  EXPECT_EQ(sink.states.back().P_B(0, 1), 0.0);
+  // Pinned by set_state: what the caller says, no uncertainty left.
+  engine.setState(at(1.0), Eigen::Quaterniond::Identity(), Eigen::Vector3d::Zero());
+  EXPECT_TRUE(sink.states.back().P_B.isZero(0.0));
+  // An unknown start (pi) stays capped at pi^2 whatever the integration adds.
+  Recorder unknown_sink;
+  config.initial_orientation_stddev = M_PI;
+  ap::AttitudeEngine unknown(config, unknown_sink);
+  for (int k = 0; k <= 50; ++k) unknown.submit(rate(at(0.01 * k), Eigen::Vector3d(1, 2, 3)));
+  const Eigen::Matrix3d P = unknown_sink.states.back().P_B;
+  EXPECT_TRUE(P.allFinite());
+  EXPECT_LE(P.diagonal().maxCoeff(), M_PI * M_PI * (1 + 1e-12));
+  EXPECT_GE(P.diagonal().minCoeff(), M_PI * M_PI * (1 - 1e-12));
 }
 
 TEST(EngineKinematic, StampsJumpingBackResetToTheInitialState) {

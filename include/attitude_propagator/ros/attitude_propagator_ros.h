@@ -33,6 +33,7 @@
 #include <std_srvs/Empty.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
+#include <tf2_msgs/TFMessage.h>
 #include <topic_tools/shape_shifter.h>
 
 #include <Eigen/Geometry>
@@ -117,6 +118,11 @@ class AttitudePropagatorRos : public EngineSink {
   /// Under wall time the clock is read from callbacks; under sim time /clock drives.
   void pollClock();
 
+  /// Watches /tf and /tf_static for another parent of the frame we publish as a child (or the
+  /// same edge from another node): warns once with the fix, counts, and with
+  /// `tf_conflict: stop` stops publishing tf rather than fight over the tree.
+  void onTfSeen(const ros::MessageEvent<const tf2_msgs::TFMessage>& event);
+
   // Outputs.
   void publishTf(const ros::Time& stamp, const Eigen::Quaterniond& q_WB);
   void publishImu(const sensor_msgs::Imu& input, const EngineState& state,
@@ -157,6 +163,10 @@ class AttitudePropagatorRos : public EngineSink {
   ros::Subscriber torque_sub_;
   ros::Subscriber clock_sub_;
   ros::Subscriber bias_sub_;
+  ros::Subscriber tf_watch_sub_;
+  ros::Subscriber tf_static_watch_sub_;
+  std::uint64_t tf_conflicts_ = 0;
+  bool tf_stopped_ = false;
   ros::Publisher tf_pub_;
   ros::Publisher imu_pub_;
   ros::Publisher state_pub_;
