@@ -358,14 +358,16 @@ void AttitudeEngine::publishDue(bool skip_intermediate) {
     k = std::min(gridIndexAtOrBefore(*last_published_) + 1, k_now);
   }
   std::size_t handled = 0;
+  std::uint64_t work = 0;
   for (; k <= k_now; ++k) {
-    if (handled++ == config_.grid_budget) {
+    if (handled++ == config_.grid_budget || work >= config_.work_budget) {
       // Bounded work per call: the rest is published on the next tick or poll.
       ++counters_.deferred_ticks;
       sink_.note({EngineNote::Deferred, std::nullopt, gridStamp(k)});
       return;
     }
     publishGridStamp(gridStamp(k));
+    work += dynamic_->lastCallWork();
   }
 }
 

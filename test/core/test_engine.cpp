@@ -386,6 +386,25 @@ TEST(EngineDynamic, WorkPerCallIsBoundedAndTheRestFollows) {
   EXPECT_EQ(sink.states.back().stamp, at(1.0));
 }
 
+TEST(EngineDynamic, IntegratorWorkPerCallIsBoundedToo) {
+  // A fine step (1e-4 s, 200 steps per 50 Hz grid stamp) and a work budget of 1000 steps:
+  // five grid stamps per call, the rest follow, and the result is the same state.
+  Recorder sink;
+  ap::EngineConfig config = torqueConfig();
+  config.dynamic->max_step = 1e-4;
+  config.work_budget = 1000;
+  ap::AttitudeEngine engine(config, sink);
+  engine.poll(at(0.0));
+  engine.submit(torque(at(0.0), Eigen::Vector3d(0.4, 0.0, 0.0)));
+  engine.poll(at(1.0));
+  EXPECT_LE(sink.states.size(), 7u);
+  EXPECT_GE(engine.counters().deferred_ticks, 1u);
+  for (int i = 0; i < 20; ++i) engine.poll(at(1.0));
+  ASSERT_EQ(sink.states.back().stamp, at(1.0));
+  EXPECT_EQ(sink.states.size(), 51u);
+  EXPECT_ROTATION_NEAR(sink.states.back().q_WB, aboutAxis(Eigen::Vector3d::UnitX(), 0.1), 1e-12);
+}
+
 TEST(EngineDynamic, TheGridIsExactForRatesThatDoNotDivideASecond) {
   Recorder sink;
   ap::EngineConfig config = spinningSphereConfig();
