@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# The core library includes only what it may: the C++ standard library, Eigen, Boost and its
+# own headers (include/attitude_propagator/*.h, not the ROS layer's). An allow-list, because
+# on Debian the ROS headers sit in /usr/include next to Boost's, where a stray include would
+# compile. The ROS layer's headers live outside the core's include directory
+# (src/ros/include), so the core's build cannot find them either.
+cd "$(dirname "${BASH_SOURCE[0]}")/../.." || exit 1
+
+std_headers=" algorithm any array atomic bitset cassert cctype cerrno cfenv cfloat charconv \
+chrono cinttypes climits clocale cmath complex condition_variable cstdarg cstddef cstdint \
+cstdio cstdlib cstring ctime cwchar deque exception execution filesystem fstream functional \
+future initializer_list iomanip ios iosfwd iostream istream iterator limits list locale map \
+memory memory_resource mutex new numeric optional ostream queue random ratio regex \
+scoped_allocator set shared_mutex sstream stack stdexcept streambuf string string_view \
+system_error thread tuple type_traits typeindex typeinfo unordered_map unordered_set utility \
+valarray variant vector "
+
+allowed() {
+  local header=$1
+  case "$header" in
+    \<Eigen/*\> | \<unsupported/Eigen/*\> | \<boost/*\>) return 0 ;;
+    \"attitude_propagator/*.h\")
+      local path=${header//\"/}
+      [[ "$path" != attitude_propagator/*/* && -f "include/$path" ]]
+      return ;;
+    \<*\>)
+      local name=${header#<}
+      name=${name%>}
+      [[ "$std_headers" == *" $name "* ]]
+      return ;;
+  esac
+  return 1
+}
+
+status=0
+while IFS= read -r line; do
+  file=${line%%:*}
+  rest=${line#*:}
+  lineno=${rest%%:*}
+  header=$(sed -E 's/^[[:space:]]*#[[:space:]]*include[[:space:]]*([<"][^>"]*[>"]).*/\1/' <<<"${rest#*:}")
+  if ! allowed "$header"; then
+    echo "$file:$lineno: $header is not allowed in the core (std, Eigen, Boost, attitude_propagator/*.h)"
+    status=1
+  fi
+done < <(grep -nHE '^[[:space:]]*#[[:space:]]*include' src/core/*.cpp include/attitude_propagator/*.h)
+exit $status
