@@ -166,6 +166,9 @@ class AttitudeEngine {
   /// timer that ran late): jumps back reset, but lateness is never a gap, and every grid
   /// stamp since the last one published is published (at most grid_budget per call).
   void poll(Stamp now);
+  /// Publishes grid stamps left over by a call that ran out of budget, up to the last time
+  /// seen; the clock itself is not read.
+  void drain();
 
   /// Live reconfiguration (same model): the rate noise, the time policy, the torque timeout
   /// and the integrator. A new propagator is built from `next` and started from the current

@@ -156,6 +156,10 @@ void AttitudeEngine::poll(Stamp now) {
   if (dynamic_) publishDue(false);
 }
 
+void AttitudeEngine::drain() {
+  if (dynamic_) publishDue(false);
+}
+
 void AttitudeEngine::advanceClock(Stamp now, bool went_back) {
   // A step back within the threshold is jitter of the time source: the clock stays put.
   clock_ = went_back || !clock_ ? now : std::max(*clock_, now);

@@ -413,7 +413,9 @@ void AttitudePropagatorRos::onDynamicTimer(const ros::TimerEvent&) {
 void AttitudePropagatorRos::onWatchdog(const ros::WallTimerEvent&) {
   guarded("watchdog", [&] {
     if (sim_time_) {
-      engine_->clockTick(toStamp(ros::Time::now()));  // catches up after a deferred tick
+      // Not the clock itself: /clock ticks may still wait in the queue behind this callback,
+      // and reading ros::Time::now() here would take them for a jump.
+      engine_->drain();  // catches up after a call that ran out of budget
     } else {
       pollClock();
     }
