@@ -22,6 +22,7 @@ DEBIAN_PACKAGES=(
   python3-std-srvs python3-geometry-msgs python3-std-msgs python3-rosgraph-msgs python3-yaml
   libeigen3-dev libboost-dev libboost-math-dev
   libgtest-dev googletest libbenchmark-dev python3-matplotlib
+  clang libclang-rt-14-dev
 )
 
 as_root() {
@@ -36,6 +37,19 @@ source_ros() {
     source "/opt/ros/${ROS_DISTRO}/setup.bash"
     set -u
   fi
+}
+
+# True when clang++ links a libFuzzer target with ASan and UBSan (scripts/fuzz.sh).
+have_libfuzzer() {
+  command -v clang++ >/dev/null || return 1
+  local dir
+  dir="$(mktemp -d)"
+  printf '%s\n' '#include <cstddef>' '#include <cstdint>' \
+    'extern "C" int LLVMFuzzerTestOneInput(const uint8_t*, size_t) { return 0; }' >"$dir/t.cpp"
+  clang++ -fsanitize=fuzzer,address,undefined "$dir/t.cpp" -o "$dir/t" >/dev/null 2>&1
+  local status=$?
+  rm -rf "$dir"
+  return $status
 }
 
 source_workspace() {

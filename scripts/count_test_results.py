@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""Counts the JUnit XML results that catkin's run_tests wrote and prints the closing line
-"N passed, M failed" (a missing or unreadable result file counts as a failure)."""
+"""Counts the JUnit XML results in one or more folders (catkin's run_tests, the sanitized core
+suite, the fuzz runs) and prints the closing line "N passed, M failed" (a folder without
+results, or an unreadable result file, counts as a failure)."""
 import argparse
 import pathlib
 import sys
@@ -33,11 +34,14 @@ def count(results_dir):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("results_dir")
+    parser.add_argument("results_dirs", nargs="+", metavar="results_dir")
     parser.add_argument("--extra-passed", type=int, default=0)
     parser.add_argument("--extra-failed", type=int, default=0)
     args = parser.parse_args()
-    passed, failed, failures = count(args.results_dir)
+    passed, failed, failures = 0, 0, []
+    for results_dir in args.results_dirs:
+        p, f, lines = count(results_dir)
+        passed, failed, failures = passed + p, failed + f, failures + lines
     passed += args.extra_passed
     failed += args.extra_failed
     for line in failures:

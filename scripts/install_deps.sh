@@ -12,7 +12,8 @@ if [ -n "${ROS_DISTRO:-}" ] && [ -d "/opt/ros/${ROS_DISTRO}" ]; then
   [ -d /etc/ros/rosdep/sources.list.d ] || as_root rosdep init
   rosdep update
   rosdep install --from-paths "$REPO_DIR" --ignore-src -y
-  as_root apt-get install -y --no-install-recommends libbenchmark-dev python3-matplotlib
+  as_root apt-get install -y --no-install-recommends libbenchmark-dev python3-matplotlib \
+    clang
   exit 0
 fi
 

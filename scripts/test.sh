@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # Builds the package and runs every test: the core's gtest suite, the rostest integration
-# tests, and the repository checks. Ends with a line "N passed, M failed"; exits non-zero if
-# anything failed.
+# tests, the repository checks, the core suite again under ASan + UBSan (scripts/sanitize.sh),
+# and, when clang with libFuzzer is present, the fuzz regression inputs and each fuzz target
+# for FUZZ_SECONDS (default 60; 0 skips the fuzzing, not the regressions; scripts/fuzz.sh).
+# Ends with a line "N passed, M failed" (every gtest case, sanitized ones too, and every fuzz
+# target run or regression input counts as one); exits non-zero if anything failed.
 set -uo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -15,4 +18,21 @@ rm -rf "$results"
 catkin_make -j1 run_tests 2>&1 | tail -n 80
 
 # The repository checks (test/checks) run inside run_tests and are counted with the rest.
-/usr/bin/python3 "$REPO_DIR/scripts/count_test_results.py" "$results"
+
+# Robustness: the core suite under sanitizers, then the fuzz targets (see scripts/fuzz.sh).
+robustness="${WORKSPACE}/build/test_results_robustness"
+rm -rf "$robustness"
+result_dirs=("$results" "$robustness/sanitize")
+bash "$REPO_DIR/scripts/sanitize.sh" "$robustness/sanitize"
+if have_libfuzzer; then
+  result_dirs+=("$robustness/fuzz")
+  bash "$REPO_DIR/scripts/fuzz.sh" --regressions --junit "$robustness/fuzz"
+  fuzz_seconds="${FUZZ_SECONDS:-60}"
+  if [ "$fuzz_seconds" -gt 0 ]; then
+    bash "$REPO_DIR/scripts/fuzz.sh" --junit "$robustness/fuzz" "$fuzz_seconds"
+  fi
+else
+  echo "fuzz: skipped (clang++ with libFuzzer not available)"
+fi
+
+/usr/bin/python3 "$REPO_DIR/scripts/count_test_results.py" "${result_dirs[@]}"

@@ -1,0 +1,130 @@
+#!/usr/bin/env bash
+# Fuzzes the core library with libFuzzer (clang, ASan + UBSan): targets in test/fuzz/.
+#   bash scripts/fuzz.sh [seconds_per_target]   build, then fuzz each target (default 60 s)
+#   bash scripts/fuzz.sh --regressions          build, then run each target over the inputs in
+#                                               test/fuzz/regressions/<target>/ only
+# Options (before the seconds): --junit DIR writes one JUnit XML per run into DIR (one test
+# case per fuzzed target, one per regression input), as scripts/test.sh counts them.
+# Environment: FUZZ_TARGETS (default "kinematic dynamic parameters"), FUZZ_TIMEOUT (seconds
+# one input may take, default 10), FUZZ_BUILD_DIR (default $AP_WORKSPACE/fuzz).
+# A finding is saved under test/fuzz/findings/ (not committed) with the command that
+# reproduces it; copy it into test/fuzz/regressions/<target>/ to keep it as a regression input.
+# Exit status: 0 nothing found, 1 a finding or a failing regression input, 2 no build.
+set -uo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
+
+mode=fuzz
+junit_dir=""
+seconds=60
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --regressions) mode=regressions ;;
+    --junit) junit_dir="$2"; shift ;;
+    -h | --help) sed -n '2,13p' "$0"; exit 0 ;;
+    *) seconds="$1" ;;
+  esac
+  shift
+done
+targets=(${FUZZ_TARGETS:-kinematic dynamic parameters})
+timeout_s="${FUZZ_TIMEOUT:-10}"
+build="${FUZZ_BUILD_DIR:-$WORKSPACE/fuzz}"
+fuzz_dir="$REPO_DIR/test/fuzz"
+findings="$fuzz_dir/findings"
+
+if ! have_libfuzzer; then
+  echo "fuzz: clang++ with libFuzzer is not available (apt-get install clang libclang-rt-14-dev)"
+  exit 2
+fi
+mkdir -p "$build" "$findings"
+echo "fuzz: building the targets in $build"
+if ! { cmake -S "$fuzz_dir" -B "$build" -DCMAKE_CXX_COMPILER=clang++ >"$build/cmake.log" 2>&1 &&
+  cmake --build "$build" -j 2 >"$build/build.log" 2>&1; }; then
+  echo "fuzz: build failed; see $build/cmake.log and $build/build.log"
+  tail -n 30 "$build/build.log" 2>/dev/null
+  exit 2
+fi
+
+export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=0}"
+export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
+flags=(-timeout="$timeout_s" -rss_limit_mb=2048 -max_len=2048 -print_final_stats=1)
+
+xml_escape() { sed -e 's/&/\&amp;/g' -e 's/</\&lt;/g' -e 's/>/\&gt;/g' -e 's/"/\&quot;/g'; }
+
+# junit_case NAME SECONDS [FAILURE_TEXT]: one <testcase> element.
+junit_case() {
+  local name="$1" time="$2" failure="${3:-}"
+  printf '  <testcase classname="fuzz" name="%s" time="%s">' "$name" "$time"
+  if [ -n "$failure" ]; then
+    printf '<failure message="finding">%s</failure>' "$(printf '%s' "$failure" | xml_escape)"
+  fi
+  printf '</testcase>\n'
+}
+
+# The lines of a libFuzzer log that say what went wrong.
+finding_summary() {
+  grep -E 'FUZZ ORACLE|runtime error|ERROR: (AddressSanitizer|LeakSanitizer)|libFuzzer: (timeout|out-of-memory)|SUMMARY: [A-Za-z]*Sanitizer' \
+    "$1" | head -n 6
+}
+
+failed=0
+cases=()
+for target in "${targets[@]}"; do
+  bin="$build/fuzz_$target"
+  log="$build/$target.$mode.log"
+  if [ "$mode" = regressions ]; then
+    inputs=("$fuzz_dir/regressions/$target"/*)
+    [ -e "${inputs[0]}" ] || { echo "fuzz: $target: no regression inputs"; continue; }
+    for input in "${inputs[@]}"; do
+      name="$target/regressions/$(basename "$input")"
+      start=$SECONDS
+      if "$bin" "${flags[@]}" "$input" >"$log" 2>&1; then
+        echo "fuzz: $name passed"
+        cases+=("$(junit_case "$name" $((SECONDS - start)))")
+      else
+        failed=$((failed + 1))
+        summary="$(finding_summary "$log")"
+        echo "fuzz: $name FAILED:"
+        echo "$summary" | sed 's/^/    /'
+        echo "    reproduce: $bin $input"
+        cases+=("$(junit_case "$name" $((SECONDS - start)) "$summary")")
+      fi
+    done
+    continue
+  fi
+  # New inputs go to the working corpus in the build dir; the committed seeds stay as they are.
+  corpus="$build/corpus/$target"
+  mkdir -p "$corpus"
+  before=$(ls "$findings" | wc -l)
+  start=$SECONDS
+  echo "fuzz: $target for ${seconds} s"
+  "$bin" "${flags[@]}" -max_total_time="$seconds" -artifact_prefix="$findings/$target-" \
+    "$corpus" "$fuzz_dir/corpus/$target" >"$log" 2>&1
+  status=$?
+  stats="$(grep -E '^stat::number_of_executed_units' "$log" | awk '{print $2}')"
+  if [ "$status" -eq 0 ]; then
+    echo "fuzz: $target passed (${stats:-?} inputs in $((SECONDS - start)) s)"
+    cases+=("$(junit_case "$target" $((SECONDS - start)))")
+  else
+    failed=$((failed + 1))
+    summary="$(finding_summary "$log")"
+    artifact="$(ls -t "$findings"/"$target"-* 2>/dev/null | head -n 1)"
+    [ "$(ls "$findings" | wc -l)" -gt "$before" ] || artifact="(none written; log: $log)"
+    echo "fuzz: $target FAILED after $((SECONDS - start)) s:"
+    echo "$summary" | sed 's/^/    /'
+    echo "    input: $artifact"
+    echo "    reproduce: $bin $artifact"
+    echo "    keep as a regression input: mkdir -p $fuzz_dir/regressions/$target && cp $artifact $fuzz_dir/regressions/$target/NAME"
+    cases+=("$(junit_case "$target" $((SECONDS - start)) "$summary (input: $artifact)")")
+  fi
+done
+
+if [ -n "$junit_dir" ]; then
+  mkdir -p "$junit_dir"
+  {
+    echo '<?xml version="1.0" encoding="UTF-8"?>'
+    echo "<testsuite name=\"fuzz_$mode\" tests=\"${#cases[@]}\" failures=\"$failed\">"
+    [ ${#cases[@]} -eq 0 ] || printf '%s\n' "${cases[@]}"
+    echo '</testsuite>'
+  } >"$junit_dir/fuzz_$mode.xml"
+fi
+[ "$failed" -eq 0 ]
