@@ -192,8 +192,6 @@ class AttitudeEngine {
   /// Relative drifts of energy and |M| since the anchor (dynamic model; 0 otherwise).
   double energyDrift() const;
   double momentumDrift() const;
-  /// Integrator steps not committed because they left the finite numbers (dynamic model).
-  std::uint64_t nonFiniteSteps() const;
 
   /// The grid stamp with index k: round(k / publish_rate) in ns.
   Stamp gridStamp(std::int64_t k) const;

@@ -52,8 +52,8 @@ enum class RateCovarianceCheck {
 constexpr double kCovarianceSymmetryTolerance = 1e-6;
 
 /// Checks a rate covariance before it is used. The node rejects a message that fails (and
-/// counts it): NonFinite as StampOutcome::RejectedNonFinite, every other problem as
-/// StampOutcome::RejectedOutOfRange; the all-zero matrix (no covariance given) is Ok.
+/// counts it): NonFinite as non-finite input, every other problem as a bad covariance
+/// (Rejection::BadCovariance, `rejected_covariance`); the all-zero matrix (none given) is Ok.
 RateCovarianceCheck checkRateCovariance(const Eigen::Matrix3d& R);
 const char* rateCovarianceCheckName(RateCovarianceCheck check);
 

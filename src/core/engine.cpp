@@ -249,6 +249,9 @@ bool AttitudeEngine::handleOutcome(StampOutcome outcome, std::optional<Source> s
       if (input) ++counters_.accepted;
       ++counters_.resets;
       sink_.note({EngineNote::StampsJumpedBack, source, stamp});
+      // A new timeline: inputs queued under the old one and its held torque are gone.
+      pending_.clear();
+      held_torque_.reset();
       P_B_ = initialCovariance();
       last_published_.reset();
       return true;
@@ -435,10 +438,6 @@ double AttitudeEngine::energyDrift() const { return dynamic_ ? dynamic_->energyD
 
 double AttitudeEngine::momentumDrift() const {
   return dynamic_ ? dynamic_->momentumDrift() : 0.0;
-}
-
-std::uint64_t AttitudeEngine::nonFiniteSteps() const {
-  return dynamic_ ? dynamic_->failedSteps() : 0;
 }
 
 void AttitudeEngine::resetState(bool forget_time) {

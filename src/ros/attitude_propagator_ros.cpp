@@ -701,7 +701,6 @@ void AttitudePropagatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
     status.add("kinetic_energy", state.kinetic_energy);
     status.add("energy_drift", engine_->energyDrift());
     status.add("momentum_drift", engine_->momentumDrift());
-    status.add("non_finite_steps", engine_->nonFiniteSteps());
   }
 }
 
