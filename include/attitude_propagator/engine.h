@@ -148,13 +148,13 @@ class AttitudeEngine {
   /// An input the node turned away (counted).
   void reject(Rejection why);
 
-  /// A gyro bias b_B (rad/s, body frame) in force for rate inputs stamped at or after
+  /// A gyro bias (rad/s, body frame) in force for rate inputs stamped at or after
   /// `stamp`; subtracted before integration. False (counted) when non-finite or larger than
   /// the largest accepted body rate. The `gyro_bias` parameter is the bias before any sample.
-  bool submitBias(Stamp stamp, const Eigen::Vector3d& b_B);
+  bool submitBias(Stamp stamp, const Eigen::Vector3d& gyro_bias_B);
   void rejectBias() { ++counters_.rejected_bias; }
   /// The bias subtracted from the latest rate input.
-  const Eigen::Vector3d& gyroBias() const { return bias_B_; }
+  const Eigen::Vector3d& gyroBias() const { return gyro_bias_B_; }
   /// The kinematic propagator (nullptr in the dynamic model), for its diagnostics.
   const KinematicPropagator* kinematic() const { return kinematic_ ? &*kinematic_ : nullptr; }
 
@@ -228,8 +228,8 @@ class AttitudeEngine {
   Eigen::Matrix3d P_B_ = Eigen::Matrix3d::Zero();
   std::vector<Input> pending_;  // sorted by stamp
   std::optional<Input> held_torque_;  // the last torque applied, for reconfigure()
-  Eigen::Vector3d bias_B_ = Eigen::Vector3d::Zero();
-  std::vector<std::pair<Stamp, Eigen::Vector3d>> pending_bias_;  // sorted by stamp, bounded
+  Eigen::Vector3d gyro_bias_B_ = Eigen::Vector3d::Zero();
+  std::vector<std::pair<Stamp, Eigen::Vector3d>> pending_gyro_bias_;  // sorted by stamp, bounded
 
   std::optional<Stamp> origin_;          // core time 0, whole seconds; set by the first stamp
   std::optional<Stamp> last_published_;  // one state per stamp, increasing

@@ -67,7 +67,7 @@ AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink)
     throw std::invalid_argument("gyro_bias: must be finite, each magnitude at most the largest "
                                 "accepted body rate");
   }
-  bias_B_ = config_.gyro_bias_B;
+  gyro_bias_B_ = config_.gyro_bias_B;
   default_R_B_ = config_.rate_stddev * config_.rate_stddev * Eigen::Matrix3d::Identity();
   pending_.reserve(config_.max_pending);
   P_B_ = initialCovariance();
@@ -205,30 +205,30 @@ void AttitudeEngine::submit(const Input& raw) {
   }
 }
 
-bool AttitudeEngine::submitBias(Stamp stamp, const Eigen::Vector3d& b_B) {
+bool AttitudeEngine::submitBias(Stamp stamp, const Eigen::Vector3d& gyro_bias_B) {
   // A bias sample stream should be slow (a calibration): more than this many ahead of the
   // rates means the stamps are wrong; the oldest then takes effect early.
   constexpr std::size_t kMaxPendingBias = 64;
-  if (!b_B.allFinite() || !(b_B.norm() <= kMaxBodyRate)) {
+  if (!gyro_bias_B.allFinite() || !(gyro_bias_B.norm() <= kMaxBodyRate)) {
     ++counters_.rejected_bias;
     return false;
   }
-  if (pending_bias_.size() >= kMaxPendingBias) {
-    bias_B_ = pending_bias_.front().second;
-    pending_bias_.erase(pending_bias_.begin());
+  if (pending_gyro_bias_.size() >= kMaxPendingBias) {
+    gyro_bias_B_ = pending_gyro_bias_.front().second;
+    pending_gyro_bias_.erase(pending_gyro_bias_.begin());
   }
   const auto at = std::upper_bound(
-      pending_bias_.begin(), pending_bias_.end(), stamp,
+      pending_gyro_bias_.begin(), pending_gyro_bias_.end(), stamp,
       [](Stamp s, const std::pair<Stamp, Eigen::Vector3d>& other) { return s < other.first; });
-  pending_bias_.insert(at, {stamp, b_B});
+  pending_gyro_bias_.insert(at, {stamp, gyro_bias_B});
   return true;
 }
 
 const Eigen::Vector3d& AttitudeEngine::biasAt(Stamp stamp) {
   std::size_t n = 0;
-  while (n < pending_bias_.size() && pending_bias_[n].first <= stamp) bias_B_ = pending_bias_[n++].second;
-  pending_bias_.erase(pending_bias_.begin(), pending_bias_.begin() + n);
-  return bias_B_;
+  while (n < pending_gyro_bias_.size() && pending_gyro_bias_[n].first <= stamp) gyro_bias_B_ = pending_gyro_bias_[n++].second;
+  pending_gyro_bias_.erase(pending_gyro_bias_.begin(), pending_gyro_bias_.begin() + n);
+  return gyro_bias_B_;
 }
 
 bool AttitudeEngine::handleOutcome(StampOutcome outcome, std::optional<Source> source,

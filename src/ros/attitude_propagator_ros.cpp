@@ -53,7 +53,7 @@ ros::Time toRosTime(Stamp stamp) {
 /// An IMU message kept with an input until the engine applies it, and its sensor mount.
 struct ImuPayload {
   sensor_msgs::Imu::ConstPtr msg;
-  Eigen::Quaterniond q_BI;
+  Eigen::Quaterniond q_BS;
 };
 
 }  // namespace
@@ -175,8 +175,8 @@ void AttitudePropagatorRos::onImu(const ros::MessageEvent<const sensor_msgs::Imu
                         engine_->counters().rejected_no_rate);
       return;
     }
-    const Eigen::Matrix3d R_I = covarianceFromMsg(msg->angular_velocity_covariance);
-    const RateCovarianceCheck check = checkRateCovariance(R_I);
+    const Eigen::Matrix3d R_S = covarianceFromMsg(msg->angular_velocity_covariance);
+    const RateCovarianceCheck check = checkRateCovariance(R_S);
     if (check != RateCovarianceCheck::Ok && check != RateCovarianceCheck::NonFinite) {
       // (Non-finite values are the engine's to reject and count as such.)
       engine_->reject(Rejection::BadCovariance);
@@ -189,25 +189,25 @@ void AttitudePropagatorRos::onImu(const ros::MessageEvent<const sensor_msgs::Imu
     }
     const auto stamp = stampOf(msg->header.stamp, event.getReceiptTime(), "imu/data_raw");
     if (!stamp) return;
-    const Eigen::Quaterniond* q_BI = mountRotation(msg->header.frame_id);
-    if (!q_BI) return;
+    const Eigen::Quaterniond* q_BS = mountRotation(msg->header.frame_id);
+    if (!q_BS) return;
     const Eigen::Matrix3d R_B =
-        R_I.isZero(0.0) || !R_I.allFinite() ? R_I : rotateCovariance(R_I, q_BI->toRotationMatrix());
-    submitRate(Source::Imu, *stamp, *q_BI * toEigen(msg->angular_velocity), R_B,
-               imu_pub_.getNumSubscribers() > 0 ? msg : sensor_msgs::Imu::ConstPtr(), *q_BI);
+        R_S.isZero(0.0) || !R_S.allFinite() ? R_S : rotateCovariance(R_S, q_BS->toRotationMatrix());
+    submitRate(Source::Imu, *stamp, *q_BS * toEigen(msg->angular_velocity), R_B,
+               imu_pub_.getNumSubscribers() > 0 ? msg : sensor_msgs::Imu::ConstPtr(), *q_BS);
   });
 }
 
 void AttitudePropagatorRos::submitRate(Source source, Stamp stamp, const Eigen::Vector3d& w_B,
                                        const Eigen::Matrix3d& R_B,
                                        const sensor_msgs::Imu::ConstPtr& imu,
-                                       const Eigen::Quaterniond& q_BI) {
+                                       const Eigen::Quaterniond& q_BS) {
   Input input;
   input.source = source;
   input.stamp = stamp;
   input.value = w_B;
   input.rate_covariance_B = R_B;
-  if (imu) input.payload = std::make_shared<ImuPayload>(ImuPayload{imu, q_BI});
+  if (imu) input.payload = std::make_shared<ImuPayload>(ImuPayload{imu, q_BS});
   last_input_ = ros::WallTime::now();
   engine_->submit(input);
 }
@@ -292,7 +292,7 @@ void AttitudePropagatorRos::onGyroBias(const geometry_msgs::Vector3Stamped::Cons
   guarded("gyro_bias", [&] {
     const std::string& frame = msg->header.frame_id;
     const bool in_body = frame.empty() || frame == config_.parameters.body_frame;
-    const bool in_mount = mount_known_ && frame == mount_frame_;
+    const bool in_mount = mount_known_ && frame == sensor_frame_;
     if (!in_body && !in_mount) {
       engine_->rejectBias();
       ROS_WARN_THROTTLE(kWarnPeriod,
@@ -303,10 +303,10 @@ void AttitudePropagatorRos::onGyroBias(const geometry_msgs::Vector3Stamped::Cons
       return;
     }
     const Eigen::Vector3d b = toEigen(msg->vector);
-    const Eigen::Vector3d b_B = in_mount ? Eigen::Vector3d(q_B_mount_ * b) : b;
+    const Eigen::Vector3d gyro_bias_B = in_mount ? Eigen::Vector3d(q_BS_ * b) : b;
     // Unstamped: from now on (ROS time; zero before the first /clock: from the start).
     const Stamp stamp = toStamp(msg->header.stamp.isZero() ? ros::Time::now() : msg->header.stamp);
-    if (!engine_->submitBias(stamp, b_B)) {
+    if (!engine_->submitBias(stamp, gyro_bias_B)) {
       ROS_WARN_THROTTLE(kWarnPeriod,
                         "gyro_bias: non-finite or larger than %g rad/s: rejected (%lu so far)",
                         kMaxBodyRate, engine_->counters().rejected_bias);
@@ -330,9 +330,9 @@ bool AttitudePropagatorRos::resolveTorqueFrame(const std::string& frame_id,
   }
   if (!tau.allFinite()) return true;  // the engine rejects and counts it; no tf lookup for it
   // A third frame: rotate into the body now; the core takes it as a body torque.
-  const auto q_B_frame = torqueFrameRotation(frame_id);
-  if (!q_B_frame) return false;
-  input.value = *q_B_frame * tau;
+  const auto q_BF = torqueFrameRotation(frame_id);
+  if (!q_BF) return false;
+  input.value = *q_BF * tau;
   input.frame = TorqueFrame::Body;
   return true;
 }
@@ -340,7 +340,7 @@ bool AttitudePropagatorRos::resolveTorqueFrame(const std::string& frame_id,
 const Eigen::Quaterniond* AttitudePropagatorRos::mountRotation(const std::string& frame_id) {
   static const Eigen::Quaterniond kIdentity = Eigen::Quaterniond::Identity();
   if (frame_id.empty() || frame_id == config_.parameters.body_frame) return &kIdentity;
-  if (mount_known_ && frame_id == mount_frame_) return &q_B_mount_;
+  if (mount_known_ && frame_id == sensor_frame_) return &q_BS_;
   ensureTfListener();
   const std::string& body = config_.parameters.body_frame;
   std::string error;
@@ -353,18 +353,18 @@ const Eigen::Quaterniond* AttitudePropagatorRos::mountRotation(const std::string
                       engine_->counters().dropped_no_tf, error.c_str());
     return nullptr;
   }
-  q_B_mount_ = rotationOf(tf_buffer_->lookupTransform(body, frame_id, ros::Time(0))).normalized();
-  mount_frame_ = frame_id;
+  q_BS_ = rotationOf(tf_buffer_->lookupTransform(body, frame_id, ros::Time(0))).normalized();
+  sensor_frame_ = frame_id;
   mount_known_ = true;
   ROS_INFO("rates in frame '%s' are rotated into '%s' by q = [%g, %g, %g, %g] (x y z w)",
-           frame_id.c_str(), body.c_str(), q_B_mount_.x(), q_B_mount_.y(), q_B_mount_.z(),
-           q_B_mount_.w());
+           frame_id.c_str(), body.c_str(), q_BS_.x(), q_BS_.y(), q_BS_.z(),
+           q_BS_.w());
   if (!config_.torque_input) {
     // Cached for good: stop listening, or the listener would keep digesting our own /tf.
     tf_listener_.reset();
     tf_buffer_.reset();
   }
-  return &q_B_mount_;
+  return &q_BS_;
 }
 
 std::optional<Eigen::Quaterniond> AttitudePropagatorRos::torqueFrameRotation(
@@ -454,7 +454,7 @@ void AttitudePropagatorRos::publishState(const EngineState& state) {
 void AttitudePropagatorRos::inputApplied(const Input& input, const EngineState& state) {
   if (!input.payload) return;
   const auto& imu = *std::static_pointer_cast<const ImuPayload>(input.payload);
-  publishImu(*imu.msg, state, imu.q_BI);
+  publishImu(*imu.msg, state, imu.q_BS);
 }
 
 void AttitudePropagatorRos::note(const EngineNote& note) {
@@ -560,14 +560,14 @@ void AttitudePropagatorRos::publishTf(const ros::Time& stamp, const Eigen::Quate
 }
 
 void AttitudePropagatorRos::publishImu(const sensor_msgs::Imu& input, const EngineState& state,
-                                       const Eigen::Quaterniond& q_BI) {
+                                       const Eigen::Quaterniond& q_BS) {
   if (imu_pub_.getNumSubscribers() == 0) return;
   auto msg = boost::make_shared<sensor_msgs::Imu>(input);
   msg->header.stamp = toRosTime(state.stamp);
   // REP-145: the orientation of the IMU's own frame; its error covariance in that frame.
-  toMsg(state.q_WB * q_BI, msg->orientation);
-  const Eigen::Matrix3d C_IB = q_BI.conjugate().toRotationMatrix();
-  covarianceToMsg(rotateCovariance(state.P_B, C_IB), msg->orientation_covariance);
+  toMsg(state.q_WB * q_BS, msg->orientation);
+  const Eigen::Matrix3d C_SB = q_BS.conjugate().toRotationMatrix();
+  covarianceToMsg(rotateCovariance(state.P_B, C_SB), msg->orientation_covariance);
   imu_pub_.publish(msg);
 }
 

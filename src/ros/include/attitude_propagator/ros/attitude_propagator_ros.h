@@ -110,7 +110,7 @@ class AttitudePropagatorRos : public EngineSink {
                                const char* input);
   void submitRate(Source source, Stamp stamp, const Eigen::Vector3d& w_B,
                   const Eigen::Matrix3d& R_B, const sensor_msgs::Imu::ConstPtr& imu,
-                  const Eigen::Quaterniond& q_BI);
+                  const Eigen::Quaterniond& q_BS);
 
   // Time.
   void onDynamicTimer(const ros::TimerEvent& event);
@@ -126,7 +126,7 @@ class AttitudePropagatorRos : public EngineSink {
   // Outputs.
   void publishTf(const ros::Time& stamp, const Eigen::Quaterniond& q_WB);
   void publishImu(const sensor_msgs::Imu& input, const EngineState& state,
-                  const Eigen::Quaterniond& q_BI);
+                  const Eigen::Quaterniond& q_BS);
 
   // Services and diagnostics.
   bool onReset(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
@@ -144,8 +144,8 @@ class AttitudePropagatorRos : public EngineSink {
   bool sim_time_ = false;
 
   // Sensor mount (frame of the rate messages -> body), cached.
-  std::string mount_frame_;
-  Eigen::Quaterniond q_B_mount_ = Eigen::Quaterniond::Identity();
+  std::string sensor_frame_;
+  Eigen::Quaterniond q_BS_ = Eigen::Quaterniond::Identity();
   bool mount_known_ = false;
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
