@@ -26,7 +26,8 @@ while [ $# -gt 0 ]; do
   shift
 done
 targets=(${FUZZ_TARGETS:-kinematic dynamic parameters})
-timeout_s="${FUZZ_TIMEOUT:-10}"
+# Per input: the sanitizers slow the core 10-20x, and the machine may be shared.
+timeout_s="${FUZZ_TIMEOUT:-30}"
 build="${FUZZ_BUILD_DIR:-$WORKSPACE/fuzz}"
 fuzz_dir="$REPO_DIR/test/fuzz"
 findings="$fuzz_dir/findings"

@@ -124,9 +124,10 @@ struct EngineConfig {
   /// Dynamic model: grid stamps handled per call at most; the rest wait for the next call.
   std::size_t grid_budget = 1000;
   /// Dynamic model: integrator work (steps; dopri5 attempts) per call at most, summed over
-  /// the grid stamps of the call: about 0.1-0.3 s of CPU, so a starved node catching up still
-  /// answers services and SIGINT. The rest waits for the next call.
-  std::uint64_t work_budget = std::uint64_t{1} << 20;
+  /// the grid stamps of the call: two propagator calls' worth (kDefaultStepBudget), well under
+  /// a second of CPU, so a starved node catching up still answers services and SIGINT. The
+  /// rest waits for the next call.
+  std::uint64_t work_budget = std::uint64_t{1} << 18;
 
   /// The engine's part of a validated node configuration.
   static EngineConfig from(const NodeConfig& node);

@@ -74,11 +74,12 @@ constexpr double kMaxStateRate = 1e3 * kMaxBodyRate;
 constexpr double kMaxTorque = kMaxInertia * kMaxStateRate / kMinMaxStep;
 
 /// Default DynamicConfig::step_budget: the integrator work one call of a DynamicPropagator may
-/// spend (one unit per fixed step or exact evaluation, per trial sub-step of dopri5). 2^20
-/// units are about 0.1 s of rk4 or dopri5 and 1 s of the worst implicit midpoint step (100
-/// iterations); a call that needs more returns FailedStep. It covers kMaxGridStepsPerCall
-/// fixed steps ten times over.
-constexpr std::uint64_t kDefaultStepBudget = std::uint64_t{1} << 20;
+/// spend (one unit per fixed step or exact evaluation, per trial sub-step of dopri5). 2^17
+/// units are about 0.03 s of rk4 or dopri5 and 0.15 s of the worst implicit midpoint step
+/// (100 iterations), so a node stays responsive (services, SIGINT) whatever it is fed; a call
+/// that needs more returns FailedStep. It covers kMaxGridStepsPerCall fixed steps (the finest
+/// grid the validator accepts across max_dt) with 30 % to spare.
+constexpr std::uint64_t kDefaultStepBudget = std::uint64_t{1} << 17;
 
 // ---- Covariance ------------------------------------------------------------------------------
 

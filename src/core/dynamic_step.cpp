@@ -420,6 +420,10 @@ StepStatus DynamicStepper::dopri5(PrincipalState& x, const PrincipalTorque& torq
       if (!std::isfinite(v)) return StepStatus::NonFinite;
     }
     if (!(norm > 0.0) || !std::isfinite(norm)) return StepStatus::NonFinite;
+    // A rate past kMaxStateRate cannot be committed at the end: stop now, not at the budget.
+    if (y[4] * y[4] + y[5] * y[5] + y[6] * y[6] > kMaxStateRate * kMaxStateRate) {
+      return StepStatus::NonFinite;
+    }
     ++info.iterations;
     // Land exactly on h, whatever round-off the sub-steps carry.
     const double next = last ? h : t_try;
@@ -428,6 +432,11 @@ StepStatus DynamicStepper::dopri5(PrincipalState& x, const PrincipalTorque& torq
     // A last sub-step shortened to land on h says nothing about the step size to come.
     if (!last || std::abs(try_dt) > std::abs(dt)) dt = try_dt;
     if (!(std::abs(dt) > smallest) && t != h) return StepStatus::NoConvergence;
+    // Hopeless within the budget even if the step grew tenfold from here: give up early, so a
+    // failing interval costs little (the controller grows a step by 5x at most per sub-step).
+    if (t != h && std::abs(h - t) / std::abs(dt) > 10.0 * static_cast<double>(budget - info.attempts)) {
+      return StepStatus::OverBudget;
+    }
     for (int i = 0; i < 4; ++i) y[i] /= norm;
     if (std::abs(norm - 1.0) > std::abs(worst_norm_error)) worst_norm_error = norm - 1.0;
     controlled.reset();

@@ -175,7 +175,8 @@ TEST(Robustness, Dopri5NeverThrows) {
 
 TEST(Robustness, Dopri5StopsAtTheStepBudget) {
   // A fast spin at the tightest accepted tolerance needs ~1e5 sub-steps per second: a call
-  // over 0.5 s with a budget of 1000 trials fails after exactly the budget, state held.
+  // over 0.5 s with a budget of 1000 trials fails within the budget (early, once it is
+  // hopeless at the current sub-step size), state held.
   ap::DynamicConfig config = dynamicConfig(ap::Integrator::Dopri5, {1.0, 2.0, 3.0});
   config.tolerance = ap::kMinTolerance;
   config.step_budget = 1000;
@@ -184,7 +185,8 @@ TEST(Robustness, Dopri5StopsAtTheStepBudget) {
   p.advanceTo(0.0);
   EXPECT_EQ(p.advanceTo(0.5), StampOutcome::FailedStep);
   EXPECT_EQ(p.lastFailure(), ap::StepStatus::OverBudget);
-  EXPECT_EQ(p.lastCallWork(), config.step_budget);
+  EXPECT_LE(p.lastCallWork(), config.step_budget);
+  EXPECT_GT(p.lastCallWork(), 0u);
   expectSameState(p.state(), config.initial);
   expectSaneState(p);
 }
@@ -488,7 +490,7 @@ TEST(RobustnessProperty, DynamicIntegratorsSurviveExtremeInput) {
       config.integrator = integrator;
       config.torque_input = integrator != ap::Integrator::Exact;
       config.max_step = 0.01;
-      config.step_budget = 2000;  // keeps the test short; the default is 2^20
+      config.step_budget = 2000;  // keeps the test short; the default is 2^17
       config.initial.w_B = Eigen::Vector3d(0.1, 1.0, 0.2);
       ap::DynamicPropagator p(config);
       for (int call = 0; call < 400; ++call) {
