@@ -160,8 +160,8 @@ class DynamicStepper {
   /// on failure.
   StepStatus dopri5(PrincipalState& x, const PrincipalTorque& torque, double h,
                     std::uint64_t budget, StepInfo& info) const;
-  StepStatus exact(PrincipalState& x, const PrincipalTorque& torque, double h,
-                   std::uint64_t budget, StepInfo& info) const;
+  StepStatus exact(PrincipalState& x, const PrincipalTorque& torque, double h, std::uint64_t budget,
+                   StepInfo& info) const;
 
  private:
   /// The angular momentum of x: x.M_P if consistent with x.w_P, else I x.w_P.

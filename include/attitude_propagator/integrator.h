@@ -34,13 +34,13 @@ enum class Integrator {
   Exact,
 };
 
-class RateWindow;             // kinematic_step.h
-enum class RateSamples;       // kinematic_step.h
-class DynamicStepper;         // dynamic_step.h
-struct PrincipalState;        // dynamic_step.h
-struct PrincipalTorque;       // dynamic_step.h
-struct StepInfo;              // dynamic_step.h
-enum class StepStatus;        // dynamic_step.h
+class RateWindow;        // kinematic_step.h
+enum class RateSamples;  // kinematic_step.h
+class DynamicStepper;    // dynamic_step.h
+struct PrincipalState;   // dynamic_step.h
+struct PrincipalTorque;  // dynamic_step.h
+struct StepInfo;         // dynamic_step.h
+enum class StepStatus;   // dynamic_step.h
 
 /// A kinematic step: q_WB advanced across the window's interval [i, i + 1], returned before
 /// renormalisation (kinematic_step.h).
@@ -51,8 +51,8 @@ using KinematicStepFunction = Eigen::Quaterniond (*)(const Eigen::Quaterniond& q
 /// A dynamic step: x advanced by h in place, in the principal frame, within `budget` work units
 /// (dynamic_step.h, DynamicStepper).
 using DynamicStepFunction = StepStatus (DynamicStepper::*)(PrincipalState& x,
-                                                           const PrincipalTorque& torque,
-                                                           double h, std::uint64_t budget,
+                                                           const PrincipalTorque& torque, double h,
+                                                           std::uint64_t budget,
                                                            StepInfo& info) const;
 
 /// What a method keeps exactly (to round-off) besides converging at its order; or-ed flags.

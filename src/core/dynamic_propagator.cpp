@@ -32,9 +32,9 @@ Integrator resolveIntegrator(const DynamicConfig& config) {
   }
   const IntegratorInfo& method = integratorInfo(config.integrator);
   if (method.dynamic_step == nullptr) {
-    throw std::invalid_argument("integrator: '" + integratorName(config.integrator) +
-                                "' is not a dynamic integrator; accepted for the dynamic model: " +
-                                dynamicNames(false));
+    throw std::invalid_argument(
+        "integrator: '" + integratorName(config.integrator) +
+        "' is not a dynamic integrator; accepted for the dynamic model: " + dynamicNames(false));
   }
   if (config.torque_input && !method.takes_torque) {
     throw std::invalid_argument("integrator: '" + integratorName(config.integrator) +
@@ -71,7 +71,9 @@ DynamicState checkedState(const DynamicState& x, const std::string& what) {
 // namely the anchor, the grid points anchor + n max_step, the stamps of torque and rate
 // samples, and the instants a torque times out. The state at any stamp t is the last knot
 // before t advanced by one partial step to t, never committed, so it does not depend on which
-// stamps the caller visited on its way to t (DESIGN §4).
+// stamps the caller visited on its way to t (DESIGN §4). A method exact at any step length
+// (`exact`) has no grid points: its step from the knot evaluates the stepper's cached closed
+// form through the knot.
 //
 // Torque over a step: a torque sample at stamp s is in force on [s, s + torque_timeout) (or
 // from s on with no timeout). The sample's stamp and its expiry are knots, so every step

@@ -448,8 +448,8 @@ StepStatus DynamicStepper::exact(PrincipalState& x, const PrincipalTorque& torqu
     start_low = c.last_time_low;
   } else if (!c.motion || !same(x, c.origin)) {
     c.motion.reset();  // a throwing construction leaves no stale motion behind
-    c.motion = std::make_shared<const TorqueFreeMotion>(principal_body_,
-                                                        DynamicState{x.q_WP, x.w_P});
+    c.motion =
+        std::make_shared<const TorqueFreeMotion>(principal_body_, DynamicState{x.q_WP, x.w_P});
     c.origin = x;
     c.last = x;
     c.last_time = 0.0;

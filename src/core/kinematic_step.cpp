@@ -145,8 +145,8 @@ void gaussRates(const RateWindow& window, std::size_t i, double h, RateSamples k
   }
 }
 
-Eigen::Quaterniond cf4Update(const Eigen::Quaterniond& q, const RateWindow& window,
-                             std::size_t i, double h, RateSamples kind) {
+Eigen::Quaterniond cf4Update(const Eigen::Quaterniond& q, const RateWindow& window, std::size_t i,
+                             double h, RateSamples kind) {
   Eigen::Vector3d a;
   Eigen::Vector3d b;
   gaussRates(window, i, h, kind, a, b);

@@ -171,8 +171,8 @@ void applyStreamParameters(const Parameters& p, KinematicConfig& kinematic) {
 const char* integratorParameterDoc() {
   static const std::string doc =
       "kinematic: " + quotedNames(integratorsFor(Model::Kinematic)) +
-      "; dynamic: " + quotedNames(integratorsFor(Model::Dynamic)) + "; `auto`: " +
-      quotedNames({autoIntegrator(Model::Kinematic, false)}) + ", " +
+      "; dynamic: " + quotedNames(integratorsFor(Model::Dynamic)) +
+      "; `auto`: " + quotedNames({autoIntegrator(Model::Kinematic, false)}) + ", " +
       quotedNames({autoIntegrator(Model::Dynamic, false)}) + " torque-free, else " +
       quotedNames({autoIntegrator(Model::Dynamic, true)});
   return doc.c_str();

@@ -26,9 +26,8 @@ std::vector<ap::Integrator> methodsWhere(ap::Model model, Predicate keep) {
 
 /// The methods that drive `model` and keep every property in `flags` (keeps::*).
 inline std::vector<ap::Integrator> methodsKeeping(ap::Model model, unsigned flags) {
-  return methodsWhere(model, [flags](const ap::IntegratorInfo& row) {
-    return (row.keeps & flags) == flags;
-  });
+  return methodsWhere(
+      model, [flags](const ap::IntegratorInfo& row) { return (row.keeps & flags) == flags; });
 }
 
 /// How far below its declared order p a method's measured order log2(e(h) / e(h/2)) may fall:

@@ -120,11 +120,11 @@ TEST_P(LieGroupMethods, KeepUnitNormToRoundOffEveryStep) {
 }
 
 // The Lie-group steps: unit norm and a constant rate exact, as their rows declare.
-INSTANTIATE_TEST_SUITE_P(
-    Kinematic, LieGroupMethods,
-    ::testing::ValuesIn(integrator_cases::methodsKeeping(
-        ap::Model::Kinematic, ap::keeps::kUnitNorm | ap::keeps::kConstantRate)),
-    integrator_cases::MethodName());
+INSTANTIATE_TEST_SUITE_P(Kinematic, LieGroupMethods,
+                         ::testing::ValuesIn(integrator_cases::methodsKeeping(
+                             ap::Model::Kinematic,
+                             ap::keeps::kUnitNorm | ap::keeps::kConstantRate)),
+                         integrator_cases::MethodName());
 
 // `exp` holds the rate of the sample that opens the interval, so a piecewise-constant rate
 // command stream is integrated exactly.
