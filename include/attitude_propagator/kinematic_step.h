@@ -135,7 +135,7 @@ Eigen::Quaterniond kinematicExp2(const Eigen::Quaterniond& q_WB, const RateWindo
                                  std::size_t i, RateSamples kind);
 
 /// cf4: q (x) Exp(h(a A + b B)) (x) Exp(h(b A + a B)), A, B the window's interpolant at the
-/// Gauss points (REFERENCE §2). With four samples that is the cubic; with fewer, the
+/// Gauss points. With four samples that is the cubic; with fewer, the
 /// lower-degree interpolant (start-up). A window whose interpolant would amplify noise by more
 /// than kMaxNoiseGain loses its oldest samples (lower degree). Averaged: A, B from
 /// averagedRate() (the delta-angle polynomial), with the same noise guard.

@@ -25,7 +25,7 @@ std::string dynamicNames(bool torque) {
 }
 
 Integrator resolveIntegrator(const DynamicConfig& config) {
-  // "No more than the scene needs" (DESIGN §4): the table's choice for auto is the exact
+  // "No more than the scene needs": the table's choice for auto is the exact
   // torque-free motion when no torque can arrive, otherwise rk4.
   if (config.integrator == Integrator::Auto) {
     return autoIntegrator(Model::Dynamic, config.torque_input);
@@ -71,7 +71,7 @@ DynamicState checkedState(const DynamicState& x, const std::string& what) {
 // namely the anchor, the grid points anchor + n max_step, the stamps of torque and rate
 // samples, and the instants a torque times out. The state at any stamp t is the last knot
 // before t advanced by one partial step to t, never committed, so it does not depend on which
-// stamps the caller visited on its way to t (DESIGN §4). A method exact at any step length
+// stamps the caller visited on its way to t. A method exact at any step length
 // (`exact`) has no grid points: its step from the knot evaluates the stepper's cached closed
 // form through the knot.
 //

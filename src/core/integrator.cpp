@@ -20,7 +20,7 @@ using keeps::kUnitNorm;
 // and one row here. Columns: id, name, orders (kinematic from instantaneous samples, from
 // interval averages, dynamic), samples read, what it keeps, where auto picks it, takes torque,
 // restarts from the anchor, step functions.
-// - rk4 on sampled rates sees only the linear interpolant at the midpoint (REFERENCE §2): second
+// - rk4 on sampled rates sees only the linear interpolant at the midpoint: second
 //   order from point samples, third from interval means (the linear rate of two means).
 // - euler and exp on interval means: the mean carries the rotation angle exactly, second order.
 // - exp2 on interval means adds the two-sample coning correction: third order.

@@ -231,7 +231,7 @@ StampOutcome KinematicPropagator::fillAndIntegrate(const RateSample& sample) {
 
 // The start-up hook of a method whose row asks for it (cf4): the first intervals after an
 // anchor had fewer samples than its interpolant needs, so it ran at lower order there; the
-// constant error that leaves would dominate the higher-order tail (cf4, REFERENCE §2: global
+// constant error that leaves would dominate the higher-order tail (cf4: global
 // order about 3.2). Once the window holds the samples it needs, integrate again from the anchor
 // across all of them with the full interpolant.
 Eigen::Quaterniond KinematicPropagator::restartFromAnchor(const RateWindow& window) const {
