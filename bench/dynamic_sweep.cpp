@@ -167,15 +167,14 @@ Result baseResult(const DynamicScene& scene, Integrator method, double dt, long 
   return r;
 }
 
-/// A method driven as the propagator drives it: a stepper on the principal state, or for
-/// `exact` one TorqueFreeMotion evaluated at each grid time.
+/// A method driven as the propagator drives it: a stepper on the principal state (`exact`'s
+/// stepper follows its cached closed form from step to step).
 class Driver {
  public:
   Driver(const DynamicScene& scene, Integrator method, double tolerance = 1e-9)
-      : stepper_(method == Integrator::Exact ? Integrator::Rk4 : method, bodyOf(scene), tolerance),
+      : stepper_(method, bodyOf(scene), tolerance),
         x0_(stepper_.toPrincipal(scene.initial)),
         torque_(stepper_.toPrincipal(ap::TorqueInput{scene.torque_B, ap::TorqueFrame::Body})) {
-    if (method == Integrator::Exact) motion_.emplace(bodyOf(scene), scene.initial);
     reset();
   }
 
@@ -184,28 +183,29 @@ class Driver {
     stepper_.setStepSizeHint(0.0);
   }
 
-  /// Advances from t - dt to t; returns |q| - 1 before renormalisation.
-  double step(double t, double dt) {
-    if (motion_) {
-      last_exact_ = motion_->evaluate(t);
-      return 0.0;
-    }
+  /// Advances by dt; returns |q| - 1 before renormalisation.
+  double step(double dt) {
     ap::StepInfo info;
     stepper_.stepPrincipal(x_, torque_, dt, &info);
     return info.norm_error;
   }
 
-  DynamicState state() const { return motion_ ? last_exact_ : stepper_.fromPrincipal(x_); }
-  double probe() const { return motion_ ? last_exact_.q_WB.w() : x_.q_WP.w(); }
+  DynamicState state() const { return stepper_.fromPrincipal(x_); }
+  double probe() const { return x_.q_WP.w(); }
 
  private:
   ap::DynamicStepper stepper_;
   ap::PrincipalState x0_;
   ap::PrincipalTorque torque_;
   ap::PrincipalState x_;
-  std::optional<ap::TorqueFreeMotion> motion_;
-  DynamicState last_exact_;
 };
+
+/// Whether the method can run the scene: one that takes no torque only a torque-free one, and
+/// the exact solution only where the core provides the closed form.
+bool runs(Integrator method, const DynamicScene& scene, const Truth& truth) {
+  if (isExactSolution(method)) return truth.exact.has_value();
+  return ap::integratorInfo(method).takes_torque || scene.torqueFree();
+}
 
 /// The untimed pass: steps of dt to the end, scored at the check times.
 void measureErrors(const DynamicScene& scene, const Truth& truth, Driver& driver, double dt,
@@ -214,7 +214,7 @@ void measureErrors(const DynamicScene& scene, const Truth& truth, Driver& driver
   Score score(scene);
   driver.reset();
   for (long k = 1; k <= steps; ++k) {
-    score.addNorm(driver.step(k * dt, dt));
+    score.addNorm(driver.step(dt));
     if (k % check_every != 0) continue;
     const std::size_t i = k / check_every - 1;
     score.add(driver.state(), judge_by_reference ? truth.reference[i] : truth.states[i]);
@@ -224,16 +224,15 @@ void measureErrors(const DynamicScene& scene, const Truth& truth, Driver& driver
 
 double timedRun(Driver& driver, double dt, long steps) {
   driver.reset();
-  for (long k = 1; k <= steps; ++k) driver.step(k * dt, dt);
+  for (long k = 1; k <= steps; ++k) driver.step(dt);
   return driver.probe();
 }
 
-std::vector<Integrator> fixedStepMethods(const Truth& truth) {
+std::vector<Integrator> fixedStepMethods(const DynamicScene& scene, const Truth& truth) {
   std::vector<Integrator> methods;
   for (Integrator m : methodsFor(ap::Model::Dynamic)) {
-    if (m == Integrator::Dopri5) continue;
-    if (m == Integrator::Exact && !truth.exact) continue;
-    methods.push_back(m);
+    if (m == Integrator::Dopri5) continue;  // swept over its tolerance instead
+    if (runs(m, scene, truth)) methods.push_back(m);
   }
   return methods;
 }
@@ -241,7 +240,7 @@ std::vector<Integrator> fixedStepMethods(const Truth& truth) {
 void sweepOneStep(const DynamicScene& scene, const Truth& truth, double dt,
                   const TimingOptions& timing, std::FILE* out) {
   const long steps = std::lround(scene.duration / dt);
-  const auto methods = fixedStepMethods(truth);
+  const auto methods = fixedStepMethods(scene, truth);
   std::vector<Driver> drivers;
   for (Integrator m : methods) drivers.emplace_back(scene, m);
   std::vector<Run> runs;
@@ -250,7 +249,7 @@ void sweepOneStep(const DynamicScene& scene, const Truth& truth, double dt,
   for (std::size_t m = 0; m < methods.size(); ++m) {
     Result r = baseResult(scene, methods[m], dt, steps);
     // `exact` is judged by the independent reference (against itself it would score zero).
-    measureErrors(scene, truth, drivers[m], dt, steps, methods[m] == Integrator::Exact, r);
+    measureErrors(scene, truth, drivers[m], dt, steps, isExactSolution(methods[m]), r);
     r.ns_per_step = ns[m];
     writeRow(out, r);
   }
@@ -304,14 +303,14 @@ void runDynamicStability(DynamicScene scene, double duration, std::FILE* out) {
     const DynamicState x_end_reference =
         referenceStates(scene.moments, scene.initial, scene.torque_B, {steps * dt}).front();
     for (Integrator m : methodsFor(ap::Model::Dynamic)) {
-      if (m == Integrator::Exact && !truth.exact) continue;
+      if (!runs(m, scene, truth)) continue;
       Driver driver(scene, m);
       Score score(scene);
       for (long k = 1; k <= steps; ++k) {
-        score.addNorm(driver.step(k * dt, dt));
+        score.addNorm(driver.step(dt));
         if (k < steps) score.addInvariants(driver.state());
       }
-      score.add(driver.state(), m == Integrator::Exact ? x_end_reference : x_end);
+      score.add(driver.state(), isExactSolution(m) ? x_end_reference : x_end);
       Result r = baseResult(scene, m, dt, steps);
       if (m == Integrator::Dopri5) r.tolerance = 1e-9;
       score.fill(r);
@@ -326,11 +325,11 @@ void runInvariants(const DynamicScene& scene, double h, double duration, double 
   const long out_every = std::lround(every / h);
   const auto exact = exactMotion(scene);
   for (Integrator m : methodsFor(ap::Model::Dynamic)) {
-    if (m == Integrator::Exact) continue;  // constant to round-off by construction
+    if (isExactSolution(m)) continue;  // constant to round-off by construction
     Driver driver(scene, m, 1e-8);
     const Invariants inv0 = invariantsOf(scene.moments, scene.initial.w_B);
     for (long k = 1; k <= steps; ++k) {
-      driver.step(k * h, h);
+      driver.step(h);
       if (k % out_every != 0) continue;
       const DynamicState x = driver.state();
       const Invariants inv = invariantsOf(scene.moments, x.w_B);

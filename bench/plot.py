@@ -28,19 +28,25 @@ SCENES = KINEMATIC_SCENES + DYNAMIC_SCENES
 TOLERANCES = [1e-6, 1e-9, 1e-12]
 FLOOR = 1e-16  # zero errors are drawn here on log axes
 
-# One colour and marker per method, the same in every chart.
-STYLE = {
-    "euler": ("tab:red", "v"),
-    "rk4": ("tab:blue", "o"),
-    "exp": ("tab:orange", "s"),
-    "exp2": ("tab:olive", "D"),
-    "cf4": ("tab:green", "^"),
-    "implicit_midpoint": ("tab:purple", "s"),
-    "splitting": ("tab:brown", "D"),
-    "splitting4": ("tab:pink", "^"),
-    "dopri5": ("tab:cyan", "P"),
-    "exact": ("black", "*"),
-}
+# One colour and marker per method, the same in every chart: the methods take these in the
+# order they first appear in the sweep (the core's table order), so a new method gets the next
+# free style without an edit here.
+PALETTE = [("tab:red", "v"), ("tab:blue", "o"), ("tab:orange", "s"), ("tab:olive", "D"),
+           ("tab:green", "^"), ("tab:purple", "s"), ("tab:brown", "D"), ("tab:pink", "^"),
+           ("black", "*"), ("tab:cyan", "P"), ("tab:gray", "X"), ("gold", "p"),
+           ("navy", "h"), ("lime", "<"), ("teal", ">")]
+STYLE = {}
+
+
+def assign_styles(*tables):
+    """Gives every method in the rows its style, in order of first appearance."""
+    for rows in tables:
+        for r in rows:
+            method = r.get("method")
+            if method and method not in STYLE:
+                STYLE[method] = PALETTE[len(STYLE) % len(PALETTE)]
+
+
 FAILURE_MARKERS = {
     "wrong_side": ("X", "wrong side of the separatrix"),
     "norm_lost": ("P", "norm lost (| |q| - 1 | > 0.1 in a step)"),
@@ -60,7 +66,9 @@ def num(row, key):
 
 
 def style(method):
-    return STYLE.get(method, ("gray", "."))
+    if method not in STYLE:
+        STYLE[method] = PALETTE[len(STYLE) % len(PALETTE)]
+    return STYLE[method]
 
 
 def floored(values):
@@ -83,27 +91,43 @@ def method_label(method, rows):
     return method + " (auto)" if any(r["auto"] == "1" for r in rows) else method
 
 
-# Methods whose line may sit on another's (exp on euler for coning) are dashed.
-DASHED = {"exp", "splitting4"}
+# A line that sits on one drawn before it in the same panel (every error within this factor
+# of the other method's at the same step, e.g. exp on euler for coning) is dashed.
+OVERLAP = 1.25
 
 
-def plot_line(ax, method, rows, xs, ys):
+def overlaps(rows, drawn):
+    """Whether the errors of `rows` sit on those of an earlier line (same steps) in `drawn`."""
+    mine = {num(r, "dt"): num(r, "err_rad") for r in rows}
+    for other in drawn:
+        theirs = {num(r, "dt"): num(r, "err_rad") for r in other}
+        common = [dt for dt in mine if dt in theirs]
+        if common and all(max(mine[dt], FLOOR) <= OVERLAP * max(theirs[dt], FLOOR) and
+                          max(theirs[dt], FLOOR) <= OVERLAP * max(mine[dt], FLOOR)
+                          for dt in common):
+            return True
+    return False
+
+
+def plot_line(ax, method, rows, xs, ys, dashed=False):
     colour, marker = style(method)
     is_auto = any(r["auto"] == "1" for r in rows)
     ax.plot(xs, floored(ys), color=colour, marker=marker, markersize=9 if is_auto else 5,
             linewidth=3.0 if is_auto else 1.3, label=method_label(method, rows),
-            linestyle="--" if method in DASHED else "-", zorder=3 if is_auto else 2)
+            linestyle="--" if dashed else "-", zorder=3 if is_auto else 2)
 
 
 def work_precision_chart(sweep, path):
     fig, axes = plt.subplots(2, 4, figsize=(20, 9.5))
     for ax, scene in zip(axes.flat, SCENES):
         rows = [r for r in sweep if r["scene"] == scene]
+        drawn = []
         for method, group in by_method(rows).items():
-            key = "tolerance" if method == "dopri5" else "dt"
+            key = "tolerance" if is_tolerance_sweep(group) else "dt"
             group.sort(key=lambda r: -num(r, key))
             plot_line(ax, method, group, [work(r) for r in group],
-                      [num(r, "err_rad") for r in group])
+                      [num(r, "err_rad") for r in group], overlaps(group, drawn))
+            drawn.append(group)
         kind = "kinematic, from rate samples" if scene in KINEMATIC_SCENES else "dynamic"
         ax.set_title(f"{scene} ({kind})")
         ax.set_xscale("log")
@@ -136,18 +160,39 @@ WORK_PRECISION_NOTE = (
     "Errors at 1e-16 are exact to round-off.")
 
 
+def is_tolerance_sweep(rows):
+    """A method swept over its tolerance (dopri5) rather than over the step."""
+    return any(r.get("tolerance") not in ("", None) for r in rows)
+
+
+def measured_order(rows):
+    """Median slope of log(error) against log(step) between neighbouring steps whose errors
+    stay well above round-off (1e-10), or None."""
+    points = sorted((num(r, "dt"), num(r, "err_rad")) for r in rows
+                    if r["status"] == "ok" and num(r, "err_rad") > 1e-10)
+    slopes = [math.log(e2 / e1) / math.log(h2 / h1)
+              for (h1, e1), (h2, e2) in zip(points, points[1:])]
+    return statistics.median(slopes) if slopes else None
+
+
 def order_chart(sweep, path):
-    panels = [("coning", "kinematic methods on the coning motion", [1, 2, 4]),
-              ("free_body", "dynamic methods on the free body (HLW)", [2, 4]),
-              ("torqued", "dynamic methods with torque", [2, 4])]
+    panels = [("coning", "kinematic methods on the coning motion"),
+              ("free_body", "dynamic methods on the free body (HLW)"),
+              ("torqued", "dynamic methods with torque")]
     fig, axes = plt.subplots(1, 3, figsize=(18, 5.5))
-    for ax, (scene, title, slopes) in zip(axes, panels):
-        rows = [r for r in sweep if r["scene"] == scene and r["method"] not in ("dopri5",)]
-        for method, group in by_method(rows).items():
+    for ax, (scene, title) in zip(axes, panels):
+        rows = [r for r in sweep if r["scene"] == scene]
+        groups = {m: g for m, g in by_method(rows).items() if not is_tolerance_sweep(g)}
+        rows = [r for g in groups.values() for r in g]
+        drawn = []
+        for method, group in groups.items():
             group.sort(key=lambda r: num(r, "dt"))
             plot_line(ax, method, group, [num(r, "dt") for r in group],
-                      [num(r, "err_rad") for r in group])
-        add_slopes(ax, rows, slopes)
+                      [num(r, "err_rad") for r in group], overlaps(group, drawn))
+            drawn.append(group)
+        # Reference slopes: the orders the methods of the panel show, rounded.
+        orders = {round(p) for p in map(measured_order, groups.values()) if p and p >= 0.5}
+        add_slopes(ax, rows, sorted(orders))
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("step dt [s]")
@@ -181,7 +226,8 @@ def invariants_chart(rows, path):
                            (axes[1], "momentum_rel_drift", "||M| - |M0|| / |M0|")]:
         for method, group in groups.items():
             colour, _ = style(method)
-            name = method + (" (tol 1e-8)" if method == "dopri5" else "")
+            tolerance = group[0].get("tolerance")
+            name = method + (f" (tol {tolerance})" if tolerance else "")
             ax.plot([num(r, "t") for r in group], floored(running_max([num(r, key)
                                                                         for r in group])),
                     color=colour, label=name, linewidth=1.8)
@@ -254,7 +300,7 @@ def fmt(x, digits=3):
 
 
 def step_label(row):
-    if row["method"] == "dopri5":
+    if row.get("tolerance"):
         return f"tol {fmt(num(row, 'tolerance'))}, output step {fmt(num(row, 'dt'))} s"
     rate = 1.0 / num(row, "dt")
     if row["scene"] in KINEMATIC_SCENES:
@@ -290,6 +336,14 @@ def gbench_medians(path):
         elif "aggregate_name" not in b and b["name"] not in medians:
             medians[b["name"]] = b["cpu_time"]
     return medians
+
+
+def gbench_spreads(path):
+    """Coefficient of variation of each benchmark's repetitions (Google Benchmark's cv)."""
+    with open(path) as f:
+        data = json.load(f)
+    return {b["run_name"]: b["cpu_time"] for b in data.get("benchmarks", [])
+            if b.get("aggregate_name") == "cv"}
 
 
 def cost_table(medians):
@@ -476,51 +530,200 @@ def err_at(sweep, scene, method, dt):
     return fmt(num(r, "err_rad"), 2) if r else "–"
 
 
-def worst_exact(sweep):
-    rows = [r for r in sweep if r["method"] == "exact"]
-    worst_err = max((num(r, "err_rad") for r in rows), default=float("nan"))
+# `auto` holds in a cell (scene, tolerance) when its method's cheapest run within the tolerance
+# costs at most this factor more than the cheapest run of any method.
+AUTO_SLACK = 2.0
+ROUND_OFF = 1e-13  # rad, or 0.1 eps per step when more: an error this small is round-off
+EPS = 2.220446049250313e-16
+KEPT = 1e-12  # a relative drift of an invariant this small over the long run: kept
+
+
+def round_off(row):
+    """The error a run may carry from rounding alone: ROUND_OFF, or 0.1 eps per step."""
+    return max(ROUND_OFF, 0.1 * EPS * num(row, "steps"))
+
+
+def cheapest_within(rows, tol):
+    within = [r for r in rows if r["status"] == "ok" and num(r, "err_rad") <= tol]
+    return min(within, key=work) if within else None
+
+
+def auto_cells(sweep, scenes):
+    """For each scene and tolerance the sweep reaches: (scene, tol, best run, auto's best run)."""
+    cells = []
+    for scene in scenes:
+        rows = [r for r in sweep if r["scene"] == scene]
+        auto = [r for r in rows if r["auto"] == "1"]
+        for tol in TOLERANCES:
+            best = cheapest_within(rows, tol)
+            if best:
+                cells.append((scene, tol, best, cheapest_within(auto, tol)))
+    return cells
+
+
+def round_off_methods(rows):
+    """Methods whose every run of the scene stays within ROUND_OFF (exact at any step)."""
+    return [m for m, g in by_method(rows).items()
+            if all(r["status"] == "ok" and num(r, "err_rad") <= round_off(r) for r in g)]
+
+
+def quoted(methods):
+    return ", ".join(f"`{m}`" for m in methods) or "none"
+
+
+def choice_lines(sweep, method, scenes):
+    """What the measurements say of `auto` picking `method` on `scenes`."""
+    cells = auto_cells(sweep, scenes)
+    cheapest = [c for c in cells if c[3] and c[3] is c[2]]
+    close = [c for c in cells if c[3] and c[3] is not c[2] and
+             work(c[3]) <= AUTO_SLACK * work(c[2])]
+    beaten = [c for c in cells if c not in cheapest and c not in close]
+    verdict = "keep it" if not beaten else "keep it except where another method is cheaper"
+    text = (f"- **`{method}`** ({', '.join(scenes)}): the cheapest method in {len(cheapest)} of "
+            f"the {len(cells)} (scene, tolerance) cells the sweep reaches, within "
+            f"{AUTO_SLACK:g}× of it in {len(close)}; {verdict}.")
+    for scene, tol, best, mine in beaten:
+        against = (f"{fmt(work(mine) / 1e3)} µs/s for `{method}`" if mine
+                   else f"`{method}` does not reach it in the sweep")
+        text += (f" On {scene} to ≤ {tol:g} rad `{best['method']}` ({step_label(best)}) costs "
+                 f"{fmt(work(best) / 1e3)} µs/s ({against}): set `integrator: {best['method']}`"
+                 " there.")
+    return text
+
+
+def accuracy_lines(sweep, method, scenes):
+    """At each step of the scenes, whether `method` is the most accurate, and what it buys over
+    the method cheapest per step."""
+    lines = []
+    wins = total = 0
+    gains = []
+    for scene in scenes:
+        rows = [r for r in sweep if r["scene"] == scene and r["status"] == "ok" and
+                not is_tolerance_sweep([r])]
+        for dt in sorted({num(r, "dt") for r in rows}):
+            at = [r for r in rows if num(r, "dt") == dt]
+            mine = [r for r in at if r["method"] == method]
+            if not mine:
+                continue
+            total += 1
+            best = min(at, key=lambda r: num(r, "err_rad"))
+            # Errors within round-off of each other tie.
+            wins += num(mine[0], "err_rad") <= max(num(best, "err_rad"), round_off(mine[0]))
+            cheap = min(at, key=lambda r: num(r, "ns_per_step"))
+            if cheap is not mine[0] and num(cheap, "err_rad") > round_off(cheap):
+                gains.append((num(cheap, "err_rad") / max(num(mine[0], "err_rad"), FLOOR),
+                              num(mine[0], "ns_per_step") - num(cheap, "ns_per_step"),
+                              cheap["method"]))
+    if total:
+        lines.append(f"  `{method}` is the most accurate method (ties within round-off) at "
+                     f"{wins} of the {total} steps swept on {', '.join(scenes)}.")
+    if gains:
+        low, high = min(g[0] for g in gains), max(g[0] for g in gains)
+        extra = [g[1] for g in gains]
+        lines.append(f"  Against the method cheapest per step where that one is not exact "
+                     f"({quoted(sorted({g[2] for g in gains}))}) it is {math.log10(low):.1f}-{math.log10(high):.1f} orders of magnitude more "
+                     f"accurate for {min(extra):.0f}-{max(extra):.0f} ns more per step.")
+    return lines
+
+
+def exact_lines(sweep, scenes):
+    """Methods exact to round-off at every step, per scene, and the cheapest of them."""
+    lines = []
+    for scene in scenes:
+        rows = [r for r in sweep if r["scene"] == scene]
+        exact = round_off_methods(rows)
+        if not exact:
+            continue
+        runs = [r for r in rows if r["method"] in exact]
+        cheapest = min(runs, key=work)
+        worst = max(num(r, "err_rad") for r in runs)
+        duration = max(num(r, "dt") * num(r, "steps") for r in runs)
+        lines.append(f"  On {scene} {quoted(exact)} {'stays' if len(exact) == 1 else 'stay'} "
+                     f"within round-off at every step (largest {fmt(worst, 2)} rad over "
+                     f"{duration:.0f} s); the cheapest is `{cheapest['method']}` "
+                     f"({step_label(cheapest)}, {fmt(work(cheapest) / 1e3)} µs/s).")
+    return lines
+
+
+def numerical_best_lines(sweep, scenes, exact_method):
+    """The best any other method reaches on scenes where the exact solution runs."""
+    lines = []
+    for scene in scenes:
+        rows = [r for r in sweep if r["scene"] == scene and r["method"] != exact_method and
+                r["status"] == "ok"]
+        if not rows:
+            continue
+        best = min(rows, key=lambda r: num(r, "err_rad"))
+        lines.append(f"  The most accurate other run on {scene}: `{best['method']}` "
+                     f"({step_label(best)}) at {fmt(num(best, 'err_rad'), 2)} rad.")
+    return lines
+
+
+def exact_cost_line(sweep, method):
+    rows = [r for r in sweep if r["method"] == method]
+    if not rows:
+        return []
     costs = sorted(num(r, "ns_per_step") for r in rows)
-    return worst_err, (costs[0] if costs else float("nan")), (costs[-1] if costs else float("nan"))
+    return [f"  One `{method}` step costs {costs[0]:.0f}-{costs[-1]:.0f} ns, at most "
+            f"{costs[-1] * 100 / 1e3:.0f} µs of CPU per simulated second at 100 steps per "
+            "second."]
 
 
-def verdict(sweep):
-    """The auto choice of DESIGN §4 against the measurements, with the figures that decide."""
-    cf4 = find(sweep, "coning", "cf4", dt=0.005)
-    euler = find(sweep, "coning", "euler", dt=0.005)
-    exp2 = find(sweep, "coning", "exp2", dt=0.005)
-    err, cheap, dear = worst_exact(sweep)
-    h = 0.0125
-    lines = [
-        "#### Verdict on `auto` (DESIGN §4): keep it",
-        "",
-        "- **Kinematic → `cf4`.** On the coning and fast-spin scenes `cf4` is the cheapest way "
-        "to every tolerance of the table that the sweep reaches, and the most accurate method "
-        "at every sample rate. At 200 Hz on the "
-        f"coning motion it costs {num(cf4, 'ns_per_step') / num(euler, 'ns_per_step'):.1f}× "
-        f"`euler` per sample and is {num(euler, 'err_rad') / num(cf4, 'err_rad'):.0f}× more "
-        f"accurate ({fmt(num(cf4, 'err_rad'), 2)} against {fmt(num(euler, 'err_rad'), 2)} "
-        f"rad; `exp2`: {fmt(num(exp2, 'err_rad'), 2)}). At a fixed gyro rate the extra "
-        "tens of nanoseconds per sample buy 2-4 orders of magnitude. Only for a rate that is "
-        "truly constant between samples (piecewise-constant commands) is `exp` the right "
-        "choice: exact and cheaper.",
-        "- **Torque-free → `exact`.** Its error is round-off at any step (largest "
-        f"{fmt(err, 2)} rad against the long-double Bulirsch-Stoer reference over 100 s) for "
-        f"{cheap:.0f}-{dear:.0f} ns per evaluation, i.e. at most "
-        f"{dear * 100 / 1e3:.0f} µs of CPU per simulated second at the default 100 Hz "
-        "publish rate. The numerical methods' errors grow with time: `rk4` at "
-        f"h = {h} s reaches {err_at(sweep, 'free_body', 'rk4', h)} rad on the free body "
-        f"(100 s) and {err_at(sweep, 'dzhanibekov', 'rk4', h)} rad on the Dzhanibekov flip "
-        "(30 s), and no numerical method of the sweep reaches 1e-12 rad on the flip.",
-        "- **With torque → `rk4`.** It is the cheapest method to 1e-6 rad on the torqued "
-        f"scene (`rk4` at h = {h} s: {err_at(sweep, 'torqued', 'rk4', h)} rad over 20 s). "
-        "For tighter tolerances `dopri5` at the node's 0.01 s grid is cheaper (see the table: "
-        "at that grid tolerances down to about 1e-11 take one Dormand-Prince step per "
-        "grid step, a fifth-order method); set `integrator: dopri5` there. The symplectic methods (`implicit_midpoint`, "
-        "`splitting`, `splitting4`) keep |M| (and for the midpoint rule the energy) to "
-        "round-off but are less accurate per unit of CPU on every scene here; they pay off "
-        "only when the invariants themselves matter over very long runs (invariants chart).",
-        "",
-    ]
+def invariant_lines(sweep, invariants):
+    """Methods that keep |M| or the energy to round-off over the long run, and whether they are
+    beaten per unit of CPU: on a scene, a run is beaten when another method's run is both
+    cheaper and more accurate."""
+    if not invariants:
+        return []
+    keeps = {}
+    for method, group in by_method(invariants).items():
+        kept = [label for key, label in [("momentum_rel_drift", "|M|"),
+                                         ("energy_rel_drift", "the energy")]
+                if max(num(r, key) for r in group) <= KEPT]
+        if kept:
+            keeps[method] = kept
+    if not keeps:
+        return []
+    t_end = max(num(r, "t") for r in invariants)
+    parts = [f"`{m}` keeps {' and '.join(k)}" for m, k in keeps.items()]
+    lines = [f"- **Invariants** (free body, {t_end:.0f} s): " + "; ".join(parts) +
+             f" to {KEPT:g} relative."]
+    for method in keeps:
+        beaten_on, scenes = [], sorted({r["scene"] for r in sweep if r["method"] == method})
+        for scene in scenes:
+            rows = [r for r in sweep if r["scene"] == scene and r["status"] == "ok"]
+            mine = [r for r in rows if r["method"] == method]
+            others = [r for r in rows if r["method"] != method]
+            if mine and all(any(work(o) <= work(r) and num(o, "err_rad") <= num(r, "err_rad")
+                                for o in others) for r in mine):
+                beaten_on.append(scene)
+        lines.append(f"  `{method}`: every run beaten by a cheaper, more accurate one on "
+                     f"{len(beaten_on)} of {len(scenes)} scenes"
+                     f"{' (' + ', '.join(beaten_on) + ')' if beaten_on else ''}.")
+    return lines
+
+
+def verdict(sweep, invariants):
+    """`auto`'s choices against the measurements: every claim computed from the rows."""
+    lines = ["#### `auto` against the measurements", "",
+             f"`auto` holds in a (scene, tolerance) cell of the table above when its method is "
+             f"the cheapest there or within {AUTO_SLACK:g}× of it.", ""]
+    by_choice = defaultdict(list)
+    for scene in SCENES:
+        for m in sorted({r["method"] for r in sweep if r["scene"] == scene and r["auto"] == "1"}):
+            by_choice[m].append(scene)
+    for method, scenes in by_choice.items():
+        lines.append(choice_lines(sweep, method, scenes))
+        if all(s in KINEMATIC_SCENES for s in scenes):
+            lines += accuracy_lines(sweep, method, scenes)
+            lines += exact_lines(sweep, scenes)
+        elif all(method in round_off_methods([r for r in sweep if r["scene"] == s])
+                 for s in scenes):
+            lines += exact_lines(sweep, scenes)
+            lines += exact_cost_line(sweep, method)
+            lines += numerical_best_lines(sweep, scenes, method)
+    lines += invariant_lines(sweep, invariants)
+    lines.append("")
     return "\n".join(lines)
 
 
@@ -534,20 +737,53 @@ def machine_line(data_dir):
             f"{info.get('commit', '?')}, load average {info.get('load before the run', '?')})")
 
 
-def results_markdown(sweep, medians, node, has_node_chart, machine):
+def spread_sentence(spreads):
+    """The spread of the Google Benchmark repetitions (coefficient of variation), if known."""
+    if not spreads:
+        return ""
+    return (f"Within this run the repetitions of one step's timing spread by "
+            f"{100 * min(spreads.values()):.1f}-{100 * max(spreads.values()):.1f} % "
+            "(coefficient of variation). ")
+
+
+def queue_sentence(node):
+    """Latency at the highest offered rate against the time a full input queue takes to drain."""
+    if not node:
+        return ""
+    top = max(node, key=lambda r: (num(r, "rate_hz"), r["mode"]))
+    rate = num(top, "rate_hz")
+    return (f"At the highest offered rate ({rate / 1e3:.0f} kHz, {top['mode']}) the median "
+            f"latency is {fmt(num(top, 'latency_p50_ms'))} ms, against "
+            f"{1e3 * NODE_QUEUE / rate:.3g} ms for a full queue to drain at that rate. ")
+
+
+def p99_spread_sentence(node):
+    ratios = [num(r, "latency_p99_ms_max") / num(r, "latency_p99_ms_min") for r in node
+              if num(r, "latency_p99_ms_min") > 0]
+    if not ratios:
+        return ""
+    return (f"Between runs the p99 at one rate varies by up to {max(ratios):.3g}× "
+            "(the machine is shared): read the ranges.")
+
+
+NODE_QUEUE = 10000  # messages: the node's input queue (attitude_propagator_ros)
+
+
+def results_markdown(sweep, medians, node, has_node_chart, machine, invariants=(),
+                     spreads=None):
     parts = [
         "### Benchmarks: speed against accuracy",
         "",
-        "Regenerate everything below with one command (about 6 minutes on 2 cores after the "
-        "build: the sweep, Google Benchmark, the node benchmark, the charts):",
+        "Regenerate everything below with one command (the build, the sweep, Google Benchmark, "
+        "the node benchmark, the charts):",
         "",
         "```bash",
         "bash bench/run_all.sh      # --no-node skips the node benchmark (bench/node_bench.sh)",
         "```",
         "",
-        f"Measured on {machine}; the machine was shared with compiles and tests, so costs are "
-        "CPU time of the benchmark thread and methods are timed in turn within one run: "
-        "ratios between methods hold, absolute figures move by 10-20 % from run to run. "
+        f"Measured on {machine}; costs are CPU time of the benchmark thread, and methods are "
+        "timed in turn within one run, so that load from other processes falls on all of them. "
+        f"{spread_sentence(spreads)}"
         "Raw data: `docs/data/*.csv`, `docs/data/step_costs.json`.",
         "",
         "#### Which integrator: cheapest method within a tolerance",
@@ -559,7 +795,7 @@ def results_markdown(sweep, medians, node, has_node_chart, machine):
         "",
         cheapest_table(sweep),
         "",
-        verdict(sweep),
+        verdict(sweep, invariants),
         "#### Targets",
         "",
         targets_table(sweep, medians, node),
@@ -588,14 +824,9 @@ def results_markdown(sweep, medians, node, has_node_chart, machine):
         "(`bench/bench_nodelets.xml`) in the same manager as the propagator nodelet and "
         "publishes shared pointers (no serialisation). Defaults of `config/default.yaml` "
         "(kinematic, `cf4`, tf on): per input the wrapper publishes tf, `attitude_state` and "
-        "`imu/data`. When the propagator cannot keep up, its input queue (10000 messages) "
-        "fills: latency then sits near 10000 / rate (100 ms at 100 kHz, 50 ms at 200 kHz) "
-        "and the excess is dropped. Profiles (`perf`) at 100-200 kHz put 85-90 % of the "
-        "propagator's CPU in roscpp, nodelet, libc (mutexes, shared-pointer counts, malloc) "
-        "and the kernel's TCP path, and under 12 % in the wrapper and the core together. On "
-        "this shared 2-core machine (other engineers' builds and tests running, the generator "
-        "on the same two cores) the p99 at a given rate varies up to tenfold between runs: "
-        "read the ranges.",
+        f"`imu/data`. When the propagator cannot keep up, its input queue ({NODE_QUEUE} "
+        "messages) fills and the excess is dropped. " + queue_sentence(node) +
+        p99_spread_sentence(node),
         "",
         node_table(node),
     ]
@@ -614,19 +845,17 @@ def splice_readme(readme, text):
         f.write(head + begin + "\n" + text + end + tail)
 
 
-KINEMATIC_METHODS = ["euler", "exp", "exp2", "rk4", "cf4"]
-
-
 def real_streams_chart(rows, path):
     """Accuracy on real streams: error per method and stream (median over seeds, whisker to
     the worst seed), one panel per scene, with the error the stream's noise alone sets."""
     scenes = sorted({r["scene"] for r in rows}, key=lambda s: (s != "coning", s))
     fig, axes = plt.subplots(len(scenes), 1, figsize=(13, 4.2 * len(scenes)), squeeze=False)
-    width = 0.8 / len(KINEMATIC_METHODS)
+    methods = list(dict.fromkeys(r["method"] for r in rows))
+    width = 0.8 / len(methods)
     for ax, scene in zip(axes[:, 0], scenes):
         mine = [r for r in rows if r["scene"] == scene]
         streams = list(dict.fromkeys(r["stream"] for r in mine))
-        for m, method in enumerate(KINEMATIC_METHODS):
+        for m, method in enumerate(methods):
             xs, ys, tops = [], [], []
             for i, stream in enumerate(streams):
                 row = next((r for r in mine if r["stream"] == stream and r["method"] == method),
@@ -662,10 +891,11 @@ def main(argv):
     data_dir, docs_dir = argv[1], argv[2]
     readme = argv[3] if len(argv) > 3 else None
     sweep = read_csv(os.path.join(data_dir, "sweep.csv"))
+    invariants = read_csv(os.path.join(data_dir, "invariants.csv"))
+    assign_styles(sweep, invariants)
     work_precision_chart(sweep, os.path.join(docs_dir, "work_precision.png"))
     order_chart(sweep, os.path.join(docs_dir, "order.png"))
-    invariants_chart(read_csv(os.path.join(data_dir, "invariants.csv")),
-                     os.path.join(docs_dir, "invariants.png"))
+    invariants_chart(invariants, os.path.join(docs_dir, "invariants.png"))
     stability_chart(read_csv(os.path.join(data_dir, "stability.csv")),
                     os.path.join(docs_dir, "stability.png"))
     streams_path = os.path.join(data_dir, "real_streams.csv")
@@ -673,11 +903,13 @@ def main(argv):
         real_streams_chart(read_csv(streams_path), os.path.join(docs_dir, "real_streams.png"))
     costs_path = os.path.join(data_dir, "step_costs.json")
     medians = gbench_medians(costs_path) if os.path.exists(costs_path) else {}
+    spreads = gbench_spreads(costs_path) if os.path.exists(costs_path) else {}
     node_path = os.path.join(data_dir, "node_bench.csv")
     node = aggregate_node(read_csv(node_path)) if os.path.exists(node_path) else []
     if node:
         node_chart(node, os.path.join(docs_dir, "node_bench.png"))
-    text = results_markdown(sweep, medians, node, bool(node), machine_line(data_dir))
+    text = results_markdown(sweep, medians, node, bool(node), machine_line(data_dir), invariants,
+                            spreads)
     with open(os.path.join(docs_dir, "results.md"), "w") as f:
         f.write(text.replace("](docs/", "]("))  # results.md sits next to the charts
     if readme:

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 
 #include <Eigen/Geometry>
 
@@ -19,6 +20,8 @@
 #include "attitude_propagator/rigid_body.h"
 
 namespace attitude_propagator {
+
+class TorqueFreeMotion;
 
 /// The state in the principal frame: x_W = q_WP x_P, w_P = q_BP^c w_B.
 struct PrincipalState {
@@ -94,9 +97,13 @@ bool committable(const PrincipalState& x);
 ///   relative tolerance `tolerance`, crossing h in as many accepted sub-steps as it needs; q
 ///   renormalised after each accepted sub-step.
 /// - exact: the torque-free motion (torque_free_motion.h) evaluated at h; throws
-///   std::invalid_argument if the torque is not zero.
+///   std::invalid_argument if the torque is not zero. The closed form is cached: stepping
+///   again from the state it was built through, or from the last state it produced, evaluates
+///   the same motion (the time along it summed without rounding drift); any other state
+///   builds the motion through that state.
 ///
-/// A stepper is cheap to copy and not thread-safe (dopri5 keeps its step-size suggestion).
+/// A stepper is cheap to copy (copies share the cached closed form, which never changes) and
+/// not thread-safe (dopri5 keeps its step-size suggestion, exact its closed form).
 class DynamicStepper {
  public:
   /// Throws std::invalid_argument for an integrator that is not dynamic (or Auto) and for a
@@ -137,21 +144,42 @@ class DynamicStepper {
   DynamicState step(const DynamicState& x, const TorqueInput& torque, double h,
                     StepInfo* info = nullptr) const;
 
- private:
-  void rk4(PrincipalState& x, const PrincipalTorque& torque, double h, StepInfo& info) const;
-  void implicitMidpoint(PrincipalState& x, const PrincipalTorque& torque, double h,
-                        StepInfo& info) const;
-  /// The angular momentum of x: x.M_P if consistent with x.w_P, else I x.w_P.
-  Eigen::Vector3d momentum(const PrincipalState& x) const;
-  void strang(Eigen::Quaterniond& q_WP, Eigen::Vector3d& M_P, const PrincipalTorque& torque,
-              double h) const;
+  // The methods' step functions (DynamicStepFunction, integrator.h), which the integrator
+  // table points to: x advanced by h in place. The fixed-cost methods leave the one iteration
+  // and one attempt the caller reported and return Ok; dopri5 stops at `budget` trial
+  // sub-steps. Call them through stepPrincipal() or tryStepPrincipal().
+  StepStatus rk4(PrincipalState& x, const PrincipalTorque& torque, double h, std::uint64_t budget,
+                 StepInfo& info) const;
+  StepStatus implicitMidpoint(PrincipalState& x, const PrincipalTorque& torque, double h,
+                              std::uint64_t budget, StepInfo& info) const;
+  StepStatus splitting(PrincipalState& x, const PrincipalTorque& torque, double h,
+                       std::uint64_t budget, StepInfo& info) const;
+  StepStatus splitting4(PrincipalState& x, const PrincipalTorque& torque, double h,
+                        std::uint64_t budget, StepInfo& info) const;
   /// Dormand-Prince across h in at most `budget` trial sub-steps; x is left partly advanced
   /// on failure.
   StepStatus dopri5(PrincipalState& x, const PrincipalTorque& torque, double h,
                     std::uint64_t budget, StepInfo& info) const;
-  /// The fixed-cost methods (everything but dopri5).
-  void fixedStep(PrincipalState& x, const PrincipalTorque& torque, double h, StepInfo& info) const;
-  void exact(PrincipalState& x, const PrincipalTorque& torque, double h) const;
+  StepStatus exact(PrincipalState& x, const PrincipalTorque& torque, double h, std::uint64_t budget,
+                   StepInfo& info) const;
+
+ private:
+  /// The angular momentum of x: x.M_P if consistent with x.w_P, else I x.w_P.
+  Eigen::Vector3d momentum(const PrincipalState& x) const;
+  void strang(Eigen::Quaterniond& q_WP, Eigen::Vector3d& M_P, const PrincipalTorque& torque,
+              double h) const;
+  /// The splittings flow M, not w: x takes the M they carried, and w = M / I read off.
+  void setMomentum(PrincipalState& x, const Eigen::Vector3d& M, StepInfo& info) const;
+
+  /// exact: the closed form through `origin`, and the last state it produced at time
+  /// `last_time` + `last_time_low` along it (a compensated sum of the steps).
+  struct ClosedForm {
+    std::shared_ptr<const TorqueFreeMotion> motion;
+    PrincipalState origin;
+    PrincipalState last;
+    double last_time = 0.0;
+    double last_time_low = 0.0;
+  };
 
   Integrator method_;
   RigidBody body_;
@@ -160,7 +188,9 @@ class DynamicStepper {
   Eigen::Vector3d I_inv_P_;
   int axis_small_, axis_middle_, axis_large_;
   double tolerance_;
+  DynamicStepFunction step_;
   mutable double dopri5_dt_ = 0.0;  // last suggested sub-step, 0 before the first step
+  mutable ClosedForm closed_form_;
 };
 
 /// One step of `method` from x (user's body frame) with the torque held over h. Builds a

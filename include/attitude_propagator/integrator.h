@@ -1,26 +1,104 @@
 // Names of the models and integrators (DESIGN §4). The names are part of the public interface:
 // they are the values of the `model` and `integrator` parameters and appear in AttitudeState.
+//
+// The integrators are one table (src/core/integrator.cpp), one row per method: its name, the
+// models it drives with their declared orders, the rate samples it reads, what it keeps
+// exactly, and its step function. Names, error messages, the parameter documentation, the
+// choice of `auto`, the tests' method lists and order bounds, and the benchmarks all read the
+// table. Adding an integrator: an enumerator below, a step function, a row.
 #pragma once
 
+#include <cstddef>
+#include <cstdint>
 #include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
 
 namespace attitude_propagator {
 
 enum class Model { Auto, Kinematic, Dynamic };
 
+/// In the table's order (integrator.cpp checks it).
 enum class Integrator {
   Auto,
-  Euler,             // kinematic, order 1
-  Rk4,               // kinematic (order 2 from samples) and dynamic (order 4)
-  Exp,               // kinematic, exact for constant rate
-  Exp2,              // kinematic, order 2
-  Cf4,               // kinematic, order 4
-  ImplicitMidpoint,  // dynamic, order 2, keeps E and |M|
-  Splitting,         // dynamic, order 2, Strang splitting of the free rotor
-  Splitting4,        // dynamic, order 4, Yoshida composition of Splitting
-  Dopri5,            // dynamic, adaptive 5(4)
-  Exact,             // dynamic, torque-free closed form
+  Euler,
+  Rk4,
+  Exp,
+  Exp2,
+  Cf4,
+  ImplicitMidpoint,
+  Splitting,
+  Splitting4,
+  Dopri5,
+  Exact,
 };
+
+class RateWindow;        // kinematic_step.h
+enum class RateSamples;  // kinematic_step.h
+class DynamicStepper;    // dynamic_step.h
+struct PrincipalState;   // dynamic_step.h
+struct PrincipalTorque;  // dynamic_step.h
+struct StepInfo;         // dynamic_step.h
+enum class StepStatus;   // dynamic_step.h
+
+/// A kinematic step: q_WB advanced across the window's interval [i, i + 1], returned before
+/// renormalisation (kinematic_step.h).
+using KinematicStepFunction = Eigen::Quaterniond (*)(const Eigen::Quaterniond& q_WB,
+                                                     const RateWindow& window, std::size_t i,
+                                                     RateSamples kind);
+
+/// A dynamic step: x advanced by h in place, in the principal frame, within `budget` work units
+/// (dynamic_step.h, DynamicStepper).
+using DynamicStepFunction = StepStatus (DynamicStepper::*)(PrincipalState& x,
+                                                           const PrincipalTorque& torque, double h,
+                                                           std::uint64_t budget,
+                                                           StepInfo& info) const;
+
+/// What a method keeps exactly (to round-off) besides converging at its order; or-ed flags.
+namespace keeps {
+constexpr unsigned kNothing = 0;
+constexpr unsigned kUnitNorm = 1u << 0;      ///< |q| = 1 after every step, before renormalising
+constexpr unsigned kConstantRate = 1u << 1;  ///< a constant body rate, at any step
+constexpr unsigned kEnergy = 1u << 2;        ///< a free body's kinetic energy
+constexpr unsigned kMomentum = 1u << 3;      ///< a free body's |M|
+constexpr unsigned kExactFlow = 1u << 4;     ///< the exact solution: any step length, no grid
+}  // namespace keeps
+
+/// Where `auto` picks the method; or-ed flags.
+namespace auto_for {
+constexpr unsigned kNever = 0;
+constexpr unsigned kKinematic = 1u << 0;
+constexpr unsigned kTorqueFree = 1u << 1;  ///< dynamic model without torque input
+constexpr unsigned kTorqued = 1u << 2;     ///< dynamic model with torque input
+}  // namespace auto_for
+
+/// One row of the table.
+struct IntegratorInfo {
+  Integrator id;
+  const char* name;
+  /// Declared orders of convergence on smooth input; 0 where the method has no fixed order
+  /// (adaptive, exact) or does not drive the model. Tests measure them.
+  int kinematic_order;  ///< from instantaneous rate samples
+  int averaged_order;   ///< from interval-averaged rate samples
+  int dynamic_order;    ///< on the Euler equations
+  /// Kinematic: the rate samples a step reads at most, the newest last (the window it needs).
+  int samples;
+  unsigned keeps;     ///< keeps::*
+  unsigned auto_for;  ///< auto_for::*
+  /// Dynamic: whether a torque may act (the exact solution is torque-free).
+  bool takes_torque;
+  /// Kinematic start-up: until `samples` samples exist after an anchor the step runs on the
+  /// fewer it has; when the window first fills, the propagator integrates again from the
+  /// anchor across it, so the start-up leaves no lower-order error in the states that follow.
+  bool restart_from_anchor;
+  KinematicStepFunction kinematic_step;  ///< nullptr: not a kinematic method
+  DynamicStepFunction dynamic_step;      ///< nullptr: not a dynamic method
+};
+
+/// Every row, `auto` first, in the enumeration's order.
+const std::vector<IntegratorInfo>& integratorTable();
+const IntegratorInfo& integratorInfo(Integrator integrator);
 
 /// Parses a `model` parameter value; throws std::invalid_argument naming the accepted values.
 Model modelFromName(const std::string& name);
@@ -31,16 +109,26 @@ std::string modelName(Model model);
 Integrator integratorFromName(const std::string& name);
 std::string integratorName(Integrator integrator);
 
-/// Whether the integrator can drive the given (resolved) model.
+/// Whether the integrator can drive the given (resolved) model; Auto drives both.
 bool supportsKinematic(Integrator integrator);
 bool supportsDynamic(Integrator integrator);
 
 /// Declared order of convergence of a fixed-step method on smooth input (kinematic methods:
-/// from rate samples; dynamic: on the Euler equations). 0 for Auto, Dopri5 (adaptive) and
-/// Exact. Tests measure the order from results and compare with this.
+/// from instantaneous rate samples; dynamic: on the Euler equations). 0 for Auto, Dopri5
+/// (adaptive) and Exact. Tests measure the order from results and compare with this.
 int declaredOrder(Integrator integrator, Model model);
 
-/// Space-separated list of all integrator names, for error messages.
-std::string integratorNames();
+/// The methods that drive `model` (Kinematic or Dynamic), in the table's order, without Auto.
+std::vector<Integrator> integratorsFor(Model model);
+
+/// What `auto` resolves to for a model (Kinematic or Dynamic) with or without torque input.
+Integrator autoIntegrator(Model model, bool torque_input);
+
+/// Every integrator name, `auto` first; or the names of the given integrators.
+std::vector<std::string> integratorNames();
+std::vector<std::string> integratorNames(const std::vector<Integrator>& integrators);
+
+/// Names joined by single spaces, for messages ("accepted: euler rk4 ...").
+std::string joinNames(const std::vector<std::string>& names);
 
 }  // namespace attitude_propagator

@@ -79,7 +79,7 @@ class KinematicPropagator {
  private:
   void anchor(double t, const Eigen::Vector3d& w_B);
   StampOutcome integrate(const RateSample& sample);
-  Eigen::Quaterniond cf4FromAnchor(const RateWindow& window) const;
+  Eigen::Quaterniond restartFromAnchor(const RateWindow& window) const;
   StampOutcome fillAndIntegrate(const RateSample& sample);
   int lostSamples(double interval) const;
   void rememberInterval(double interval);
@@ -88,7 +88,7 @@ class KinematicPropagator {
   TimePolicy policy_;
   Eigen::Quaterniond initial_q_WB_;
   Eigen::Quaterniond q_WB_;
-  Eigen::Quaterniond anchor_q_WB_;  // state at the anchor, for the cf4 start-up restart
+  Eigen::Quaterniond anchor_q_WB_;  // state at the anchor, for a method's start-up restart
   RateWindow window_;
   std::uint64_t samples_since_anchor_ = 0;
   bool anchored_ = false;

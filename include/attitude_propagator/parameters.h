@@ -43,15 +43,17 @@ struct Parameters {
   std::vector<double> gyro_bias{0.0, 0.0, 0.0};
 };
 
+/// The `integrator` parameter's description, from the integrator table: the methods of each
+/// model and what `auto` picks.
+const char* integratorParameterDoc();
+
 /// Calls f(name, field, unit, description) for every parameter, in the README's order.
 /// Works on a const or a mutable Parameters: the loader reads into the fields, the README
 /// table and the YAML check format them. Adding a parameter = one member above, one line here.
 template <class P, class F>
 void forEachParameter(P& p, F&& f) {
   f("model", p.model, "", "`auto` (dynamic when `inertia` is set), `kinematic` or `dynamic`");
-  f("integrator", p.integrator, "",
-    "kinematic: `euler` `rk4` `exp` `exp2` `cf4`; dynamic: `rk4` `implicit_midpoint` "
-    "`splitting` `splitting4` `dopri5` `exact`; `auto`: `cf4`, `exact` torque-free, else `rk4`");
+  f("integrator", p.integrator, "", integratorParameterDoc());
   f("rate_input", p.rate_input, "",
     "`imu` (`imu/data_raw`), `twist` (`body_twist`) or `none` (dynamic only)");
   f("torque_input", p.torque_input, "", "subscribe to `torque` (dynamic model only)");

@@ -5,6 +5,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "attitude_propagator/dynamic_step.h"
 #include "attitude_propagator/quaternion.h"
@@ -14,21 +15,32 @@ namespace attitude_propagator {
 
 namespace {
 
+/// The names of the dynamic methods that take a torque (all, when `torque` is false).
+std::string dynamicNames(bool torque) {
+  std::vector<std::string> names{"auto"};
+  for (Integrator m : integratorsFor(Model::Dynamic)) {
+    if (!torque || integratorInfo(m).takes_torque) names.push_back(integratorName(m));
+  }
+  return joinNames(names);
+}
+
 Integrator resolveIntegrator(const DynamicConfig& config) {
+  // "No more than the scene needs": the table's choice for auto is the exact
+  // torque-free motion when no torque can arrive, otherwise rk4.
   if (config.integrator == Integrator::Auto) {
-    // "No more than the scene needs" (DESIGN §4): the exact torque-free motion when no
-    // torque can arrive, otherwise rk4.
-    return config.torque_input ? Integrator::Rk4 : Integrator::Exact;
+    return autoIntegrator(Model::Dynamic, config.torque_input);
   }
-  if (!supportsDynamic(config.integrator)) {
-    throw std::invalid_argument("integrator: '" + integratorName(config.integrator) +
-                                "' is not a dynamic integrator; accepted for the dynamic model: "
-                                "auto rk4 implicit_midpoint splitting splitting4 dopri5 exact");
-  }
-  if (config.integrator == Integrator::Exact && config.torque_input) {
+  const IntegratorInfo& method = integratorInfo(config.integrator);
+  if (method.dynamic_step == nullptr) {
     throw std::invalid_argument(
-        "integrator: 'exact' is the torque-free motion and cannot take torque_input; accepted "
-        "with torque: auto rk4 implicit_midpoint splitting splitting4 dopri5");
+        "integrator: '" + integratorName(config.integrator) +
+        "' is not a dynamic integrator; accepted for the dynamic model: " + dynamicNames(false));
+  }
+  if (config.torque_input && !method.takes_torque) {
+    throw std::invalid_argument("integrator: '" + integratorName(config.integrator) +
+                                "' takes no torque and cannot run with torque_input; accepted "
+                                "with torque: " +
+                                dynamicNames(true));
   }
   return config.integrator;
 }
@@ -53,27 +65,15 @@ DynamicState checkedState(const DynamicState& x, const std::string& what) {
   return DynamicState{*q, x.w_B};
 }
 
-/// The exact motion through x at t, or nullopt when the closed form cannot be set up or
-/// evaluated there (Boost.Math errors, constants that left the doubles).
-std::optional<TorqueFreeMotion> motionThrough(const RigidBody& body, const DynamicState& x,
-                                              double t) {
-  try {
-    TorqueFreeMotion motion(body, x, t);
-    const DynamicState check = motion.evaluate(t);
-    if (!check.q_WB.coeffs().allFinite() || !check.w_B.allFinite()) return std::nullopt;
-    return motion;
-  } catch (...) {
-    return std::nullopt;
-  }
-}
-
 }  // namespace
 
 // The state is kept at "knots": committed states at times that depend only on the inputs,
 // namely the anchor, the grid points anchor + n max_step, the stamps of torque and rate
 // samples, and the instants a torque times out. The state at any stamp t is the last knot
 // before t advanced by one partial step to t, never committed, so it does not depend on which
-// stamps the caller visited on its way to t (DESIGN §4).
+// stamps the caller visited on its way to t. A method exact at any step length
+// (`exact`) has no grid points: its step from the knot evaluates the stepper's cached closed
+// form through the knot.
 //
 // Torque over a step: a torque sample at stamp s is in force on [s, s + torque_timeout) (or
 // from s on with no timeout). The sample's stamp and its expiry are knots, so every step
@@ -95,7 +95,6 @@ struct DynamicPropagator::Impl {
   double time = 0.0;
   PrincipalState current;
   DynamicState current_B;
-  std::optional<TorqueFreeMotion> motion;  // exact: the motion through the knot (none: failed)
 
   bool torque_set = false;
   double torque_stamp = -std::numeric_limits<double>::infinity();
@@ -114,8 +113,7 @@ struct DynamicPropagator::Impl {
   explicit Impl(const DynamicConfig& c)
       : config(c),
         integrator(resolveIntegrator(c)),
-        stepper(integrator == Integrator::Exact ? Integrator::Rk4 : integrator, c.body,
-                c.tolerance),
+        stepper(integrator, c.body, c.tolerance),
         initial(checkedState(c.initial, "initial state")) {
     requirePositiveFinite(c.max_step, "max_step");
     requirePositiveFinite(c.tolerance, "tolerance");
@@ -132,15 +130,24 @@ struct DynamicPropagator::Impl {
           std::to_string(static_cast<int>(kBudgetHeadroomSteps)) + " = " + std::to_string(needed) +
           " steps; raise max_step or step_budget, or lower max_dt");
     }
-    if (exact() && !motionThrough(c.body, initial, 0.0)) {
-      throw std::invalid_argument(
-          "initial state: the exact torque-free motion cannot be evaluated from it");
+    if (!startsFrom(initial)) {
+      throw std::invalid_argument("initial state: integrator '" + integratorName(integrator) +
+                                  "' cannot start from it (its closed form cannot be evaluated)");
     }
     pin(0.0, initial);
     anchored = false;
   }
 
-  bool exact() const { return integrator == Integrator::Exact; }
+  /// A method exact at any step length (the table's kExactFlow) needs no grid: its state at t
+  /// is one step from the knot.
+  bool gridded() const { return !(integratorInfo(integrator).keeps & keeps::kExactFlow); }
+
+  /// Whether the method can step from x: a zero-length step succeeds (the closed form, for
+  /// one, cannot be set up from every state whose constants leave the doubles).
+  bool startsFrom(const DynamicState& x) const {
+    PrincipalState y = stepper.toPrincipal(x);
+    return stepper.tryStepPrincipal(y, PrincipalTorque{}, 0.0, 1) == StepStatus::Ok;
+  }
 
   double gridTime(std::int64_t n) const {
     return grid_origin + static_cast<double>(n) * config.max_step;
@@ -171,14 +178,7 @@ struct DynamicPropagator::Impl {
   void setKnot(double t, const PrincipalState& x) {
     knot_time = t;
     knot = x;
-    rebuildMotion();
     setCurrent(t, x);
-  }
-
-  /// exact: the motion through the knot. If the closed form cannot be set up there, no motion,
-  /// and every advance fails (the state is held) until a new state is pinned.
-  void rebuildMotion() {
-    if (exact()) motion = motionThrough(config.body, stepper.fromPrincipal(knot), knot_time);
   }
 
   void setCurrent(double t, const PrincipalState& x) {
@@ -214,44 +214,12 @@ struct DynamicPropagator::Impl {
     return true;
   }
 
-  /// exact: the state at t on the motion through the knot (x_B, and x in P), if it can be
-  /// evaluated. Counts one unit of work; a call evaluates at most three times.
-  bool evaluateMotion(double t, DynamicState& x_B, PrincipalState& x) {
-    ++work;
-    ++steps;
-    if (!motion) {
-      failure = StepStatus::EvaluationError;
-      return false;
-    }
-    try {
-      x_B = motion->evaluate(t);
-    } catch (...) {  // Boost.Math's evaluation and domain errors
-      failure = StepStatus::EvaluationError;
-      return false;
-    }
-    x = stepper.toPrincipal(x_B);
-    if (!committable(x)) {
-      failure = StepStatus::NonFinite;
-      return false;
-    }
-    return true;
-  }
-
   /// Commits the knots up to t (t >= knot_time) and sets the current state at t. False if a
   /// step failed: knots up to the failure may be committed, the current state is unchanged.
   bool advanceState(double t) {
-    if (exact()) {
-      DynamicState x_B;
-      PrincipalState x;
-      if (!evaluateMotion(t, x_B, x)) return false;
-      current = x;
-      current_B = x_B;  // the closed form's value, not its round trip through P
-      time = t;
-      return true;
-    }
     for (;;) {
-      double next = gridTime(grid_index + 1);
-      bool on_grid = true;
+      bool on_grid = gridded();
+      double next = on_grid ? gridTime(grid_index + 1) : std::numeric_limits<double>::infinity();
       if (torque_set && config.torque_timeout > 0.0) {
         const double expiry = torqueExpiry();
         if (expiry > knot_time && expiry < next) {
@@ -274,13 +242,6 @@ struct DynamicPropagator::Impl {
   /// Commits the state at t (knot_time <= t <= time) as a knot. False if the step failed.
   bool commitAt(double t) {
     if (t == knot_time) return true;
-    if (exact()) {
-      DynamicState x_B;
-      PrincipalState x;
-      if (!evaluateMotion(t, x_B, x)) return false;
-      setKnot(t, x);
-      return true;
-    }
     PrincipalState x = knot;
     if (!step(x, knot_time, t - knot_time)) return false;
     knot = x;
@@ -345,7 +306,6 @@ struct DynamicPropagator::Impl {
     const DynamicState held = current_B;
     if (commitAt(std::max(t, knot_time))) {
       apply();
-      rebuildMotion();
       if (now <= knot_time) {
         setCurrent(knot_time, knot);
         return true;
@@ -354,7 +314,6 @@ struct DynamicPropagator::Impl {
     }
     failAndHold(now, held);
     apply();  // at the new anchor: knot_time == now
-    rebuildMotion();
     setCurrent(knot_time, knot);
     return false;
   }
@@ -377,7 +336,7 @@ DynamicPropagator& DynamicPropagator::operator=(DynamicPropagator&&) noexcept = 
 Integrator DynamicPropagator::integrator() const { return impl_->integrator; }
 
 std::string DynamicPropagator::modelName() const {
-  if (impl_->integrator != Integrator::Exact) {
+  if (impl_->gridded()) {
     return "numerical_" + integratorName(impl_->integrator);
   }
   const RigidBody& body = impl_->config.body;
@@ -396,9 +355,9 @@ StampOutcome DynamicPropagator::setTorque(double t, const Eigen::Vector3d& tau, 
   d.beginCall();
   if (!std::isfinite(t) || !tau.allFinite()) return StampOutcome::RejectedNonFinite;
   if (!(tau.norm() <= kMaxTorque)) return StampOutcome::RejectedOutOfRange;
-  if (d.exact() && !tau.isZero(0.0)) {
-    throw std::logic_error(
-        "DynamicPropagator::setTorque: the exact torque-free model cannot take a torque");
+  if (!integratorInfo(d.integrator).takes_torque && !tau.isZero(0.0)) {
+    throw std::logic_error("DynamicPropagator::setTorque: integrator '" +
+                           integratorName(d.integrator) + "' cannot take a torque");
   }
   const StampOutcome outcome = d.placeInput(t, d.torque_stamp);
   if (!stateHoldsAtStamp(outcome)) return outcome;
@@ -433,9 +392,9 @@ StampOutcome DynamicPropagator::setRate(double t, const Eigen::Vector3d& w_B) {
 void DynamicPropagator::setState(double t, const DynamicState& state) {
   if (!std::isfinite(t)) throw std::invalid_argument("set_state: non-finite stamp");
   const DynamicState x = checkedState(state, "set_state");
-  if (impl_->exact() && !motionThrough(impl_->config.body, x, t)) {
-    throw std::invalid_argument(
-        "set_state: the exact torque-free motion cannot be evaluated from this state");
+  if (!impl_->startsFrom(x)) {
+    throw std::invalid_argument("set_state: integrator '" + integratorName(impl_->integrator) +
+                                "' cannot start from this state");
   }
   impl_->pin(t, x);
 }

@@ -150,11 +150,12 @@ DynamicStepper::DynamicStepper(Integrator method, const RigidBody& body, double 
                                                       RigidBody::TriangleInequality::Ignore)),
       I_P_(body.principalMoments()),
       I_inv_P_(body.inverseMoments()),
-      tolerance_(tolerance) {
-  if (method == Integrator::Auto || !supportsDynamic(method)) {
+      tolerance_(tolerance),
+      step_(integratorInfo(method).dynamic_step) {
+  if (step_ == nullptr) {
     throw std::invalid_argument("integrator: '" + integratorName(method) +
-                                "' cannot step the dynamic model; accepted: rk4 "
-                                "implicit_midpoint splitting splitting4 dopri5 exact");
+                                "' cannot step the dynamic model; accepted: " +
+                                joinNames(integratorNames(integratorsFor(Model::Dynamic))));
   }
   if (!(tolerance > 0.0) || !std::isfinite(tolerance)) {
     throw std::invalid_argument("tolerance: must be positive and finite, got " +
@@ -195,13 +196,11 @@ void DynamicStepper::stepPrincipal(PrincipalState& x, const PrincipalTorque& tor
   StepInfo local;
   StepInfo& report = info ? *info : local;
   report = StepInfo{};
-  if (method_ != Integrator::Dopri5) {
-    fixedStep(x, torque, h, report);
-    return;
-  }
-  const StepStatus status = dopri5(x, torque, h, UINT64_MAX, report);
+  report.iterations = 1;
+  report.attempts = 1;
+  const StepStatus status = (this->*step_)(x, torque, h, UINT64_MAX, report);
   if (status != StepStatus::Ok) {
-    throw std::runtime_error(std::string("dopri5: step size control failed (") +
+    throw std::runtime_error(integratorName(method_) + ": step size control failed (" +
                              stepStatusName(status) + ")");
   }
 }
@@ -213,14 +212,12 @@ StepStatus DynamicStepper::tryStepPrincipal(PrincipalState& x, const PrincipalTo
   StepInfo& report = info ? *info : local;
   report = StepInfo{};
   if (budget == 0) return StepStatus::OverBudget;
+  report.iterations = 1;
+  report.attempts = 1;
   PrincipalState y = x;
   StepStatus status = StepStatus::Ok;
   try {
-    if (method_ == Integrator::Dopri5) {
-      status = dopri5(y, torque, h, budget, report);
-    } else {
-      fixedStep(y, torque, h, report);
-    }
+    status = (this->*step_)(y, torque, h, budget, report);
   } catch (...) {  // Boost.Math's evaluation and domain errors in the closed form, or a torque
     status = StepStatus::EvaluationError;
   }
@@ -234,41 +231,32 @@ bool committable(const PrincipalState& x) {
          std::abs(x.q_WP.squaredNorm() - 1.0) <= kUnitTolerance && x.w_P.norm() <= kMaxStateRate;
 }
 
-void DynamicStepper::fixedStep(PrincipalState& x, const PrincipalTorque& torque, double h,
-                               StepInfo& report) const {
-  report.iterations = 1;
-  report.attempts = 1;
-  switch (method_) {
-    case Integrator::Rk4:
-      rk4(x, torque, h, report);
-      return;
-    case Integrator::ImplicitMidpoint:
-      implicitMidpoint(x, torque, h, report);
-      return;
-    case Integrator::Splitting:
-    case Integrator::Splitting4: {
-      // The splittings flow M, not w: M is carried through the sub-flows and from step to
-      // step (PrincipalState::M_P), and w = M / I is only read off.
-      Eigen::Vector3d M = momentum(x);
-      if (method_ == Integrator::Splitting) {
-        strang(x.q_WP, M, torque, h);
-      } else {
-        strang(x.q_WP, M, torque, kYoshidaW1 * h);
-        strang(x.q_WP, M, torque, kYoshidaW0 * h);
-        strang(x.q_WP, M, torque, kYoshidaW1 * h);
-      }
-      // M / I, not M * (1/I), so that momentum() recognises the pair as consistent.
-      x.w_P = M.cwiseQuotient(I_P_);
-      x.M_P = M;
-      report.norm_error = normaliseAndReport(x.q_WP);
-      return;
-    }
-    case Integrator::Exact:
-      exact(x, torque, h);
-      return;
-    default:
-      throw std::logic_error("DynamicStepper: unreachable integrator");
-  }
+StepStatus DynamicStepper::splitting(PrincipalState& x, const PrincipalTorque& torque, double h,
+                                     std::uint64_t /*budget*/, StepInfo& info) const {
+  Eigen::Vector3d M = momentum(x);
+  strang(x.q_WP, M, torque, h);
+  setMomentum(x, M, info);
+  return StepStatus::Ok;
+}
+
+StepStatus DynamicStepper::splitting4(PrincipalState& x, const PrincipalTorque& torque, double h,
+                                      std::uint64_t /*budget*/, StepInfo& info) const {
+  Eigen::Vector3d M = momentum(x);
+  strang(x.q_WP, M, torque, kYoshidaW1 * h);
+  strang(x.q_WP, M, torque, kYoshidaW0 * h);
+  strang(x.q_WP, M, torque, kYoshidaW1 * h);
+  setMomentum(x, M, info);
+  return StepStatus::Ok;
+}
+
+// The splittings flow M, not w: M is carried through the sub-flows and from step to step
+// (PrincipalState::M_P), and w = M / I is only read off.
+void DynamicStepper::setMomentum(PrincipalState& x, const Eigen::Vector3d& M,
+                                 StepInfo& info) const {
+  // M / I, not M * (1/I), so that momentum() recognises the pair as consistent.
+  x.w_P = M.cwiseQuotient(I_P_);
+  x.M_P = M;
+  info.norm_error = normaliseAndReport(x.q_WP);
 }
 
 DynamicState DynamicStepper::step(const DynamicState& x, const TorqueInput& torque, double h,
@@ -279,8 +267,8 @@ DynamicState DynamicStepper::step(const DynamicState& x, const TorqueInput& torq
 }
 
 // Classical RK4 on y = (q, w), f(y) = (1/2 q (x) (0, w), I^-1 ((I w) x w + T(q))).
-void DynamicStepper::rk4(PrincipalState& x, const PrincipalTorque& torque, double h,
-                         StepInfo& info) const {
+StepStatus DynamicStepper::rk4(PrincipalState& x, const PrincipalTorque& torque, double h,
+                               std::uint64_t /*budget*/, StepInfo& info) const {
   const Eigen::Quaterniond q0 = x.q_WP;
   const Eigen::Vector3d w0 = x.w_P;
   const double h2 = 0.5 * h;
@@ -308,6 +296,7 @@ void DynamicStepper::rk4(PrincipalState& x, const PrincipalTorque& torque, doubl
       q0.coeffs() + h6 * (kq1.coeffs() + 2.0 * (kq2.coeffs() + kq3.coeffs()) + kq4.coeffs());
   x.w_P = w0 + h6 * (kw1 + 2.0 * (kw2 + kw3) + kw4);
   info.norm_error = normaliseAndReport(x.q_WP);
+  return StepStatus::Ok;
 }
 
 // Implicit midpoint on (q, w): w1 = w0 + h I^-1((I wm) x wm + T(qm)) with wm = (w0 + w1)/2,
@@ -315,8 +304,9 @@ void DynamicStepper::rk4(PrincipalState& x, const PrincipalTorque& torque, doubl
 // is linear, q1 (1 - a) = q0 (1 + a) with a = (h/4)(0, wm), solved by the Cayley transform
 // q1 = q0 (x) ((1 - |a|^2) + 2a)/(1 + |a|^2); and qm is along q0 (x) (1 + a). So the
 // iteration runs on wm alone (qm follows it only for a fixed-frame torque).
-void DynamicStepper::implicitMidpoint(PrincipalState& x, const PrincipalTorque& torque, double h,
-                                      StepInfo& info) const {
+StepStatus DynamicStepper::implicitMidpoint(PrincipalState& x, const PrincipalTorque& torque,
+                                            double h, std::uint64_t /*budget*/,
+                                            StepInfo& info) const {
   const Eigen::Quaterniond q0 = x.q_WP;
   const Eigen::Vector3d w0 = x.w_P;
   const double h2 = 0.5 * h;
@@ -352,6 +342,7 @@ void DynamicStepper::implicitMidpoint(PrincipalState& x, const PrincipalTorque& 
   x.q_WP = q0 * cayley;
   x.w_P = 2.0 * wm - w0;
   info.norm_error = normaliseAndReport(x.q_WP);
+  return StepStatus::Ok;
 }
 
 Eigen::Vector3d DynamicStepper::momentum(const PrincipalState& x) const {
@@ -387,6 +378,7 @@ StepStatus DynamicStepper::dopri5(PrincipalState& x, const PrincipalTorque& torq
   OdeState y{x.q_WP.w(), x.q_WP.x(), x.q_WP.y(), x.q_WP.z(), x.w_P.x(), x.w_P.y(), x.w_P.z()};
 
   info.iterations = 0;
+  info.attempts = 0;
   if (h == 0.0) return StepStatus::Ok;
   if (!std::isfinite(h)) return StepStatus::NonFinite;
   const double direction = h > 0.0 ? 1.0 : -1.0;
@@ -448,18 +440,42 @@ StepStatus DynamicStepper::dopri5(PrincipalState& x, const PrincipalTorque& torq
   return StepStatus::Ok;
 }
 
-void DynamicStepper::exact(PrincipalState& x, const PrincipalTorque& torque, double h) const {
+StepStatus DynamicStepper::exact(PrincipalState& x, const PrincipalTorque& torque, double h,
+                                 std::uint64_t /*budget*/, StepInfo& /*info*/) const {
   if (!torque.isZero()) {
     throw std::invalid_argument(
         "integrator: 'exact' is the torque-free motion and cannot take a torque");
   }
-  DynamicState x0;
-  x0.q_WB = x.q_WP;
-  x0.w_B = x.w_P;
-  const TorqueFreeMotion motion(principal_body_, x0);
-  const DynamicState x1 = motion.evaluate(h);
-  x.q_WP = x1.q_WB;
-  x.w_P = x1.w_B;
+  ClosedForm& c = closed_form_;
+  auto same = [](const PrincipalState& a, const PrincipalState& b) {
+    return a.q_WP.coeffs() == b.q_WP.coeffs() && a.w_P == b.w_P;
+  };
+  double start = 0.0;
+  double start_low = 0.0;
+  if (c.motion && same(x, c.last)) {
+    start = c.last_time;
+    start_low = c.last_time_low;
+  } else if (!c.motion || !same(x, c.origin)) {
+    c.motion.reset();  // a throwing construction leaves no stale motion behind
+    c.motion =
+        std::make_shared<const TorqueFreeMotion>(principal_body_, DynamicState{x.q_WP, x.w_P});
+    c.origin = x;
+    c.last = x;
+    c.last_time = 0.0;
+    c.last_time_low = 0.0;
+  }
+  // start + h summed exactly (Knuth's two-sum): a run of steps from the last state lands on
+  // the time a single evaluation would use, with no drift of one rounding per step.
+  const double time = start + h;
+  const double h_part = time - start;
+  const double low = start_low + ((start - (time - h_part)) + (h - h_part));
+  const DynamicState y = c.motion->evaluate(time + low);
+  x.q_WP = y.q_WB;
+  x.w_P = y.w_B;
+  c.last = x;
+  c.last_time = time;
+  c.last_time_low = low;
+  return StepStatus::Ok;
 }
 
 DynamicState dynamicStep(Integrator method, const RigidBody& body, const DynamicState& x,

@@ -14,11 +14,11 @@ namespace attitude_propagator {
 namespace {
 
 Integrator resolveKinematic(Integrator requested) {
-  if (requested == Integrator::Auto) return Integrator::Cf4;
+  if (requested == Integrator::Auto) return autoIntegrator(Model::Kinematic, false);
   if (!supportsKinematic(requested)) {
     throw std::invalid_argument("integrator: '" + integratorName(requested) +
-                                "' does not apply to the kinematic model; accepted: auto euler "
-                                "rk4 exp exp2 cf4");
+                                "' does not apply to the kinematic model; accepted: auto " +
+                                joinNames(integratorNames(integratorsFor(Model::Kinematic))));
   }
   return requested;
 }
@@ -171,10 +171,12 @@ void KinematicPropagator::anchor(double t, const Eigen::Vector3d& w_B) {
 // double range), and the state must never become NaN. The window is restored otherwise.
 StampOutcome KinematicPropagator::integrate(const RateSample& sample) {
   const bool evicted = window_.push(sample);
-  const bool restart =
-      integrator_ == Integrator::Cf4 && samples_since_anchor_ + 1 == RateWindow::kCapacity;
+  const IntegratorInfo& method = integratorInfo(integrator_);
+  const bool restart = method.restart_from_anchor &&
+                       samples_since_anchor_ + 1 == static_cast<std::uint64_t>(method.samples);
   const Eigen::Quaterniond q =
-      restart ? cf4FromAnchor(window_) : kinematicStep(integrator_, q_WB_, window_, rate_samples_);
+      restart ? restartFromAnchor(window_)
+              : method.kinematic_step(q_WB_, window_, window_.size() - 2, rate_samples_);
   const double n = q.norm();
   if (!std::isfinite(n) || n == 0.0) {
     window_.undoPush(evicted);
@@ -227,16 +229,18 @@ StampOutcome KinematicPropagator::fillAndIntegrate(const RateSample& sample) {
   return integrate(sample);
 }
 
-// The first intervals after an anchor had fewer than four samples, so cf4 ran at lower order
-// there; the constant error that leaves would dominate the fourth-order tail (REFERENCE §2:
-// global order about 3.2). Once the fourth sample is in, integrate again from the anchor with
-// the cubic through all four.
-Eigen::Quaterniond KinematicPropagator::cf4FromAnchor(const RateWindow& window) const {
+// The start-up hook of a method whose row asks for it (cf4): the first intervals after an
+// anchor had fewer samples than its interpolant needs, so it ran at lower order there; the
+// constant error that leaves would dominate the higher-order tail (cf4: global
+// order about 3.2). Once the window holds the samples it needs, integrate again from the anchor
+// across all of them with the full interpolant.
+Eigen::Quaterniond KinematicPropagator::restartFromAnchor(const RateWindow& window) const {
+  const KinematicStepFunction step = integratorInfo(integrator_).kinematic_step;
   Eigen::Quaterniond q = anchor_q_WB_;
-  for (std::size_t i = 0; i + 2 < RateWindow::kCapacity; ++i) {
-    q = kinematicStep(Integrator::Cf4, q, window, i, rate_samples_).normalized();
+  for (std::size_t i = 0; i + 2 < window.size(); ++i) {
+    q = step(q, window, i, rate_samples_).normalized();
   }
-  return kinematicStep(Integrator::Cf4, q, window, RateWindow::kCapacity - 2, rate_samples_);
+  return step(q, window, window.size() - 2, rate_samples_);
 }
 
 }  // namespace attitude_propagator

@@ -24,13 +24,13 @@ Eigen::Vector4d timesPure(const Eigen::Vector4d& q_xyzw, const Eigen::Vector3d& 
   return (q * pureQuaternion(w)).coeffs();
 }
 
-Eigen::Quaterniond eulerStep(const Eigen::Quaterniond& q, const Eigen::Vector3d& w0, double h) {
+Eigen::Quaterniond eulerUpdate(const Eigen::Quaterniond& q, const Eigen::Vector3d& w0, double h) {
   return Eigen::Quaterniond(q.coeffs() + (0.5 * h) * timesPure(q.coeffs(), w0));
 }
 
 // Classical RK4 on dq/dt = 1/2 q (x) (0, w(t)), w linear between w0 and w1 (w_mid halfway).
-Eigen::Quaterniond rk4Step(const Eigen::Quaterniond& q, const Eigen::Vector3d& w0,
-                           const Eigen::Vector3d& w1, double h, const Eigen::Vector3d& w_mid) {
+Eigen::Quaterniond rk4Update(const Eigen::Quaterniond& q, const Eigen::Vector3d& w0,
+                             const Eigen::Vector3d& w1, double h, const Eigen::Vector3d& w_mid) {
   const Eigen::Vector4d& y = q.coeffs();
   const Eigen::Vector4d k1 = 0.5 * timesPure(y, w0);
   const Eigen::Vector4d k2 = 0.5 * timesPure(y + (0.5 * h) * k1, w_mid);
@@ -145,8 +145,8 @@ void gaussRates(const RateWindow& window, std::size_t i, double h, RateSamples k
   }
 }
 
-Eigen::Quaterniond cf4Step(const Eigen::Quaterniond& q, const RateWindow& window, std::size_t i,
-                           double h, RateSamples kind) {
+Eigen::Quaterniond cf4Update(const Eigen::Quaterniond& q, const RateWindow& window, std::size_t i,
+                             double h, RateSamples kind) {
   Eigen::Vector3d a;
   Eigen::Vector3d b;
   gaussRates(window, i, h, kind, a, b);
@@ -163,30 +163,8 @@ Eigen::Vector3d averagedSlope(const RateWindow& window, std::size_t i, double h)
   return (window[i + 1].w_B - window[i].w_B) * (2.0 / (h_p + h));
 }
 
-Eigen::Quaterniond averagedStep(Integrator method, const Eigen::Quaterniond& q,
-                                const RateWindow& window, std::size_t i, double h) {
-  const Eigen::Vector3d& mean = window[i + 1].w_B;
-  switch (method) {
-    case Integrator::Euler:
-      return eulerStep(q, mean, h);
-    case Integrator::Exp:
-      return q * expMap(h * mean);
-    case Integrator::Exp2: {
-      // Rotation vector of the linear rate w(s) = m + b (s - h/2) on [0, h] to third order:
-      // int w + 1/2 int int_{r<s} w(r) x w(s) = h m + (h^3/12) m x b (Bortz).
-      const Eigen::Vector3d slope = averagedSlope(window, i, h);
-      return q * expMap(h * mean + (h * h * h / 12.0) * mean.cross(slope));
-    }
-    case Integrator::Rk4: {
-      const Eigen::Vector3d half_change = (0.5 * h) * averagedSlope(window, i, h);
-      return rk4Step(q, mean - half_change, mean + half_change, h, mean);
-    }
-    case Integrator::Cf4:
-      return cf4Step(q, window, i, h, RateSamples::IntervalAverage);
-    default:
-      throw std::invalid_argument("integrator '" + integratorName(method) +
-                                  "' is not a kinematic method; accepted: euler rk4 exp exp2 cf4");
-  }
+double intervalLength(const RateWindow& window, std::size_t i) {
+  return window[i + 1].t - window[i].t;
 }
 
 }  // namespace
@@ -250,30 +228,56 @@ void RateWindow::interpolate(double t_a, double t_b, Eigen::Vector3d& w_a,
 
 Eigen::Quaterniond kinematicStep(Integrator method, const Eigen::Quaterniond& q_WB,
                                  const RateWindow& window, std::size_t i, RateSamples kind) {
-  const RateSample& open = window[i];
-  const RateSample& close = window[i + 1];
-  const double h = close.t - open.t;
-  if (kind == RateSamples::IntervalAverage) return averagedStep(method, q_WB, window, i, h);
-  switch (method) {
-    case Integrator::Euler:
-      return eulerStep(q_WB, open.w_B, h);
-    case Integrator::Rk4:
-      return rk4Step(q_WB, open.w_B, close.w_B, h, 0.5 * (open.w_B + close.w_B));
-    case Integrator::Exp:
-      return q_WB * expMap(h * open.w_B);
-    case Integrator::Exp2:
-      return q_WB * expMap((0.5 * h) * (open.w_B + close.w_B));
-    case Integrator::Cf4:
-      return cf4Step(q_WB, window, i, h, kind);
-    default:
-      throw std::invalid_argument("integrator '" + integratorName(method) +
-                                  "' is not a kinematic method; accepted: euler rk4 exp exp2 cf4");
+  const KinematicStepFunction step = integratorInfo(method).kinematic_step;
+  if (step == nullptr) {
+    throw std::invalid_argument("integrator '" + integratorName(method) +
+                                "' is not a kinematic method; accepted: " +
+                                joinNames(integratorNames(integratorsFor(Model::Kinematic))));
   }
+  return step(q_WB, window, i, kind);
 }
 
 Eigen::Quaterniond kinematicStep(Integrator method, const Eigen::Quaterniond& q_WB,
                                  const RateWindow& window, RateSamples kind) {
   return kinematicStep(method, q_WB, window, window.size() - 2, kind);
+}
+
+Eigen::Quaterniond kinematicEuler(const Eigen::Quaterniond& q_WB, const RateWindow& window,
+                                  std::size_t i, RateSamples kind) {
+  const std::size_t held = kind == RateSamples::IntervalAverage ? i + 1 : i;
+  return eulerUpdate(q_WB, window[held].w_B, intervalLength(window, i));
+}
+
+Eigen::Quaterniond kinematicRk4(const Eigen::Quaterniond& q_WB, const RateWindow& window,
+                                std::size_t i, RateSamples kind) {
+  const double h = intervalLength(window, i);
+  const Eigen::Vector3d& w0 = window[i].w_B;
+  const Eigen::Vector3d& w1 = window[i + 1].w_B;
+  if (kind == RateSamples::Instantaneous) return rk4Update(q_WB, w0, w1, h, 0.5 * (w0 + w1));
+  const Eigen::Vector3d half_change = (0.5 * h) * averagedSlope(window, i, h);
+  return rk4Update(q_WB, w1 - half_change, w1 + half_change, h, w1);
+}
+
+Eigen::Quaterniond kinematicExp(const Eigen::Quaterniond& q_WB, const RateWindow& window,
+                                std::size_t i, RateSamples kind) {
+  const std::size_t held = kind == RateSamples::IntervalAverage ? i + 1 : i;
+  return q_WB * expMap(intervalLength(window, i) * window[held].w_B);
+}
+
+Eigen::Quaterniond kinematicExp2(const Eigen::Quaterniond& q_WB, const RateWindow& window,
+                                 std::size_t i, RateSamples kind) {
+  const double h = intervalLength(window, i);
+  const Eigen::Vector3d& w1 = window[i + 1].w_B;
+  if (kind == RateSamples::Instantaneous) return q_WB * expMap((0.5 * h) * (window[i].w_B + w1));
+  // Rotation vector of the linear rate w(s) = m + b (s - h/2) on [0, h] to third order:
+  // int w + 1/2 int int_{r<s} w(r) x w(s) = h m + (h^3/12) m x b (Bortz).
+  const Eigen::Vector3d slope = averagedSlope(window, i, h);
+  return q_WB * expMap(h * w1 + (h * h * h / 12.0) * w1.cross(slope));
+}
+
+Eigen::Quaterniond kinematicCf4(const Eigen::Quaterniond& q_WB, const RateWindow& window,
+                                std::size_t i, RateSamples kind) {
+  return cf4Update(q_WB, window, i, intervalLength(window, i), kind);
 }
 
 }  // namespace attitude_propagator

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <sstream>
 #include <stdexcept>
 #include <type_traits>
 
@@ -52,16 +51,20 @@ void requireFrameName(const std::string& name, const std::string& frame) {
   }
 }
 
-/// Names of the integrators that can drive the model, for error messages.
-std::string integratorsFor(Model model) {
-  std::istringstream all(integratorNames());
-  std::string name, list;
-  while (all >> name) {
-    const Integrator i = integratorFromName(name);
-    if (model == Model::Dynamic ? supportsDynamic(i) : supportsKinematic(i)) {
-      list += (list.empty() ? "" : " ") + name;
-    }
+/// Names of the integrators that can drive the model (with torque: those that take one), for
+/// error messages.
+std::string acceptedIntegrators(Model model, bool torque = false) {
+  std::vector<std::string> names{"auto"};
+  for (Integrator m : integratorsFor(model)) {
+    if (!torque || integratorInfo(m).takes_torque) names.push_back(integratorName(m));
   }
+  return joinNames(names);
+}
+
+/// `a` `b` `c`: names in backticks, for the parameter documentation.
+std::string quotedNames(const std::vector<Integrator>& methods) {
+  std::string list;
+  for (Integrator m : methods) list += (list.empty() ? "`" : " `") + integratorName(m) + "`";
   return list;
 }
 
@@ -77,13 +80,12 @@ Integrator resolveIntegrator(const Parameters& p, Model model) {
       model == Model::Dynamic ? supportsDynamic(integrator) : supportsKinematic(integrator);
   if (!ok) {
     fail("integrator", "'" + p.integrator + "' does not drive the " + modelName(model) +
-                           " model; accepted: " + integratorsFor(model));
+                           " model; accepted: " + acceptedIntegrators(model));
   }
-  if (integrator == Integrator::Exact && p.torque_input) {
-    fail("integrator",
-         "'exact' is the torque-free solution and torque_input is true; "
-         "accepted: " +
-             integratorsFor(model) + " except exact");
+  if (model == Model::Dynamic && p.torque_input && !integratorInfo(integrator).takes_torque) {
+    fail("integrator", "'" + p.integrator +
+                           "' takes no torque and torque_input is true; accepted: " +
+                           acceptedIntegrators(model, true));
   }
   return integrator;
 }
@@ -169,6 +171,16 @@ void applyStreamParameters(const Parameters& p, KinematicConfig& kinematic) {
 }
 
 }  // namespace
+
+const char* integratorParameterDoc() {
+  static const std::string doc =
+      "kinematic: " + quotedNames(integratorsFor(Model::Kinematic)) +
+      "; dynamic: " + quotedNames(integratorsFor(Model::Dynamic)) +
+      "; `auto`: " + quotedNames({autoIntegrator(Model::Kinematic, false)}) + ", " +
+      quotedNames({autoIntegrator(Model::Dynamic, false)}) + " torque-free, else " +
+      quotedNames({autoIntegrator(Model::Dynamic, true)});
+  return doc.c_str();
+}
 
 std::vector<std::string> parameterNames() {
   std::vector<std::string> names;

@@ -10,6 +10,7 @@
 
 #include "attitude_propagator/dynamic_propagator.h"
 #include "attitude_propagator/torque_free_motion.h"
+#include "integrator_cases.h"
 #include "rotation_matchers.h"
 
 namespace ap = attitude_propagator;
@@ -33,9 +34,10 @@ void expectSameState(const ap::DynamicState& a, const ap::DynamicState& b, doubl
   EXPECT_NEAR((a.w_B - b.w_B).cwiseAbs().maxCoeff(), 0.0, tol);
 }
 
-const std::vector<ap::Integrator> kNumerical = {
-    ap::Integrator::Rk4, ap::Integrator::ImplicitMidpoint, ap::Integrator::Splitting,
-    ap::Integrator::Splitting4, ap::Integrator::Dopri5};
+// The methods that step on the grid (all but the exact solution).
+const std::vector<ap::Integrator> kNumerical = integrator_cases::methodsWhere(
+    ap::Model::Dynamic,
+    [](const ap::IntegratorInfo& row) { return !(row.keeps & ap::keeps::kExactFlow); });
 
 // Advances p through irregular stamps from t0 until past t1, each step a random fraction of
 // max_step (a bursty /clock). The state at a stamp must not depend on this path.

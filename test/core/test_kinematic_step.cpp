@@ -11,6 +11,7 @@
 #include "attitude_propagator/kinematic_propagator.h"
 #include "attitude_propagator/kinematic_step.h"
 #include "attitude_propagator/quaternion.h"
+#include "integrator_cases.h"
 #include "rotation_matchers.h"
 
 namespace ap = attitude_propagator;
@@ -118,9 +119,12 @@ TEST_P(LieGroupMethods, KeepUnitNormToRoundOffEveryStep) {
   EXPECT_LE(worst, 1e-15);
 }
 
+// The Lie-group steps: unit norm and a constant rate exact, as their rows declare.
 INSTANTIATE_TEST_SUITE_P(Kinematic, LieGroupMethods,
-                         ::testing::Values(Integrator::Exp, Integrator::Exp2, Integrator::Cf4),
-                         [](const auto& info) { return ap::integratorName(info.param); });
+                         ::testing::ValuesIn(integrator_cases::methodsKeeping(
+                             ap::Model::Kinematic,
+                             ap::keeps::kUnitNorm | ap::keeps::kConstantRate)),
+                         integrator_cases::MethodName());
 
 // `exp` holds the rate of the sample that opens the interval, so a piecewise-constant rate
 // command stream is integrated exactly.
@@ -154,19 +158,16 @@ TEST_P(AllKinematicMethods, OctahedronFromPiecewiseRates) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Kinematic, AllKinematicMethods,
-                         ::testing::Values(Integrator::Euler, Integrator::Rk4, Integrator::Exp,
-                                           Integrator::Exp2, Integrator::Cf4),
-                         [](const auto& info) { return ap::integratorName(info.param); });
+                         ::testing::ValuesIn(ap::integratorsFor(ap::Model::Kinematic)),
+                         integrator_cases::MethodName());
 
-struct OrderCase {
-  Integrator method;
-  double min_ratio;  // error ratio when the sample rate doubles
-};
-
-class ConingOrder : public ::testing::TestWithParam<OrderCase> {};
+class ConingOrder : public ::testing::TestWithParam<Integrator> {};
 
 TEST_P(ConingOrder, ErrorFallsAtTheDeclaredOrder) {
-  const auto [method, min_ratio] = GetParam();
+  const Integrator method = GetParam();
+  const int p = ap::declaredOrder(method, ap::Model::Kinematic);
+  ASSERT_GT(p, 0) << ap::integratorName(method) << " declares no order";
+  const double min_ratio = integrator_cases::minHalvingRatio(p);
   const double duration = 20.0;
   std::vector<double> errors;
   for (double rate : {100.0, 200.0, 400.0})
@@ -176,18 +177,13 @@ TEST_P(ConingOrder, ErrorFallsAtTheDeclaredOrder) {
         << ap::integratorName(method) << ": errors " << errors[i - 1] << " -> " << errors[i];
   }
   // Sanity of the declared order: 2^p within 25 %.
-  const double p = ap::declaredOrder(method, ap::Model::Kinematic);
   const double observed = std::log2(errors[1] / errors[2]);
   EXPECT_NEAR(observed, p, 0.25 * p) << ap::integratorName(method);
 }
 
 INSTANTIATE_TEST_SUITE_P(Kinematic, ConingOrder,
-                         ::testing::Values(OrderCase{Integrator::Euler, 1.8},
-                                           OrderCase{Integrator::Exp, 1.8},
-                                           OrderCase{Integrator::Exp2, 3.5},
-                                           OrderCase{Integrator::Rk4, 3.5},
-                                           OrderCase{Integrator::Cf4, 12.0}),
-                         [](const auto& info) { return ap::integratorName(info.param.method); });
+                         ::testing::ValuesIn(ap::integratorsFor(ap::Model::Kinematic)),
+                         integrator_cases::MethodName());
 
 // cf4 on unevenly spaced samples (jittered by up to +-30 %) still converges at fourth order.
 TEST(Cf4, FourthOrderOnJitteredSamples) {
