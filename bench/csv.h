@@ -1,4 +1,4 @@
-// Rows of the benchmark CSV files (DESIGN §7). Quantities that do not apply to a scene
+// Rows of the benchmark CSV files (docs/design.md §8). Quantities that do not apply to a scene
 // (the invariants of a kinematic scene, the cost of a stability run) are written empty.
 #pragma once
 

@@ -1,5 +1,5 @@
-// Dynamic benchmark scenes (DESIGN §7): a body, an initial state and a torque held in the body
-// frame. Torque-free scenes are judged against the exact solution (REFERENCE §3), the torqued
+// Dynamic benchmark scenes (docs/design.md §8): a body, an initial state and a torque held in the body
+// frame. Torque-free scenes are judged against the exact solution (docs/numerics.md §6), the torqued
 // one against a tight Bulirsch-Stoer reference (reference.h).
 #pragma once
 

@@ -74,7 +74,7 @@ DynamicState truthAt(const DynamicScene& scene, const Truth& truth, double t) {
   return referenceStates(scene.moments, scene.initial, scene.torque_B, {t}).front();
 }
 
-/// Energy 1/2 w.Iw, |M| = |I w|, and the side of the separatrix (REFERENCE §3, moments sorted
+/// Energy 1/2 w.Iw, |M| = |I w|, and the side of the separatrix (docs/numerics.md §6, moments sorted
 /// I1 < I2 < I3, Delta2 = G^2 - 2T I2): +-1 when M circulates about +-e1, +-2 about +-e3.
 struct Invariants {
   double energy;

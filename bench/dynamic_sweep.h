@@ -1,5 +1,5 @@
 // Work-precision sweep, stability map and long-run invariants of the dynamic integrators
-// (DESIGN §7).
+// (docs/design.md §8).
 #pragma once
 
 #include <cstdio>

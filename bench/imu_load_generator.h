@@ -1,4 +1,4 @@
-// Load generator of the node benchmark (DESIGN §7): publishes sensor_msgs/Imu on imu/data_raw
+// Load generator of the node benchmark (docs/design.md §8): publishes sensor_msgs/Imu on imu/data_raw
 // at rising rates, a few seconds each, and listens on imu/data. Every input header is stamped
 // with its send time; the node copies the input header into imu/data, so on receipt
 // now - stamp is the input-to-output latency, and the stamp tells which rate it belongs to.

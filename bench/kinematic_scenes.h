@@ -1,4 +1,4 @@
-// Kinematic benchmark scenes (DESIGN §7): a body-rate history w_B(t) with its closed-form
+// Kinematic benchmark scenes (docs/design.md §8): a body-rate history w_B(t) with its closed-form
 // attitude q_WB(t), so the error of a propagation from rate samples is measured against the
 // truth, never against another run of ours.
 #pragma once
@@ -77,7 +77,7 @@ inline KinematicScene constantRateScene() {
   return scene;
 }
 
-/// coning: beta = 0.1 rad, Omega = 2 pi 1.1 rad/s over 20 s, as REFERENCE §2 measured.
+/// coning: beta = 0.1 rad, Omega = 2 pi 1.1 rad/s over 20 s, as docs/numerics.md §8 measured.
 inline KinematicScene coningScene() {
   const ConingMotion cone;
   KinematicScene scene;

@@ -1,4 +1,4 @@
-// Work-precision sweep and stability map of the kinematic integrators (DESIGN §7).
+// Work-precision sweep and stability map of the kinematic integrators (docs/design.md §8).
 #pragma once
 
 #include <cstdio>

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Turns the benchmark CSV files into the charts and the results table (DESIGN §7).
+"""Turns the benchmark CSV files into the charts and the results table (docs/design.md §8).
 
 Usage: plot.py DATA_DIR DOCS_DIR [README]
 

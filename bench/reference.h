@@ -1,7 +1,7 @@
 // A tight numerical reference for the dynamic scenes: Boost.Odeint's controlled
 // Bulirsch-Stoer in long double at absolute and relative tolerance 1e-16 on (q, w) with the
 // Euler equations
-//   I dw/dt = (I w) x w + T,   dq/dt = 1/2 q (x) (0, w)   (seed notes eqs. 10 and 9),
+//   I dw/dt = (I w) x w + T,   dq/dt = 1/2 q (x) (0, w)   (Coutsias–Romero eqs. 10 and 9),
 // written here independently of the core. It judges the torqued scene (no closed form) and
 // cross-checks the exact solution; it is never a coarser run of a method under test.
 #pragma once
@@ -23,7 +23,7 @@ std::vector<ap::DynamicState> referenceStates(const Eigen::Vector3d& moments,
                                               const std::vector<double>& times);
 
 /// Largest rotation error of the reference against the constant-torque-from-rest closed form
-/// (REFERENCE §4: w = T t / I, angle T t^2 / (2 I) about the principal axis), over 10 s.
+/// (docs/numerics.md §8: w = T t / I, angle T t^2 / (2 I) about the principal axis), over 10 s.
 double referenceSelfCheck();
 
 }  // namespace bench

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Regenerates every benchmark figure of the README (issue 5) with one command:
+# Regenerates every benchmark figure of the README with one command:
 #   bash bench/run_all.sh [--no-node]
 # 1. builds the package in Release (scripts/build.sh, workspace $AP_WORKSPACE as elsewhere),
 # 2. runs bench_sweep (work-precision sweep, stability map, invariants -> docs/data/*.csv),

@@ -2,7 +2,7 @@
 //
 // Each benchmark is one dependent chain (the next step starts from the last result), as in a
 // propagator, so the figure is latency, not throughput of independent steps. Pitfalls kept out
-// (REFERENCE §6): the state changes every iteration so nothing is constant-folded, results go
+// (docs/numerics.md §9): the state changes every iteration so nothing is constant-folded, results go
 // through benchmark::DoNotOptimize, and every step is renormalised as the propagators do.
 //
 //   kinematicStep/<method>   one kinematicStep on a four-sample window, then normalise
@@ -33,7 +33,7 @@ using ap::Integrator;
 
 constexpr double kDt = 1.0 / 200.0;  // s, a 200 Hz gyro
 
-// A coning-like body rate (REFERENCE §2), rad/s.
+// A coning-like body rate (docs/numerics.md §8), rad/s.
 Eigen::Vector3d rateAt(double t) {
   return Eigen::Vector3d(-0.0347, -0.69 * std::sin(6.9 * t), 0.69 * std::cos(6.9 * t));
 }

@@ -1,4 +1,4 @@
-// bench_sweep: runs every integrator on the scenes of DESIGN §7 over a sweep of step sizes and
+// bench_sweep: runs every integrator on the scenes of docs/design.md §8 over a sweep of step sizes and
 // writes, into the output folder,
 //   sweep.csv       work-precision: error and median cost per step for every (scene, method, dt)
 //   stability.csv   error after a fixed time against |w| dt from 1e-3 to 10
@@ -59,7 +59,7 @@ std::vector<bench::DynamicScene> dynamicScenes() {
 }
 
 // The references judge everything else, so they are checked first against known answers:
-// the constant torque from rest (REFERENCE §4) and Hairer-Lubich-Wanner's M(100).
+// the constant torque from rest (docs/numerics.md §8) and Hairer-Lubich-Wanner's M(100).
 bool checkReferences() {
   const double from_rest = bench::referenceSelfCheck();
   const auto scene = bench::freeBodyScene();

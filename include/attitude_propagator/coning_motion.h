@@ -1,5 +1,5 @@
 // The coning motion, the classic strapdown benchmark with a closed-form attitude
-// (REFERENCE §2), shared by the tests, the benchmarks and the demo as their truth.
+// (docs/numerics.md §8), shared by the tests, the benchmarks and the demo as their truth.
 #pragma once
 
 #include <cmath>

@@ -1,9 +1,6 @@
-// Stateful dynamic propagation (DESIGN §4): Euler equations I dw/dt = (I w) x w + T with the
-// kinematics dq/dt = 1/2 q (x) (0, w) (seed notes eqs. 9 and 10), driven by held torques or
-// torque-free, with the time policy of DESIGN §6.
-//
-// CONTRACT for the dynamics issue: the ROS wrapper programs against this API. Implement it in
-// src/core/dynamic_propagator.cpp; extend it, but keep what is here.
+// Stateful dynamic propagation (docs/design.md §4): Euler equations I dw/dt = (I w) x w + T with the
+// kinematics dq/dt = 1/2 q (x) (0, w) (Coutsias–Romero eqs. 9 and 10), driven by held torques or
+// torque-free, with the time policy of docs/design.md §6.
 #pragma once
 
 #include <cstdint>
@@ -64,7 +61,7 @@ class DynamicPropagator {
   /// "numerical_<integrator name>". Logged at start and reported in AttitudeState.
   std::string modelName() const;
 
-  /// Advances the state to time t under DESIGN §6: the first call anchors (the state at t is
+  /// Advances the state to time t under docs/design.md §6: the first call anchors (the state at t is
   /// the initial one), stale stamps do nothing, gaps over max_dt hold the state, a jump back
   /// by more than the threshold resets to the initial state and anchors at t.
   /// Never throws: if the integrator cannot complete the interval (see StampOutcome::FailedStep

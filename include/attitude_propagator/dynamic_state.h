@@ -1,4 +1,4 @@
-// State and torque types of the dynamic model (DESIGN §4), shared by the one-step integrators,
+// State and torque types of the dynamic model (docs/design.md §4), shared by the one-step integrators,
 // the exact torque-free motion and the stateful DynamicPropagator.
 #pragma once
 

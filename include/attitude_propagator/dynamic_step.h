@@ -1,6 +1,6 @@
-// One step of the dynamic model (DESIGN §4, REFERENCE §5): the Euler equations with torque
+// One step of the dynamic model (docs/design.md §4, docs/numerics.md §5): the Euler equations with torque
 // and the kinematics,
-//   I dw/dt = (I w) x w + T,   dq/dt = 1/2 q (x) (0, w)          (seed notes eqs. 10 and 9),
+//   I dw/dt = (I w) x w + T,   dq/dt = 1/2 q (x) (0, w)          (Coutsias–Romero eqs. 10 and 9),
 // integrated together on the state (q, w) by one of the dynamic integrators.
 //
 // All methods work in the principal frame P of the body, where I is diagonal and the Euler
@@ -29,7 +29,7 @@ struct PrincipalState {
   Eigen::Vector3d w_P = Eigen::Vector3d::Zero();
   /// The angular momentum M_P = I w_P as the splittings carry it from step to step. Rounding
   /// it through the rate each step, M -> w = M / I -> M = I w, biases |M| (measured on the HLW
-  /// body, REFERENCE §4, 10^5 steps of 0.1: relative |M| drift 2.4e-12 with the round trip,
+  /// body, docs/numerics.md §8, 10^5 steps of 0.1: relative |M| drift 2.4e-12 with the round trip,
   /// 4e-14 without). A stepper uses M_P only while it is consistent with w_P, i.e. while
   /// w_P == M_P / I exactly as a splitting step leaves them; otherwise (w_P written by the
   /// caller or by another method) it starts from I w_P, so callers may ignore this member.
@@ -79,7 +79,7 @@ const char* stepStatusName(StepStatus status);
 /// |w_P| <= kMaxStateRate (limits.h).
 bool committable(const PrincipalState& x);
 
-/// A dynamic integrator bound to a body: the "stepper with a declared order" of STYLE.md.
+/// A dynamic integrator bound to a body: a stepper with a declared order, as the tests measure it.
 ///
 /// - rk4: classical Runge-Kutta on (q, w), q renormalised after the step. Order 4.
 /// - implicit_midpoint: y1 = y0 + h f((y0 + y1)/2), solved by fixed-point iteration on the

@@ -1,5 +1,5 @@
-// Kinematic integrators on sampled body rates (DESIGN §4, REFERENCE §2):
-// dq_WB/dt = 1/2 q_WB (x) (0, w_B)   (seed notes eq. 9).
+// Kinematic integrators on sampled body rates (docs/design.md §4, docs/numerics.md §2):
+// dq_WB/dt = 1/2 q_WB (x) (0, w_B)   (Coutsias–Romero eq. 9).
 //
 // A step closes the interval between two rate samples when the newer one arrives. It may use
 // older samples, never newer ones, so the propagation is causal.

@@ -1,4 +1,4 @@
-// The node's parameters (DESIGN §5): one struct holding every private parameter with its
+// The node's parameters (docs/design.md §5): one struct holding every private parameter with its
 // default, one list describing them (forEachParameter), and one validator turning them into
 // the core's configuration. No ROS here: the ROS loader (src/ros/parameter_loader.cpp) only
 // reads values into this struct, and the README table and config/default.yaml are checked

@@ -1,7 +1,7 @@
-// Quaternion operations of the seed notes (Coutsias & Romero, "The Quaternions with an
+// Quaternion operations of the Coutsias–Romero notes ("The Quaternions with an
 // application to Rigid Body Dynamics") that Eigen does not already provide.
 //
-// Conventions (REFERENCE §1): Hamilton quaternions; q_WB maps body coordinates to world,
+// Conventions (docs/conventions.md §2): Hamilton quaternions; q_WB maps body coordinates to world,
 // x_W = q_WB X_B q_WB^c (notes eq. 7). Eigen's product, conjugate, norm, vector rotation and
 // rotation matrix (notes §6) are used as they are.
 #pragma once
@@ -13,7 +13,7 @@
 
 namespace attitude_propagator {
 
-/// Exponential map of a rotation vector v (angle |v|, REFERENCE §2):
+/// Exponential map of a rotation vector v (angle |v|, docs/numerics.md §1):
 /// Exp(v) = (cos(|v|/2), sin(|v|/2) v/|v|). Below |v|^2 = 1e-12 a Taylor series is used, so
 /// the result is exact to round-off near zero and never divides by zero. Inline: it is the
 /// inner operation of every Lie-group step.

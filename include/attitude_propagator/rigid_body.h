@@ -1,10 +1,6 @@
-// A rigid body's inertia (DESIGN §4, REFERENCE §3). The user's body frame B may differ from the
+// A rigid body's inertia (docs/design.md §4, docs/numerics.md §6). The user's body frame B may differ from the
 // principal frame P in which the Euler equations are diagonal; q_BP maps principal coordinates
 // to the user's body coordinates, so everything the user sees stays in B.
-//
-// CONTRACT for the dynamics issue: the public API below is used by the ROS wrapper and the
-// benchmarks. Implement it in src/core/rigid_body.cpp; extend it, but do not change what is
-// here without updating its users.
 #pragma once
 
 #include <array>
@@ -18,7 +14,7 @@ class RigidBody {
  public:
   /// Whether the moments must satisfy the triangle inequality I_i <= I_j + I_k, which every
   /// real body does. Ignore admits the mathematical test rotors of the literature, such as
-  /// Hairer-Lubich-Wanner's free body I = (2, 1, 2/3) (REFERENCE §4): the Euler equations
+  /// Hairer-Lubich-Wanner's free body I = (2, 1, 2/3) (docs/numerics.md §8): the Euler equations
   /// and their exact solution do not need the inequality.
   enum class TriangleInequality { Require, Ignore };
 

@@ -1,4 +1,4 @@
-// The time policy of DESIGN §6, shared by the kinematic and the dynamic propagators so the node
+// The time policy of docs/design.md §6, shared by the kinematic and the dynamic propagators so the node
 // only forwards stamps.
 #pragma once
 

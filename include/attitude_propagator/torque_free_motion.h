@@ -1,11 +1,11 @@
-// The exact motion of a free rigid body (integrator `exact`, DESIGN §4, REFERENCE §3): the
+// The exact motion of a free rigid body (integrator `exact`, docs/design.md §4, docs/numerics.md §6): the
 // body rate w(t) and the attitude q(t) in closed form, in the cheapest form the body allows.
 //
 // - sphere (I1 = I2 = I3): w constant, q(t) = q0 (x) Exp(t w).
 // - symmetric top (two equal moments I_perp, symmetry axis e_s with moment I_s):
 //   q(t) = Exp(t m_W / I_perp) (x) q0 (x) Exp(t c e_s), c = M_s (1/I_s - 1/I_perp), and
 //   M(t) = Exp(-t c e_s) M0 in the body.
-// - triaxial: Jacobi elliptic functions (REFERENCE §3 table, cases i and ii on either side of
+// - triaxial: Jacobi elliptic functions (docs/numerics.md §6 table, cases i and ii on either side of
 //   the separatrix, iii on it). With the moments sorted I1 < I2 < I3 and e the axis M
 //   circulates about (e1 in case i, e3 in case ii, e3 on the separatrix),
 //   q(t) = R (x) Exp(psi(t) e) (x) P(M(t)), where P(M) is the rotation taking M/|M| onto e
@@ -19,7 +19,7 @@
 // Precision near the separatrix (k -> 1) hangs on the complementary parameter m_c = 1 - k^2,
 // which is computed from the state without cancellation and used directly: K, F and Pi in
 // Carlson's form (Boost.Math's ellint_rf and ellint_rj, without promotion to long double,
-// 8x faster, REFERENCE §3), and sn, cn, dn by the descending Landen / AGM recursion started
+// 8x faster, docs/numerics.md §6), and sn, cn, dn by the descending Landen / AGM recursion started
 // from sqrt(m_c). Boost's jacobi_elliptic, ellint_1 and ellint_3 take k, whose 1 - k^2 keeps
 // only the absolute round-off 1e-16 of m_c: measured 5e-10 rad after 100 s at m_c = 5e-7,
 // 1e-6 rad at m_c = 5e-11.
@@ -38,7 +38,7 @@ class TorqueFreeMotion {
  public:
   /// Which closed form applies (by the body's moments, to kRelativeSymmetry).
   enum class Form { Sphere, SymmetricTop, Triaxial };
-  /// For a triaxial body, where M0 lies (REFERENCE §3, with I1 < I2 < I3): circulating about
+  /// For a triaxial body, where M0 lies (docs/numerics.md §6, with I1 < I2 < I3): circulating about
   /// the axis of the smallest moment (case i, Delta2 < 0), of the largest (case ii), on the
   /// separatrix (case iii, Delta2 = 0 to round-off), or at rest / a steady rotation about a
   /// principal axis (M along an axis; w constant).

@@ -19,7 +19,7 @@ namespace {
 
 constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
 // The implicit midpoint iteration converges in 8-11 iterations at h = 0.1 on the free body
-// (REFERENCE §5); the cap only stops a step that is too large to contract.
+// (docs/numerics.md §5); the cap only stops a step that is too large to contract.
 constexpr int kMaxMidpointIterations = 100;
 // Yoshida's triple jump: w1 = 1/(2 - 2^(1/3)), w0 = -2^(1/3) w1 (no std::pow at run time).
 constexpr double kCubeRootOfTwo = 1.2599210498948731647672106;

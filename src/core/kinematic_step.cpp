@@ -11,7 +11,7 @@ namespace attitude_propagator {
 namespace {
 
 // Gauss–Legendre nodes and the weights of the fourth-order commutator-free step
-// (REFERENCE §2): c = 1/2 -+ sqrt(3)/6, alpha = 1/4 + sqrt(3)/6, beta = 1/4 - sqrt(3)/6.
+// (docs/numerics.md §2): c = 1/2 -+ sqrt(3)/6, alpha = 1/4 + sqrt(3)/6, beta = 1/4 - sqrt(3)/6.
 constexpr double kSqrt3 = 1.7320508075688772935;
 constexpr double kGauss1 = 0.5 - kSqrt3 / 6.0;
 constexpr double kGauss2 = 0.5 + kSqrt3 / 6.0;

@@ -77,14 +77,14 @@ void TorqueFreeMotion::initSymmetricTop(const Eigen::Vector3d& M_P, int axis) {
 
 namespace {
 
-// Boost.Math promotes double to long double by default, about 8x slower (REFERENCE §3); the
+// Boost.Math promotes double to long double by default, about 8x slower (docs/numerics.md §6); the
 // results without promotion differ by ~1e-14 relative.
 using NoPromotion = boost::math::policies::policy<boost::math::policies::promote_double<false>>;
 
 constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
 constexpr double kPi = 3.14159265358979323846;
 
-/// Rotation P(M) taking M/|M| onto the axis e_i (REFERENCE §3):
+/// Rotation P(M) taking M/|M| onto the axis e_i (docs/numerics.md §6):
 /// P = (c, (M/G x e_i) / (2c)), c = sqrt((1 + M_i/G)/2). Needs M_i > -G; here M_i >= 0.
 Eigen::Quaterniond alignWithAxis(const Eigen::Vector3d& M, double G, int i) {
   const double c = std::sqrt(0.5 * (1.0 + M[i] / G));
@@ -141,10 +141,10 @@ void TorqueFreeMotion::initTriaxial(const RigidBody& body, const Eigen::Vector3d
   const double I1 = I[0], I2 = I[1], I3 = I[2];
   const double I21 = I2 - I1, I31 = I3 - I1, I32 = I3 - I2;
 
-  // Cancellation-free Delta_j = G^2 - 2T I_j (REFERENCE §3): Delta1 >= 0 >= Delta3.
+  // Cancellation-free Delta_j = G^2 - 2T I_j (docs/numerics.md §6): Delta1 >= 0 >= Delta3.
   const double M1s = M[0] * M[0], M3s = M[2] * M[2];
 
-  // Cancellation-free Delta_j = G^2 - 2T I_j (REFERENCE §3), Delta1 >= 0 >= Delta3, written
+  // Cancellation-free Delta_j = G^2 - 2T I_j (docs/numerics.md §6), Delta1 >= 0 >= Delta3, written
   // with w (M_i^2 / I_i = I_i w_i^2) and summed in long double: near the separatrix Delta2 is
   // a difference of two nearly equal terms, and its relative error sets the error of the
   // period (dK = dm_c / (2 m_c)); the state as given is the truth to propagate.

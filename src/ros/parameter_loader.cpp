@@ -61,7 +61,7 @@ void read(const std::string& name, XmlRpc::XmlRpcValue& v, std::vector<double>& 
   }
 }
 
-/// Every private parameter set on the server must be one we know (DESIGN §6): a typo would
+/// Every private parameter set on the server must be one we know (docs/design.md §7.7): a typo would
 /// otherwise silently leave a default in place.
 void rejectUnknownNames(const ros::NodeHandle& pnh) {
   std::vector<std::string> keys;

@@ -1,5 +1,5 @@
-// DynamicPropagator: model selection, the time policy of DESIGN §6, stamp independence of the
-// state (DESIGN §4), torque handling, and bad input.
+// DynamicPropagator: model selection, the time policy of docs/design.md §6, stamp independence of the
+// state (docs/design.md §4), torque handling, and bad input.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -149,7 +149,7 @@ TEST(DynPropagator, TimePolicy) {
                std::invalid_argument);
 }
 
-// DESIGN §4: the state at a stamp does not depend on how the clock got there. One propagator
+// docs/design.md §4: the state at a stamp does not depend on how the clock got there. One propagator
 // visits many irregular stamps, the other only the inputs' stamps and the end; torque samples
 // arrive at the same stamps for both (some between grid points, one late).
 TEST(DynPropagator, StateAtStampIsIndependentOfIntermediateStamps) {
@@ -206,7 +206,7 @@ TEST(DynPropagator, TorqueTimeoutZeroesTheTorque) {
 }
 
 // ---- The exact model (auto without torque): the same time policy, and states that follow the
-// closed forms of REFERENCE §3 from every anchor (first stamp, gap, reset, set_state,
+// closed forms of docs/numerics.md §6 from every anchor (first stamp, gap, reset, set_state,
 // set_rate). The sphere and symmetric-top truths are written here independently of
 // TorqueFreeMotion; the triaxial one is TorqueFreeMotion itself, checked against the published
 // Hairer-Lubich-Wanner values below.
@@ -231,7 +231,7 @@ ap::DynamicState sphereAt(const ap::DynamicState& x0, double t) {
 }
 
 /// Symmetric top with moment I_s about the unit body axis a_B and I_perp across it
-/// (REFERENCE §3 with e3 -> a_B): q(t) = Exp(t G/I_perp m_W/G) (x) q0 (x) Exp(t c a_B),
+/// (docs/numerics.md §6 with e3 -> a_B): q(t) = Exp(t G/I_perp m_W/G) (x) q0 (x) Exp(t c a_B),
 /// c = M_s (1/I_s - 1/I_perp), and M_B(t) = Exp(-t c a_B) M_B(0), w_B = I_B^-1 M_B.
 Truth symmetricTop(double I_perp, double I_s, const Eigen::Vector3d& a_B) {
   return [I_perp, I_s, a_B](const ap::DynamicState& x0, double t) {
@@ -442,7 +442,7 @@ TEST(DynPropagatorExact, StateAtStampIsIndependentOfIntermediateStamps) {
   }
 }
 
-// Hairer-Lubich-Wanner's free body through the propagator (REFERENCE §4): anchored at 2 s and
+// Hairer-Lubich-Wanner's free body through the propagator (docs/numerics.md §8): anchored at 2 s and
 // walked through irregular stamps, M in the body at anchor + 10 s is the published M(10).
 TEST(DynPropagatorExact, TriaxialMatchesPublishedValues) {
   ap::DynamicPropagator p(freeBodyConfig(ap::Integrator::Auto));

@@ -1,5 +1,5 @@
 // The dynamic integrators against truths: invariants of the free rigid body (Hairer-Lubich-
-// Wanner's test problem, REFERENCE §4), convergence orders measured against the exact
+// Wanner's test problem, docs/numerics.md §8), convergence orders measured against the exact
 // solution and compared with the declared ones, the Dzhanibekov flip, and constant torque from
 // rest along a principal axis (w = T t / I, angle T t^2 / (2 I)).
 #include <gtest/gtest.h>
@@ -118,7 +118,7 @@ TEST(DynStep, FreeBodyInvariants) {
     EXPECT_GT(s.energy_max, 0.0);
   }
 
-  // rk4: the slow drift of a non-symplectic method, energy error ~ C t h^4 (REFERENCE §5:
+  // rk4: the slow drift of a non-symplectic method, energy error ~ C t h^4 (docs/numerics.md §5:
   // 1.4e-6 at t = 1000, so ~1e-5 at t = 10^4), growing from the first tenth to the last.
   const InvariantHistory rk4 = runFreeBody(ap::Integrator::Rk4, h, n);
   EXPECT_GT(rk4.energy_last_tenth, 5.0 * rk4.energy_first_tenth);

@@ -1,4 +1,4 @@
-// The time and bad-input policy of DESIGN §6 in the kinematic propagator.
+// The time and bad-input policy of docs/design.md §6–§7 in the kinematic propagator.
 #include <gtest/gtest.h>
 
 #include <cmath>

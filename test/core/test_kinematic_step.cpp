@@ -49,7 +49,7 @@ ap::KinematicPropagator makePropagator(Integrator method, const Eigen::Quaternio
 constexpr int kStartUpSamples = 3;
 
 // Largest attitude error along the whole path after start-up (not only at the end: at whole
-// cone periods a first-order error telescopes away, REFERENCE §2).
+// cone periods a first-order error telescopes away, docs/numerics.md §2).
 double coningMaxError(Integrator method, double rate_hz, double duration) {
   const ConingMotion cone;
   auto propagator = makePropagator(method, cone.attitude(0.0));
@@ -206,7 +206,7 @@ TEST(Cf4, FourthOrderOnJitteredSamples) {
   EXPECT_GE(errors[1] / errors[2], 12.0) << errors[1] << " -> " << errors[2];
 }
 
-// The Magnus form of REFERENCE §2 is an independent fourth-order step: one cf4 step and one
+// The Magnus form of docs/numerics.md §2 is an independent fourth-order step: one cf4 step and one
 // Magnus step on the same cubic agree to O(h^5).
 TEST(Cf4, AgreesWithTheFourthOrderMagnusStep) {
   const ConingMotion cone;

@@ -1,4 +1,4 @@
-// The quaternion layer against the claims of the seed notes (Coutsias & Romero), checked as
+// The quaternion layer against the claims of the Coutsias–Romero notes, checked as
 // properties over many random quaternions.
 #include <gtest/gtest.h>
 

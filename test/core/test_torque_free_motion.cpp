@@ -1,5 +1,5 @@
 // The exact torque-free motion against published values (Hairer-Lubich-Wanner's free body,
-// REFERENCE §4), closed forms (period of the Dzhanibekov flip) and an independent tight
+// docs/numerics.md §8), closed forms (period of the Dzhanibekov flip) and an independent tight
 // numerical reference: Boost.Odeint's Bulirsch-Stoer at 1e-14 on the Euler equations written
 // with the full inertia tensor in the user's frame (no principal axes, no sorting).
 #include <gtest/gtest.h>
@@ -88,7 +88,7 @@ ap::DynamicState stateWithMomentum(const ap::RigidBody& body, const Eigen::Vecto
 
 }  // namespace
 
-// REFERENCE §4: I = (2, 1, 2/3), M0 = (cos 1.1, 0, sin 1.1). Their body frame is ours (P = B),
+// docs/numerics.md §8: I = (2, 1, 2/3), M0 = (cos 1.1, 0, sin 1.1). Their body frame is ours (P = B),
 // so M(t) compares component by component.
 TEST(DynTorqueFree, HairerLubichWannerPublishedValues) {
   const ap::RigidBody body =

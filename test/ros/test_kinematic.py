@@ -228,7 +228,7 @@ class KinematicTest(unittest.TestCase):
         self.diag.wait_counter("/twx/attitude_propagator", "rejected_type", before + 1)
         self.assertEqual(self.nodes["twx"].state.count(), 0)
 
-    # -- DESIGN §6 ----------------------------------------------------------------------------
+    # -- docs/design.md §6–§7 ----------------------------------------------------------------------------
 
     def test_rep145_no_rate_is_rejected(self):
         before = self.diag.counter("/kin/attitude_propagator", "rejected_no_rate") or 0
