@@ -10,7 +10,7 @@
 # memory (GNU time), and evaluate_bag_core's time against the sum of the five propagate_bag
 # runs. The same with --csv output when CSV=1.
 #
-# Usage: bench/bag_throughput.sh [SECONDS_OF_DATA] [WORK_DIR]   (from the devel space built
+# Usage: bash bench/bag_throughput.sh [SECONDS_OF_DATA] [WORK_DIR]   (from the devel space built
 # by scripts/build.sh; never part of the tests)
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/../scripts/common.sh"

@@ -125,7 +125,8 @@ Eigen::Matrix3d wahba(const std::vector<Eigen::Vector3d>& a, const std::vector<E
   for (std::size_t i = 0; i < a.size(); ++i) H += a[i] * b[i].transpose();
   const Eigen::JacobiSVD<Eigen::Matrix3d> plain(H);
   const double s1 = plain.singularValues()(0);
-  if (second_singular_ratio) *second_singular_ratio = s1 > 0.0 ? plain.singularValues()(1) / s1 : 0.0;
+  if (second_singular_ratio)
+    *second_singular_ratio = s1 > 0.0 ? plain.singularValues()(1) / s1 : 0.0;
   H += kIdentityPrior * std::max(s1, std::numeric_limits<double>::min()) *
        Eigen::Matrix3d::Identity();
   const Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
@@ -160,7 +161,7 @@ OffsetEstimate estimateOffset(const std::vector<TimedRate>& gyro, const RateTrac
   }
   if (!std::isfinite(best_cost) || worst_cost - best_cost <= kFlatCriterion * scale) {
     e.how = !std::isfinite(best_cost) ? "not observable: rates and truth do not overlap"
-            : mount ? "not observable: the rates do not change enough"
+            : mount                   ? "not observable: the rates do not change enough"
                     : "not observable with an unknown mount (a time shift of this motion is "
                       "a rotation; give --mount or --offset)";
     return e;

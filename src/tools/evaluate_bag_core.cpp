@@ -39,7 +39,8 @@ namespace attitude_propagator {
 namespace tools {
 namespace {
 
-const char* const kUsage = R"(usage: evaluate_bag_core IN.bag --rates TOPIC (--truth TOPIC | --truth-tf PARENT CHILD)
+const char* const kUsage =
+    R"(usage: evaluate_bag_core IN.bag --rates TOPIC (--truth TOPIC | --truth-tf PARENT CHILD)
                          [options]
 
 Runs every kinematic integrator with each rate_samples choice over the rate topic, compares
@@ -364,7 +365,7 @@ class Method : public EngineSink {
   std::string integrator_, samples_;
   std::unique_ptr<AttitudeEngine> engine_;
   bool started_ = false;
-  std::vector<float> batch_costs_;  // ns per sample, one per batch
+  std::vector<float> batch_costs_;                            // ns per sample, one per batch
   std::deque<std::pair<Stamp, Eigen::Quaterniond>> pending_;  // states awaiting the truth
   std::optional<Eigen::Quaterniond> align_;                   // A = q_VW
   std::optional<Stamp> t0_;
@@ -608,9 +609,10 @@ bool Evaluation::decodeTruth(const rosbag::MessageInstance& m, TruthSample& out)
     out = {stampOr(odometry_.header.stamp, record_), toEigen(odometry_.pose.pose.orientation)};
   } else {
     decodeInto(m, buffer_, tf_);
-    const auto it = std::find_if(tf_.transforms.begin(), tf_.transforms.end(), [this](const auto& t) {
-      return t.header.frame_id == o_.tf_parent && t.child_frame_id == o_.tf_child;
-    });
+    const auto it =
+        std::find_if(tf_.transforms.begin(), tf_.transforms.end(), [this](const auto& t) {
+          return t.header.frame_id == o_.tf_parent && t.child_frame_id == o_.tf_child;
+        });
     if (it == tf_.transforms.end()) return false;
     out = {stampOr(it->header.stamp, record_), rotationOf(*it)};
   }
@@ -741,25 +743,28 @@ std::size_t Evaluation::recommended() const {
 void Evaluation::report(std::FILE* out) const {
   const double span = double(last_rate_ - first_rate_) * kNs;
   std::fprintf(out, "evaluate_bag: %s, %.1f s of rates\n", o_.input.c_str(), span);
-  std::fprintf(out, "  rates %s (%s): %llu samples, %.1f Hz\n", rates_topic_.c_str(), rates_type_.c_str(),
-               static_cast<unsigned long long>(rate_count_), rate_period_ > 0 ? 1.0 / rate_period_ : 0.0);
+  std::fprintf(out, "  rates %s (%s): %llu samples, %.1f Hz\n", rates_topic_.c_str(),
+               rates_type_.c_str(), static_cast<unsigned long long>(rate_count_),
+               rate_period_ > 0 ? 1.0 / rate_period_ : 0.0);
   std::fprintf(out, "  truth %s%s (%s): %llu samples, %.1f Hz; gaps above %.4g s are skipped%s\n",
                truth_topic_.c_str(),
                o_.tf_parent.empty() ? "" : (" " + o_.tf_parent + " -> " + o_.tf_child).c_str(),
                truth_type_.c_str(), static_cast<unsigned long long>(truth_count_),
                truth_period_ > 0 ? 1.0 / truth_period_ : 0.0, truth_gap_,
-               truth_unordered_ > 0
-                   ? (", " + std::to_string(truth_unordered_) + " out-of-order truth samples ignored").c_str()
-                   : "");
-  std::fprintf(out, "  time offset (truth - rates): %+.4f ms as instantaneous, %+.4f ms as interval "
+               truth_unordered_ > 0 ? (", " + std::to_string(truth_unordered_) +
+                                       " out-of-order truth samples ignored")
+                                          .c_str()
+                                    : "");
+  std::fprintf(out,
+               "  time offset (truth - rates): %+.4f ms as instantaneous, %+.4f ms as interval "
                "averages (%s)\n",
-               offset_instantaneous_ * 1e3, offset_averaged_ * 1e3,
-               offset_estimate_.how.c_str());
+               offset_instantaneous_ * 1e3, offset_averaged_ * 1e3, offset_estimate_.how.c_str());
   const double mount_angle = 2.0 * std::atan2(mount_.vec().norm(), std::abs(mount_.w()));
   std::fprintf(out, "  mount q_ST [x y z w] = [%.6f %.6f %.6f %.6f] (%.3f deg; %s)\n", mount_.x(),
                mount_.y(), mount_.z(), mount_.w(), mount_angle * 180.0 / M_PI, mount_note_.c_str());
   const Method& first = *methods_.front();
-  std::fprintf(out, "  compared per method: %llu; in truth gaps: %llu; outside the truth: %llu; "
+  std::fprintf(out,
+               "  compared per method: %llu; in truth gaps: %llu; outside the truth: %llu; "
                "before the truth: %llu\n",
                static_cast<unsigned long long>(first.compared),
                static_cast<unsigned long long>(first.in_gap),
@@ -780,11 +785,10 @@ void Evaluation::report(std::FILE* out) const {
       }
       return std::string(text);
     };
-    std::fprintf(out, "  %-24s %s %s %s %s %s %9.1f%s\n", m.name().c_str(),
-                 cell(m.max_error, 10).c_str(), cell(m.rms(), 10).c_str(),
-                 cell(m.drift(), 11).c_str(), cell(m.window(0).rms(), 10).c_str(),
-                 cell(m.window(1).rms(), 10).c_str(), m.costNs(),
-                 i == pick ? "  <- recommended" : "");
+    std::fprintf(
+        out, "  %-24s %s %s %s %s %s %9.1f%s\n", m.name().c_str(), cell(m.max_error, 10).c_str(),
+        cell(m.rms(), 10).c_str(), cell(m.drift(), 11).c_str(), cell(m.window(0).rms(), 10).c_str(),
+        cell(m.window(1).rms(), 10).c_str(), m.costNs(), i == pick ? "  <- recommended" : "");
   }
   const Method& r = *methods_[pick];
   std::fprintf(out,
@@ -796,20 +800,21 @@ void Evaluation::report(std::FILE* out) const {
 
 void Evaluation::writeCsv(const std::string& summary_path, const std::string& series_path) {
   CsvFile summary(summary_path);
-  std::fputs("method,integrator,rate_samples,offset_s,compared,in_truth_gaps,outside_truth,"
-             "max_error_rad,rms_error_rad,drift_rad_per_s,rpe_1s_rms_rad,rpe_1s_max_rad,"
-             "rpe_10s_rms_rad,rpe_10s_max_rad,cost_ns_per_sample,recommended\n",
-             summary.get());
+  std::fputs(
+      "method,integrator,rate_samples,offset_s,compared,in_truth_gaps,outside_truth,"
+      "max_error_rad,rms_error_rad,drift_rad_per_s,rpe_1s_rms_rad,rpe_1s_max_rad,"
+      "rpe_10s_rms_rad,rpe_10s_max_rad,cost_ns_per_sample,recommended\n",
+      summary.get());
   const std::size_t pick = recommended();
   for (std::size_t i = 0; i < methods_.size(); ++i) {
     const Method& m = *methods_[i];
-    std::fprintf(summary.get(), "%s,%s,%s,%.9g,%llu,%llu,%llu,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.2f,%d\n",
-                 m.name().c_str(), m.integrator().c_str(), m.samples().c_str(), m.offset,
-                 static_cast<unsigned long long>(m.compared),
-                 static_cast<unsigned long long>(m.in_gap),
-                 static_cast<unsigned long long>(m.outside), m.max_error, m.rms(), m.drift(),
-                 m.window(0).rms(), m.window(0).max, m.window(1).rms(), m.window(1).max,
-                 m.costNs(), i == pick ? 1 : 0);
+    std::fprintf(
+        summary.get(), "%s,%s,%s,%.9g,%llu,%llu,%llu,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.2f,%d\n",
+        m.name().c_str(), m.integrator().c_str(), m.samples().c_str(), m.offset,
+        static_cast<unsigned long long>(m.compared), static_cast<unsigned long long>(m.in_gap),
+        static_cast<unsigned long long>(m.outside), m.max_error, m.rms(), m.drift(),
+        m.window(0).rms(), m.window(0).max, m.window(1).rms(), m.window(1).max, m.costNs(),
+        i == pick ? 1 : 0);
   }
   summary.close();
   CsvFile series(series_path);

@@ -210,9 +210,9 @@ class CsvWriter : public Writer {
                  "%s,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,"
                  "%.9g,%.9g,%.9g,%.3g,%llu,%.17g,%.17g,%.17g,%.17g\n",
                  formatStamp(s.stamp).c_str(), q.x(), q.y(), q.z(), q.w(), s.w_B.x(), s.w_B.y(),
-                 s.w_B.z(), P(0, 0), P(0, 1), P(0, 2), P(1, 0), P(1, 1), P(1, 2), P(2, 0),
-                 P(2, 1), P(2, 2), s.norm_error, static_cast<unsigned long long>(s.steps),
-                 s.M_B.x(), s.M_B.y(), s.M_B.z(), s.kinetic_energy);
+                 s.w_B.z(), P(0, 0), P(0, 1), P(0, 2), P(1, 0), P(1, 1), P(1, 2), P(2, 0), P(2, 1),
+                 P(2, 2), s.norm_error, static_cast<unsigned long long>(s.steps), s.M_B.x(),
+                 s.M_B.y(), s.M_B.z(), s.kinetic_energy);
   }
   void imu(const sensor_msgs::Imu&, const EngineState&, const Eigen::Quaterniond&,
            const ros::Time&) override {}
@@ -351,8 +351,8 @@ void BagPropagator::run(const std::string& path) {
     }
   } catch (const rosbag::BagException& e) {
     progress.finish();
-    throw ToolError(o_.input + ": damaged after " + std::to_string(messages_) +
-                    " messages (" + e.what() + ")");
+    throw ToolError(o_.input + ": damaged after " + std::to_string(messages_) + " messages (" +
+                    e.what() + ")");
   }
   throwIfInterrupted();
   writer_->close();
@@ -399,9 +399,8 @@ void BagPropagator::onImu(const rosbag::MessageInstance& m) {
   input.source = Source::Imu;
   input.stamp = stampOr(msg.header.stamp, record_);
   input.value = *q_BI * toEigen(msg.angular_velocity);
-  input.rate_covariance_B = R_I.isZero(0.0) || !R_I.allFinite()
-                                ? R_I
-                                : rotateCovariance(R_I, q_BI->toRotationMatrix());
+  input.rate_covariance_B =
+      R_I.isZero(0.0) || !R_I.allFinite() ? R_I : rotateCovariance(R_I, q_BI->toRotationMatrix());
   if (engine_->dynamicModel()) {
     input.payload = std::make_shared<ImuPayload>(imu_);  // may wait for the clock
   } else {
@@ -532,8 +531,9 @@ std::optional<Eigen::Quaterniond> BagPropagator::staticRotation(const std::strin
     // The bag's static transforms, read once (a handful of messages).
     static_tf_ = std::make_unique<tf2::BufferCore>();
     if (topicType(bag_, o_.static_tf_topic)) {
-      rosbag::View view(bag_, rosbag::TopicQuery(
-                                  std::vector<std::string>{recordedName(bag_, o_.static_tf_topic)}));
+      rosbag::View view(
+          bag_,
+          rosbag::TopicQuery(std::vector<std::string>{recordedName(bag_, o_.static_tf_topic)}));
       for (const rosbag::MessageInstance& m : view) {
         if (!isType<tf2_msgs::TFMessage>(m)) continue;
         tf2_msgs::TFMessage tf;
@@ -545,8 +545,10 @@ std::optional<Eigen::Quaterniond> BagPropagator::staticRotation(const std::strin
   try {
     return rotationOf(static_tf_->lookupTransform(target, source, ros::Time(0))).normalized();
   } catch (const tf2::TransformException&) {
-    std::fprintf(stderr, "propagate_bag: no static transform %s -> %s in %s: its messages are "
-                         "dropped\n", target.c_str(), source.c_str(), o_.input.c_str());
+    std::fprintf(stderr,
+                 "propagate_bag: no static transform %s -> %s in %s: its messages are "
+                 "dropped\n",
+                 target.c_str(), source.c_str(), o_.input.c_str());
     return std::nullopt;
   }
 }
@@ -559,7 +561,8 @@ void BagPropagator::summary(std::FILE* out) const {
   }
   std::string dropped;
   auto add = [&dropped](const char* name, std::uint64_t n) {
-    if (n > 0) dropped += (dropped.empty() ? "" : ", ") + std::string(name) + " " + std::to_string(n);
+    if (n > 0)
+      dropped += (dropped.empty() ? "" : ", ") + std::string(name) + " " + std::to_string(n);
   };
   add("stale", c.dropped_stale);
   add("non-finite", c.rejected_non_finite);
@@ -571,16 +574,17 @@ void BagPropagator::summary(std::FILE* out) const {
   add("no-time", c.dropped_no_time);
   add("bias", c.rejected_bias);
   const std::uint64_t accepted = o_.io_floor ? floor_accepted_ : c.accepted;
-  std::fprintf(out,
-               "propagate_bag: %llu messages (%s), %llu accepted, dropped: %s; %llu resets, "
-               "%llu gaps, %llu late; %llu states -> %s; %.3f s wall, %.0f msg/s, %.0fx real "
-               "time%s\n",
-               static_cast<unsigned long long>(messages_), by_topic.c_str(),
-               static_cast<unsigned long long>(accepted), dropped.empty() ? "none" : dropped.c_str(),
-               static_cast<unsigned long long>(c.resets), static_cast<unsigned long long>(c.gaps),
-               static_cast<unsigned long long>(c.late), static_cast<unsigned long long>(states_),
-               o_.output.c_str(), wall_, wall_ > 0 ? double(messages_) / wall_ : 0.0,
-               wall_ > 0 ? bag_seconds_ / wall_ : 0.0, o_.io_floor ? " (I/O floor: no propagation)" : "");
+  std::fprintf(
+      out,
+      "propagate_bag: %llu messages (%s), %llu accepted, dropped: %s; %llu resets, "
+      "%llu gaps, %llu late; %llu states -> %s; %.3f s wall, %.0f msg/s, %.0fx real "
+      "time%s\n",
+      static_cast<unsigned long long>(messages_), by_topic.c_str(),
+      static_cast<unsigned long long>(accepted), dropped.empty() ? "none" : dropped.c_str(),
+      static_cast<unsigned long long>(c.resets), static_cast<unsigned long long>(c.gaps),
+      static_cast<unsigned long long>(c.late), static_cast<unsigned long long>(states_),
+      o_.output.c_str(), wall_, wall_ > 0 ? double(messages_) / wall_ : 0.0,
+      wall_ > 0 ? bag_seconds_ / wall_ : 0.0, o_.io_floor ? " (I/O floor: no propagation)" : "");
 }
 
 int run(int argc, char** argv) {

@@ -134,11 +134,14 @@ void openBag(rosbag::Bag& bag, const std::string& path) {
   try {
     bag.open(path, rosbag::bagmode::Read);
   } catch (const rosbag::BagUnindexedException&) {
-    throw ToolError(path + ": the bag is unindexed (a recording that did not end cleanly); "
-                           "`rosbag reindex " + path + "` rebuilds its index");
+    throw ToolError(path +
+                    ": the bag is unindexed (a recording that did not end cleanly); "
+                    "`rosbag reindex " +
+                    path + "` rebuilds its index");
   } catch (const rosbag::BagException& e) {
     throw ToolError(path + ": not a readable bag, truncated or damaged (" + e.what() + ", " +
-                    std::to_string(size) + " bytes); `rosbag reindex` may recover a truncated "
+                    std::to_string(size) +
+                    " bytes); `rosbag reindex` may recover a truncated "
                     "recording");
   }
 }
@@ -197,8 +200,8 @@ std::string requireTopic(rosbag::Bag& bag, const std::string& topic, const char*
                       c->datatype + " (md5 " + c->md5sum + "); accepted: " + names);
     }
   }
-  if (view.size() == 0) throw ToolError(bag.getFileName() + ": " + role + " topic '" + in +
-                                        "' has no messages");
+  if (view.size() == 0)
+    throw ToolError(bag.getFileName() + ": " + role + " topic '" + in + "' has no messages");
   return connections.front()->datatype;
 }
 

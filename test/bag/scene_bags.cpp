@@ -68,7 +68,9 @@ void toMsg(const Eigen::Quaterniond& q, geometry_msgs::Quaternion& m) {
   m.x = q.x(), m.y = q.y(), m.z = q.z(), m.w = q.w();
 }
 
-void toMsg(const Eigen::Vector3d& v, geometry_msgs::Vector3& m) { m.x = v.x(), m.y = v.y(), m.z = v.z(); }
+void toMsg(const Eigen::Vector3d& v, geometry_msgs::Vector3& m) {
+  m.x = v.x(), m.y = v.y(), m.z = v.z();
+}
 
 void writeRate(rosbag::Bag& bag, const SceneBag& s, Stamp stamp, const Eigen::Vector3d& w) {
   const ros::Time t = rosTime(stamp);
@@ -263,7 +265,8 @@ std::vector<std::vector<std::pair<std::string, std::string>>> readCsv(const std:
   while (std::getline(in, line)) {
     const auto cells = split(line);
     std::vector<std::pair<std::string, std::string>> row;
-    for (std::size_t i = 0; i < header.size() && i < cells.size(); ++i) row.emplace_back(header[i], cells[i]);
+    for (std::size_t i = 0; i < header.size() && i < cells.size(); ++i)
+      row.emplace_back(header[i], cells[i]);
     rows.push_back(row);
   }
   return rows;

@@ -17,7 +17,7 @@ using Stamp = std::int64_t;
 /// Physical time 0 of every scene: a stamp near today's epoch, so that the tools meet
 /// stamps as real bags have them.
 constexpr Stamp kStart = 1700000000LL * 1000000000LL;
-Stamp stampAt(double t);  ///< kStart + t seconds, rounded to the nanosecond
+Stamp stampAt(double t);        ///< kStart + t seconds, rounded to the nanosecond
 double secondsOf(Stamp stamp);  ///< (stamp - kStart) in seconds
 
 /// A motion: the sensor's attitude q_WS(t) and the body rate w_S(t) that generates it.
@@ -49,7 +49,7 @@ struct SceneBag {
   TruthType truth = TruthType::Pose;
   std::string truth_topic = "/truth";
   double truth_hz = 200.0;
-  double truth_offset = 0.0;  ///< s: the truth of instant t is stamped t + truth_offset
+  double truth_offset = 0.0;              ///< s: the truth of instant t is stamped t + truth_offset
   double gap_from = -1.0, gap_to = -1.0;  ///< s: no truth sample stamped in between
   Eigen::Quaterniond fixed = Eigen::Quaterniond::Identity();  ///< A = q_VW
   Eigen::Quaterniond mount = Eigen::Quaterniond::Identity();  ///< q_ST

@@ -6,9 +6,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <iostream>
-#include <cstdlib>
 #include <map>
 #include <regex>
 #include <string>
@@ -97,7 +97,7 @@ TEST(PropagateBag, ConingImuFollowsTheClosedForm) {
   const Written w = writeSceneBag(dir.file("in.bag"), scene);
   const auto q0 = scene.motion.attitude(0.0);
   const RunResult r = run(kPropagate + " " + dir.file("in.bag") + " -o " + dir.file("out.bag") +
-                    " --set integrator=cf4" + setQuaternion("initial_orientation", q0));
+                          " --set integrator=cf4" + setQuaternion("initial_orientation", q0));
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find(std::to_string(w.rate_stamps.size()) + " accepted"), std::string::npos)
       << r.output;
@@ -108,7 +108,9 @@ TEST(PropagateBag, ConingImuFollowsTheClosedForm) {
   for (std::size_t k = 0; k < out.states.size(); ++k) {
     ASSERT_EQ(static_cast<Stamp>(out.states[k].header.stamp.toNSec()), w.rate_stamps[k]);
     EXPECT_EQ(out.states[k].integrator, "cf4");
-    EXPECT_EQ(ap::rotationAngle(toEigen(out.imu[k].orientation), toEigen(out.states[k].orientation)), 0.0);
+    EXPECT_EQ(
+        ap::rotationAngle(toEigen(out.imu[k].orientation), toEigen(out.states[k].orientation)),
+        0.0);
     EXPECT_EQ(out.tf[k].transforms.at(0).child_frame_id, "base_link");
   }
   EXPECT_LT(largestError(out.states, scene.motion.attitude), 1e-6);
@@ -157,11 +159,12 @@ TEST(PropagateBag, AveragedJitteredLossyStream) {
   const Written w = writeSceneBag(dir.file("in.bag"), scene);
   double largest_delay = 0.0;
   for (std::size_t k = 0; k < w.rate_stamps.size(); ++k) {
-    largest_delay = std::max(largest_delay, std::abs(secondsOf(w.rate_stamps[k]) - w.rate_times[k]));
+    largest_delay =
+        std::max(largest_delay, std::abs(secondsOf(w.rate_stamps[k]) - w.rate_times[k]));
   }
   const RunResult r = run(kPropagate + " " + dir.file("in.bag") + " --csv " + dir.file("out.csv") +
-                    " --set integrator=cf4 --set rate_samples=interval_average" +
-                    setQuaternion("initial_orientation", scene.motion.attitude(0.0)));
+                          " --set integrator=cf4 --set rate_samples=interval_average" +
+                          setQuaternion("initial_orientation", scene.motion.attitude(0.0)));
   ASSERT_EQ(r.status, 0) << r.output;
   const auto rows = readCsv(dir.file("out.csv"));
   ASSERT_EQ(rows.size(), w.rate_stamps.size());
@@ -181,10 +184,11 @@ TEST(PropagateBag, AveragedJitteredLossyStream) {
 void torquedBody(double clock_hz) {
   TempDir dir;
   const double T = 0.3, I = 4.0, duration = 10.0;
-  writeTorqueBag(dir.file("in.bag"), Eigen::Vector3d(0, 0, T), 50.0, duration, clock_hz, "base_link");
+  writeTorqueBag(dir.file("in.bag"), Eigen::Vector3d(0, 0, T), 50.0, duration, clock_hz,
+                 "base_link");
   const RunResult r = run(kPropagate + " " + dir.file("in.bag") + " -o " + dir.file("out.bag") +
-                    " --set inertia=[2,3,4] --set torque_input=true --set rate_input=none"
-                    " --set integrator=rk4 --set publish_rate=100");
+                          " --set inertia=[2,3,4] --set torque_input=true --set rate_input=none"
+                          " --set integrator=rk4 --set publish_rate=100");
   ASSERT_EQ(r.status, 0) << r.output;
   const Output out = readOutput(dir.file("out.bag"));
   ASSERT_EQ(out.states.size(), std::size_t(duration * 100) + 1) << r.output;
@@ -210,8 +214,8 @@ TEST(PropagateBag, TwistStampedRates) {
   scene.truth = TruthType::None;
   writeSceneBag(dir.file("in.bag"), scene);
   const RunResult r = run(kPropagate + " " + dir.file("in.bag") + " -o " + dir.file("out.bag") +
-                    " --set rate_input=twist" +
-                    setQuaternion("initial_orientation", scene.motion.attitude(0.0)));
+                          " --set rate_input=twist" +
+                          setQuaternion("initial_orientation", scene.motion.attitude(0.0)));
   ASSERT_EQ(r.status, 0) << r.output;
   const Output out = readOutput(dir.file("out.bag"));
   EXPECT_EQ(out.states.size(), 1001u);
@@ -227,7 +231,8 @@ TEST(PropagateBag, IoFloorWritesTheSameMessages) {
   scene.duration = 2.0;
   writeSceneBag(dir.file("in.bag"), scene);
   ASSERT_EQ(run(kPropagate + " " + dir.file("in.bag") + " -o " + dir.file("a.bag")).status, 0);
-  const RunResult r = run(kPropagate + " " + dir.file("in.bag") + " -o " + dir.file("b.bag") + " --io-floor");
+  const RunResult r =
+      run(kPropagate + " " + dir.file("in.bag") + " -o " + dir.file("b.bag") + " --io-floor");
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_EQ(readOutput(dir.file("a.bag")).count, readOutput(dir.file("b.bag")).count);
 }
@@ -263,8 +268,7 @@ TEST(PropagateBag, BadBagsAreRefused) {
   writeSceneBag(dir.file("good.bag"), scene);
   expectRefused(dir, dir.file("missing.bag"), "cannot open");
   expectRefused(dir, dir.file("good.bag") + " --rates /nothing", "no rate topic '/nothing'");
-  expectRefused(dir, dir.file("good.bag") + " --rates /truth",
-                "carries geometry_msgs/PoseStamped");
+  expectRefused(dir, dir.file("good.bag") + " --rates /truth", "carries geometry_msgs/PoseStamped");
   const std::string good = fileText(dir.file("good.bag"));
   writeText(dir.file("truncated.bag"), good.substr(0, good.size() / 2));
   expectRefused(dir, dir.file("truncated.bag"), "truncated");
@@ -333,7 +337,8 @@ TEST(EvaluateBag, ConingPointSamples) {
   TempDir dir;
   SceneBag scene;
   scene.motion = coning();
-  scene.fixed = Eigen::Quaterniond(Eigen::AngleAxisd(2.0, Eigen::Vector3d(1, -2, 0.5).normalized()));
+  scene.fixed =
+      Eigen::Quaterniond(Eigen::AngleAxisd(2.0, Eigen::Vector3d(1, -2, 0.5).normalized()));
   const Written w = writeSceneBag(dir.file("in.bag"), scene);
   const Evaluation e = evaluate(dir, "--truth /truth --offset 0 --mount 0 0 0 1");
   ASSERT_EQ(e.run.status, 0) << e.run.output;
@@ -349,7 +354,8 @@ TEST(EvaluateBag, ConingPointSamples) {
             10.0 * e.number("cf4/instantaneous", "rms_error_rad"));
   EXPECT_EQ(e.recommended(), "cf4/instantaneous") << e.run.output;
   EXPECT_NE(e.run.output.find("recommendation: integrator cf4, rate_samples instantaneous"),
-            std::string::npos) << e.run.output;
+            std::string::npos)
+      << e.run.output;
 }
 
 // Interval-averaged samples, 5 % lost, stamps jittered by 10 us: read as interval means they
@@ -451,8 +457,9 @@ TEST(EvaluateBag, TruthTypes) {
     writeSceneBag(dir.file("in.bag"), scene);
     const std::string truth =
         type == TruthType::Tf ? "--truth-tf map body_truth" : "--truth /truth";
-    const Evaluation e = evaluate(dir, truth + " --offset 0 --mount 0 0 0 1 --integrators cf4 "
-                                               "--rate-samples instantaneous");
+    const Evaluation e = evaluate(dir, truth +
+                                           " --offset 0 --mount 0 0 0 1 --integrators cf4 "
+                                           "--rate-samples instantaneous");
     ASSERT_EQ(e.run.status, 0) << e.run.output;
     EXPECT_LT(e.number("cf4/instantaneous", "max_error_rad"), 1e-6) << e.run.output;
   }
