@@ -1,0 +1,197 @@
+#include "alignment.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/SVD>
+
+#include "attitude_propagator/quaternion.h"
+
+namespace attitude_propagator {
+namespace tools {
+
+namespace {
+
+// |w| counts as varying when its variance exceeds this share of its mean square (1 % in
+// magnitude); below, only the directions can tell the offset.
+constexpr double kVaryingMagnitude = 1e-4;
+// A criterion whose range over the searched offsets is below this share of the mean square
+// rate cannot tell one offset from another (e.g. coning with an unknown mount, where a time
+// shift is exactly a rotation of the mount).
+constexpr double kFlatCriterion = 1e-6;
+// Offsets at which fewer than this share of the gyro samples meet the truth are not tried.
+constexpr double kMinOverlap = 0.5;
+// Relative weight of the identity added to Wahba's matrix: picks the rotation closest to the
+// identity among equally good ones, moving a well-determined one by about this much.
+constexpr double kIdentityPrior = 1e-9;
+
+struct Pairs {
+  std::vector<Eigen::Vector3d> gyro;   // w_S(t_i)
+  std::vector<Eigen::Vector3d> truth;  // w_T(t_i + offset)
+};
+
+Pairs pairsAt(const std::vector<TimedRate>& gyro, const RateTrack& truth, double offset) {
+  Pairs p;
+  p.gyro.reserve(gyro.size());
+  p.truth.reserve(gyro.size());
+  for (const TimedRate& g : gyro) {
+    if (const auto w_T = truth.at(g.t + offset)) {
+      p.gyro.push_back(g.w);
+      p.truth.push_back(*w_T);
+    }
+  }
+  return p;
+}
+
+double magnitudeCost(const Pairs& p) {
+  double sum = 0.0;
+  for (std::size_t i = 0; i < p.gyro.size(); ++i) {
+    const double d = p.gyro[i].norm() - p.truth[i].norm();
+    sum += d * d;
+  }
+  return sum / double(p.gyro.size());
+}
+
+double vectorCost(const Pairs& p, const std::optional<Eigen::Matrix3d>& mount) {
+  const Eigen::Matrix3d R = mount ? *mount : wahba(p.gyro, p.truth);
+  double sum = 0.0;
+  for (std::size_t i = 0; i < p.gyro.size(); ++i) sum += (p.gyro[i] - R * p.truth[i]).squaredNorm();
+  return sum / double(p.gyro.size());
+}
+
+double meanSquare(const std::vector<TimedRate>& gyro) {
+  double sum = 0.0;
+  for (const auto& g : gyro) sum += g.w.squaredNorm();
+  return gyro.empty() ? 0.0 : sum / double(gyro.size());
+}
+
+double magnitudeVariance(const std::vector<TimedRate>& gyro) {
+  double sum = 0.0, sum2 = 0.0;
+  for (const auto& g : gyro) {
+    sum += g.w.norm();
+    sum2 += g.w.squaredNorm();
+  }
+  const double n = double(gyro.size());
+  return n > 0 ? std::max(0.0, sum2 / n - (sum / n) * (sum / n)) : 0.0;
+}
+
+}  // namespace
+
+double medianInterval(const std::vector<double>& times) {
+  if (times.size() < 2) return 0.0;
+  std::vector<double> d;
+  d.reserve(times.size() - 1);
+  for (std::size_t i = 1; i < times.size(); ++i) d.push_back(times[i] - times[i - 1]);
+  std::nth_element(d.begin(), d.begin() + d.size() / 2, d.end());
+  return d[d.size() / 2];
+}
+
+Eigen::Quaterniond slerp(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b, double s) {
+  return a * expMap(s * logMap(a.conjugate() * b));
+}
+
+std::vector<TimedRate> differentiate(const std::vector<TimedAttitude>& attitudes, double gap) {
+  std::vector<TimedRate> rates;
+  for (std::size_t k = 1; k < attitudes.size(); ++k) {
+    const double h = attitudes[k].t - attitudes[k - 1].t;
+    if (!(h > 0.0) || h > gap) continue;
+    const Eigen::Vector3d w = logMap(attitudes[k - 1].q.conjugate() * attitudes[k].q) / h;
+    rates.push_back({attitudes[k - 1].t + 0.5 * h, w});
+  }
+  return rates;
+}
+
+std::optional<Eigen::Vector3d> RateTrack::at(double t) const {
+  const std::size_t n = rates_.size();
+  if (n < 2 || t < rates_.front().t || t > rates_.back().t) return std::nullopt;
+  if (cursor_ >= n || rates_[cursor_].t > t) {
+    const auto it = std::upper_bound(rates_.begin(), rates_.end(), t,
+                                     [](double x, const TimedRate& r) { return x < r.t; });
+    cursor_ = static_cast<std::size_t>(std::max<std::ptrdiff_t>(it - rates_.begin() - 1, 0));
+  }
+  while (cursor_ + 1 < n && rates_[cursor_ + 1].t <= t) ++cursor_;
+  if (cursor_ + 1 >= n) return rates_.back().w;  // t is the last time exactly
+  const TimedRate& a = rates_[cursor_];
+  const TimedRate& b = rates_[cursor_ + 1];
+  if (b.t - a.t > gap_) return std::nullopt;
+  const double s = (t - a.t) / (b.t - a.t);
+  return (1.0 - s) * a.w + s * b.w;
+}
+
+Eigen::Matrix3d wahba(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b,
+                      double* second_singular_ratio) {
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+  for (std::size_t i = 0; i < a.size(); ++i) H += a[i] * b[i].transpose();
+  const Eigen::JacobiSVD<Eigen::Matrix3d> plain(H);
+  const double s1 = plain.singularValues()(0);
+  if (second_singular_ratio)
+    *second_singular_ratio = s1 > 0.0 ? plain.singularValues()(1) / s1 : 0.0;
+  H += kIdentityPrior * std::max(s1, std::numeric_limits<double>::min()) *
+       Eigen::Matrix3d::Identity();
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  // R = U diag(1, 1, det(U V^T)) V^T: the nearest proper rotation (no reflection).
+  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+  D(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
+  return svd.matrixU() * D * svd.matrixV().transpose();
+}
+
+OffsetEstimate estimateOffset(const std::vector<TimedRate>& gyro, const RateTrack& truth,
+                              double max_offset, double step,
+                              const std::optional<Eigen::Matrix3d>& mount) {
+  OffsetEstimate e;
+  const double scale = meanSquare(gyro);
+  const bool by_magnitude = magnitudeVariance(gyro) > kVaryingMagnitude * scale;
+  auto cost = [&](double offset, bool magnitude) {
+    const Pairs p = pairsAt(gyro, truth, offset);
+    if (double(p.gyro.size()) < kMinOverlap * double(gyro.size())) {
+      return std::numeric_limits<double>::infinity();
+    }
+    return magnitude ? magnitudeCost(p) : vectorCost(p, mount);
+  };
+  // Coarse: every step over the range.
+  const int n = std::max(1, static_cast<int>(std::ceil(max_offset / step)));
+  double best = 0.0, best_cost = std::numeric_limits<double>::infinity();
+  double worst_cost = 0.0;
+  for (int j = -n; j <= n; ++j) {
+    const double c = cost(j * step, by_magnitude);
+    if (!std::isfinite(c)) continue;
+    worst_cost = std::max(worst_cost, c);
+    if (c < best_cost) best_cost = c, best = j * step;
+  }
+  if (!std::isfinite(best_cost) || worst_cost - best_cost <= kFlatCriterion * scale) {
+    e.how = !std::isfinite(best_cost) ? "not observable: rates and truth do not overlap"
+            : mount                   ? "not observable: the rates do not change enough"
+                    : "not observable with an unknown mount (a time shift of this motion is "
+                      "a rotation; give --mount or --offset)";
+    return e;
+  }
+  // Fine: golden-section search on the vectors within one step of the coarse minimum.
+  const double phi = 0.5 * (std::sqrt(5.0) - 1.0);
+  double lo = best - step, hi = best + step;
+  double x1 = hi - phi * (hi - lo), x2 = lo + phi * (hi - lo);
+  double c1 = cost(x1, false), c2 = cost(x2, false);
+  for (int it = 0; it < 60 && hi - lo > 1e-9; ++it) {
+    if (c1 < c2) {
+      hi = x2, x2 = x1, c2 = c1;
+      x1 = hi - phi * (hi - lo), c1 = cost(x1, false);
+    } else {
+      lo = x1, x1 = x2, c1 = c2;
+      x2 = lo + phi * (hi - lo), c2 = cost(x2, false);
+    }
+  }
+  e.offset = 0.5 * (lo + hi);
+  e.observable = true;
+  e.how = std::string(by_magnitude ? "|w| matched" : "rate vectors matched") + ", refined on " +
+          (mount ? "the vectors through the given mount" : "the vectors through the best mount");
+  return e;
+}
+
+Eigen::Matrix3d estimateMount(const std::vector<TimedRate>& gyro, const RateTrack& truth,
+                              double offset, double* second_singular_ratio) {
+  const Pairs p = pairsAt(gyro, truth, offset);
+  return wahba(p.gyro, p.truth, second_singular_ratio);
+}
+
+}  // namespace tools
+}  // namespace attitude_propagator

@@ -1,0 +1,83 @@
+// Aligning a rate stream with a truth attitude stream (evaluate_bag): the time offset between
+// the two clocks, the rotation between the rate sensor and the truth's body, interpolation of
+// the truth between its samples. No ROS: plain Eigen on stamps in seconds.
+//
+// Frames: the truth gives q_VT (truth body T in the truth's fixed frame V); a rate sensor S
+// measures w_S; integrating it gives q_WS. With q_ST the mount (x_S = q_ST x_T, so
+// w_S = q_ST w_T) and A = q_VW a fixed rotation, q_VT(t + offset) = A q_WS(t) q_ST.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+namespace attitude_propagator {
+namespace tools {
+
+struct TimedRate {
+  double t;  ///< s
+  Eigen::Vector3d w;
+};
+
+struct TimedAttitude {
+  double t;  ///< s
+  Eigen::Quaterniond q;
+};
+
+/// Median of the intervals between consecutive times (0 with fewer than two).
+double medianInterval(const std::vector<double>& times);
+
+/// q_a Exp(s Log(q_a^c q_b)): the rotation a fraction s of the way from q_a to q_b along the
+/// shorter arc (slerp, through the accurate log and exp maps).
+Eigen::Quaterniond slerp(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b, double s);
+
+/// Body rates from consecutive attitudes, w_k = Log(q_k^c q_{k+1}) / (t_{k+1} - t_k), placed
+/// at the mid-time (the interval's mean rate, accurate to O(h^2) there). Pairs further apart
+/// than `gap` give none.
+std::vector<TimedRate> differentiate(const std::vector<TimedAttitude>& attitudes, double gap);
+
+/// Piecewise-linear interpolation of rates between neighbours closer than `gap`.
+class RateTrack {
+ public:
+  RateTrack(const std::vector<TimedRate>& rates, double gap) : rates_(rates), gap_(gap) {}
+  /// The rate at t, or nothing outside the track or inside a gap. Calls with increasing t
+  /// are cheapest (a cursor moves forward; a smaller t searches from the start).
+  std::optional<Eigen::Vector3d> at(double t) const;
+
+ private:
+  const std::vector<TimedRate>& rates_;
+  double gap_;
+  mutable std::size_t cursor_ = 0;
+};
+
+/// The rotation R (a proper rotation) minimising sum |a_i - R b_i|^2 (Wahba's problem, by
+/// the SVD of sum a_i b_i^T). A tiny multiple of the identity is added to that sum, so when
+/// the vectors leave a rotation unobservable (all along one axis) the solution closest to the
+/// identity is chosen. `second_singular_ratio` receives sigma_2 / sigma_1 of the sum (near 0:
+/// one axis only).
+Eigen::Matrix3d wahba(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b,
+                      double* second_singular_ratio = nullptr);
+
+struct OffsetEstimate {
+  double offset = 0.0;      ///< s: truth time = rate time + offset
+  bool observable = false;  ///< false: the data cannot tell (offset 0 used)
+  std::string how;          ///< which criterion decided, for the report
+};
+
+/// The offset that best matches the gyro rates w_S(t_i) with the truth's rates w_T(t_i +
+/// offset), searched in [-max_offset, max_offset] on a grid of `step`, then refined by
+/// golden-section search within one step. Criterion: the mean squared difference of |w|
+/// (which no mount changes) when |w| varies; otherwise (a constant |w|, e.g. coning) of the
+/// vectors, through `mount` R_ST or, without one, the best rotation per offset.
+OffsetEstimate estimateOffset(const std::vector<TimedRate>& gyro, const RateTrack& truth,
+                              double max_offset, double step,
+                              const std::optional<Eigen::Matrix3d>& mount);
+
+/// The mount R_ST fitted by wahba() to w_S(t_i) and w_T(t_i + offset).
+Eigen::Matrix3d estimateMount(const std::vector<TimedRate>& gyro, const RateTrack& truth,
+                              double offset, double* second_singular_ratio);
+
+}  // namespace tools
+}  // namespace attitude_propagator

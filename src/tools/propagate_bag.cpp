@@ -1,0 +1,614 @@
+// propagate_bag: the node's propagation over a recorded bag, as fast as the machine allows.
+// Reads the rate topic (sensor_msgs/Imu, geometry_msgs/Twist or TwistStamped) and, in the
+// dynamic model, the torque topic, with the node's parameters and YAML, through the same core
+// engine; writes attitude_state, imu/data and /tf into an output bag at the input messages'
+// record times (or the states into a CSV). The bag is read chunk by chunk (rosbag::View),
+// never whole.
+//
+// Time, as the node under sim time: a /clock topic in the bag drives the engine's clock. Without
+// one, the input stamps do (each input is submitted, then the clock ticks to its stamp, so a
+// grid stamp's state includes the inputs stamped up to it).
+#include <cstdio>
+#include <cstring>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <geometry_msgs/Twist.h>
+#include <geometry_msgs/TwistStamped.h>
+#include <geometry_msgs/Vector3Stamped.h>
+#include <geometry_msgs/Wrench.h>
+#include <geometry_msgs/WrenchStamped.h>
+#include <rosgraph_msgs/Clock.h>
+#include <sensor_msgs/Imu.h>
+#include <tf2/buffer_core.h>
+#include <tf2/exceptions.h>
+#include <tf2_msgs/TFMessage.h>
+
+#include "attitude_propagator/AttitudeState.h"
+#include "attitude_propagator/engine.h"
+#include "attitude_propagator/orientation_covariance.h"
+#include "attitude_propagator/ros/conversions.h"
+#include "tool_support.h"
+
+namespace attitude_propagator {
+namespace tools {
+namespace {
+
+const char* const kUsage = R"(usage: propagate_bag IN.bag [options]
+
+Propagates the attitude over a recorded bag with the node's engine and parameters, as fast as
+the machine allows, and writes attitude_state, imu/data and /tf into a bag (or a CSV).
+
+  -o, --output OUT.bag   output bag (default: IN.propagated.bag)
+  --csv OUT.csv          write the states as CSV instead of a bag
+  --config FILE.yaml     node parameters (the keys of config/default.yaml)
+  --set name=value       one node parameter (YAML value), after --config; repeatable
+  --rates TOPIC          rate topic (default /imu/data_raw, or /body_twist for rate_input twist)
+  --torque TOPIC         torque topic, dynamic model with torque_input (default /torque)
+  --clock TOPIC          clock topic driving the engine when present (default /clock)
+  --no-clock             ignore the clock topic: input stamps drive the engine
+  --io-floor             read, decode and write the same outputs without propagating (one
+                         identity state per input): the I/O cost alone, for benchmarks
+  --no-progress          no progress line (it is shown only on a terminal anyway)
+  -h, --help             this text
+)";
+
+struct Options {
+  std::string input;
+  std::string output;
+  bool csv = false;
+  std::string rates_topic;
+  std::string torque_topic = "/torque";
+  std::string clock_topic = "/clock";
+  std::string bias_topic = "/gyro_bias";
+  std::string static_tf_topic = "/tf_static";
+  bool use_clock = true;
+  bool io_floor = false;
+  bool progress = true;
+  Parameters parameters;
+};
+
+Options parseOptions(int argc, char** argv) {
+  Options o;
+  std::vector<std::string> configs, sets;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "-h" || a == "--help") {
+      std::cout << kUsage;
+      std::exit(0);
+    } else if (a == "-o" || a == "--output") {
+      o.output = optionValue(argc, argv, i);
+    } else if (a == "--csv") {
+      o.output = optionValue(argc, argv, i);
+      o.csv = true;
+    } else if (a == "--config") {
+      configs.push_back(optionValue(argc, argv, i));
+    } else if (a == "--set") {
+      sets.push_back(optionValue(argc, argv, i));
+    } else if (a == "--rates") {
+      o.rates_topic = optionValue(argc, argv, i);
+    } else if (a == "--torque") {
+      o.torque_topic = optionValue(argc, argv, i);
+    } else if (a == "--clock") {
+      o.clock_topic = optionValue(argc, argv, i);
+    } else if (a == "--no-clock") {
+      o.use_clock = false;
+    } else if (a == "--io-floor") {
+      o.io_floor = true;
+    } else if (a == "--no-progress") {
+      o.progress = false;
+    } else if (!a.empty() && a[0] == '-') {
+      throw ToolError(a + ": unknown option (see --help)");
+    } else if (o.input.empty()) {
+      o.input = a;
+    } else {
+      throw ToolError(a + ": one input bag only (see --help)");
+    }
+  }
+  if (o.input.empty()) throw ToolError("no input bag (see --help)");
+  for (const auto& c : configs) loadConfigFile(c, o.parameters);
+  for (const auto& s : sets) applySetting(s, o.parameters);
+  if (o.output.empty()) {
+    const bool bag = o.input.size() > 4 && o.input.compare(o.input.size() - 4, 4, ".bag") == 0;
+    o.output = (bag ? o.input.substr(0, o.input.size() - 4) : o.input) + ".propagated.bag";
+  }
+  if (o.rates_topic.empty()) {
+    o.rates_topic = o.parameters.rate_input == "twist" ? "/body_twist" : "/imu/data_raw";
+  }
+  return o;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Outputs
+// ---------------------------------------------------------------------------------------------
+
+/// Where states (and the republished IMU messages) go.
+class Writer {
+ public:
+  virtual ~Writer() = default;
+  virtual void state(const EngineState& s, const ros::Time& record) = 0;
+  virtual void imu(const sensor_msgs::Imu& input, const EngineState& s,
+                   const Eigen::Quaterniond& q_BI, const ros::Time& record) = 0;
+  virtual void close() = 0;
+};
+
+/// attitude_state, imu/data and /tf as the node publishes them, into a bag.
+class BagWriter : public Writer {
+ public:
+  BagWriter(const std::string& path, const Parameters& p, const AttitudeEngine& engine)
+      : publish_tf_(p.publish_tf), reverse_tf_(p.reverse_tf) {
+    bag_.open(path, rosbag::bagmode::Write);
+    state_.header.frame_id = p.fixed_frame;
+    state_.child_frame_id = p.body_frame;
+    state_.model = engine.modelName();
+    state_.integrator = integratorName(engine.integrator());
+    tf_.transforms.resize(1);
+    auto& t = tf_.transforms[0];
+    t.header.frame_id = p.reverse_tf ? p.body_frame : p.fixed_frame;
+    t.child_frame_id = p.reverse_tf ? p.fixed_frame : p.body_frame;
+  }
+
+  void state(const EngineState& s, const ros::Time& record) override {
+    const ros::Time stamp = toRosTime(s.stamp);
+    if (publish_tf_) {
+      auto& t = tf_.transforms[0];
+      t.header.stamp = stamp;
+      toMsg(reverse_tf_ ? s.q_WB.conjugate() : s.q_WB, t.transform.rotation);
+      bag_.write("/tf", record, tf_);
+    }
+    state_.header.stamp = stamp;
+    toMsg(s.q_WB, state_.orientation);
+    covarianceToMsg(s.P_B, state_.orientation_covariance);
+    toMsg(s.w_B, state_.angular_velocity);
+    toMsg(s.M_B, state_.angular_momentum);
+    state_.kinetic_energy = s.kinetic_energy;
+    state_.norm_error = s.norm_error;
+    state_.steps = s.steps;
+    bag_.write("/attitude_state", record, state_);
+  }
+
+  void imu(const sensor_msgs::Imu& input, const EngineState& s, const Eigen::Quaterniond& q_BI,
+           const ros::Time& record) override {
+    // As the node: the input with the orientation of the IMU's own frame and its covariance.
+    imu_ = input;
+    imu_.header.stamp = toRosTime(s.stamp);
+    toMsg(s.q_WB * q_BI, imu_.orientation);
+    covarianceToMsg(rotateCovariance(s.P_B, q_BI.conjugate().toRotationMatrix()),
+                    imu_.orientation_covariance);
+    bag_.write("/imu/data", record, imu_);
+  }
+
+  void close() override { bag_.close(); }
+
+ private:
+  rosbag::Bag bag_;
+  bool publish_tf_;
+  bool reverse_tf_;
+  AttitudeState state_;
+  tf2_msgs::TFMessage tf_;
+  sensor_msgs::Imu imu_;
+};
+
+/// One line per state.
+class CsvWriter : public Writer {
+ public:
+  explicit CsvWriter(const std::string& path) : file_(path) {
+    std::fputs(
+        "stamp,qx,qy,qz,qw,wx,wy,wz,P_xx,P_xy,P_xz,P_yx,P_yy,P_yz,P_zx,P_zy,P_zz,norm_error,"
+        "steps,Mx,My,Mz,kinetic_energy\n",
+        file_.get());
+  }
+
+  void state(const EngineState& s, const ros::Time&) override {
+    const auto& q = s.q_WB;
+    const auto& P = s.P_B;
+    std::fprintf(file_.get(),
+                 "%s,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,"
+                 "%.9g,%.9g,%.9g,%.3g,%llu,%.17g,%.17g,%.17g,%.17g\n",
+                 formatStamp(s.stamp).c_str(), q.x(), q.y(), q.z(), q.w(), s.w_B.x(), s.w_B.y(),
+                 s.w_B.z(), P(0, 0), P(0, 1), P(0, 2), P(1, 0), P(1, 1), P(1, 2), P(2, 0), P(2, 1),
+                 P(2, 2), s.norm_error, static_cast<unsigned long long>(s.steps), s.M_B.x(),
+                 s.M_B.y(), s.M_B.z(), s.kinetic_energy);
+  }
+  void imu(const sensor_msgs::Imu&, const EngineState&, const Eigen::Quaterniond&,
+           const ros::Time&) override {}
+  void close() override { file_.close(); }
+
+ private:
+  CsvFile file_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// The run
+// ---------------------------------------------------------------------------------------------
+
+/// An IMU message kept with its input until the engine applies it, with its sensor mount.
+struct ImuPayload {
+  sensor_msgs::Imu msg;
+  Eigen::Quaterniond q_BI = Eigen::Quaterniond::Identity();
+};
+
+class BagPropagator : public EngineSink {
+ public:
+  BagPropagator(const Options& o, rosbag::Bag& bag)
+      : o_(o), bag_(bag), config_(validateParameters(o.parameters)) {
+    engine_ = std::make_unique<AttitudeEngine>(EngineConfig::from(config_), *this);
+  }
+
+  /// Checks the topics, then runs; writes into `path` (a temporary name).
+  void run(const std::string& path);
+  void summary(std::FILE* out) const;
+
+  // EngineSink
+  void publishState(const EngineState& state) override {
+    ++states_;
+    writer_->state(state, record_);
+  }
+  void inputApplied(const Input& input, const EngineState& state) override {
+    if (!input.payload) return;
+    const auto& imu = *static_cast<const ImuPayload*>(input.payload.get());
+    writer_->imu(imu.msg, state, imu.q_BI, record_);
+  }
+  void note(const EngineNote&) override {}  // counted by the engine, summarised at the end
+
+ private:
+  std::vector<std::string> checkTopics();
+  void dispatch(const rosbag::MessageInstance& m);
+  void onImu(const rosbag::MessageInstance& m);
+  void onTwist(const rosbag::MessageInstance& m);
+  void onTorque(const rosbag::MessageInstance& m);
+  void onBias(const rosbag::MessageInstance& m);
+  void submit(Input& input);
+  void tickTo(Stamp now);
+  const Eigen::Quaterniond* mountRotation(const std::string& frame_id);
+  std::optional<Eigen::Quaterniond> staticRotation(const std::string& target,
+                                                   const std::string& source);
+
+  const Options& o_;
+  rosbag::Bag& bag_;
+  NodeConfig config_;
+  std::unique_ptr<AttitudeEngine> engine_;
+  std::unique_ptr<Writer> writer_;
+  std::string rates_, torque_, clock_, bias_;  // as recorded; empty: not read
+  bool clock_driven_ = false;
+  ros::Time record_;  // record time of the message being handled
+  std::optional<Stamp> last_tick_;
+  std::optional<std::string> twist_type_, wrench_type_;
+  ImuPayload imu_;
+  geometry_msgs::TwistStamped twist_stamped_;
+  geometry_msgs::Twist twist_;
+  geometry_msgs::WrenchStamped wrench_stamped_;
+  geometry_msgs::Wrench wrench_;
+  geometry_msgs::Vector3Stamped bias_msg_;
+  rosgraph_msgs::Clock clock_msg_;
+  std::vector<std::uint8_t> buffer_;
+  std::unique_ptr<tf2::BufferCore> static_tf_;
+  std::map<std::string, std::optional<Eigen::Quaterniond>> mounts_;
+  std::map<std::string, std::uint64_t> read_;  // messages read per role
+  std::uint64_t messages_ = 0;
+  std::uint64_t states_ = 0;
+  std::uint64_t floor_accepted_ = 0;  // --io-floor: inputs passed straight to the outputs
+  double wall_ = 0.0;
+  double bag_seconds_ = 0.0;
+};
+
+std::vector<std::string> BagPropagator::checkTopics() {
+  std::vector<std::string> topics;
+  const bool dynamic = config_.model == Model::Dynamic;
+  if (config_.rate_input == RateInput::Imu) {
+    requireTopic(bag_, o_.rates_topic, "rate", {typeOf<sensor_msgs::Imu>()});
+  } else if (config_.rate_input == RateInput::Twist) {
+    requireTopic(bag_, o_.rates_topic, "rate",
+                 {typeOf<geometry_msgs::Twist>(), typeOf<geometry_msgs::TwistStamped>()});
+  }
+  if (config_.rate_input != RateInput::None) {
+    rates_ = recordedName(bag_, o_.rates_topic);
+    topics.push_back(rates_);
+  }
+  if (dynamic && config_.torque_input) {
+    requireTopic(bag_, o_.torque_topic, "torque",
+                 {typeOf<geometry_msgs::Wrench>(), typeOf<geometry_msgs::WrenchStamped>()});
+    torque_ = recordedName(bag_, o_.torque_topic);
+    topics.push_back(torque_);
+  }
+  if (topics.empty()) {
+    throw ToolError("nothing to read: rate_input is none and torque_input is off");
+  }
+  if (o_.use_clock && topicType(bag_, o_.clock_topic)) {
+    requireTopic(bag_, o_.clock_topic, "clock", {typeOf<rosgraph_msgs::Clock>()});
+    clock_ = recordedName(bag_, o_.clock_topic);
+    topics.push_back(clock_);
+    clock_driven_ = true;
+  }
+  if (config_.rate_input != RateInput::None && topicType(bag_, o_.bias_topic)) {
+    requireTopic(bag_, o_.bias_topic, "gyro bias", {typeOf<geometry_msgs::Vector3Stamped>()});
+    bias_ = recordedName(bag_, o_.bias_topic);
+    topics.push_back(bias_);
+  }
+  return topics;
+}
+
+void BagPropagator::run(const std::string& path) {
+  const std::vector<std::string> topics = checkTopics();
+  if (o_.csv) {
+    writer_ = std::make_unique<CsvWriter>(path);
+  } else {
+    writer_ = std::make_unique<BagWriter>(path, config_.parameters, *engine_);
+  }
+  rosbag::View view(bag_, rosbag::TopicQuery(topics));
+  bag_seconds_ = (view.getEndTime() - view.getBeginTime()).toSec();
+  Progress progress(view.size(), o_.progress);
+  try {
+    for (const rosbag::MessageInstance& m : view) {
+      record_ = m.getTime();
+      dispatch(m);
+      progress.update(++messages_);
+      if ((messages_ & 1023u) == 0) throwIfInterrupted();
+    }
+  } catch (const rosbag::BagException& e) {
+    progress.finish();
+    throw ToolError(o_.input + ": damaged after " + std::to_string(messages_) + " messages (" +
+                    e.what() + ")");
+  }
+  throwIfInterrupted();
+  writer_->close();
+  progress.finish();
+  wall_ = progress.elapsed();
+}
+
+void BagPropagator::dispatch(const rosbag::MessageInstance& m) {
+  const std::string& topic = m.getTopic();
+  ++read_[topic];
+  if (topic == rates_) {
+    if (config_.rate_input == RateInput::Imu) {
+      onImu(m);
+    } else {
+      onTwist(m);
+    }
+  } else if (topic == torque_) {
+    onTorque(m);
+  } else if (topic == clock_) {
+    decodeInto(m, buffer_, clock_msg_);
+    if (!o_.io_floor) engine_->clockTick(toStamp(clock_msg_.clock));
+  } else if (topic == bias_) {
+    onBias(m);
+  }
+}
+
+void BagPropagator::onImu(const rosbag::MessageInstance& m) {
+  decodeInto(m, buffer_, imu_.msg);
+  const sensor_msgs::Imu& msg = imu_.msg;
+  if (msg.angular_velocity_covariance[0] == -1.0) {
+    engine_->reject(Rejection::NoRate);  // REP-145: no rate in this message
+    return;
+  }
+  const Eigen::Matrix3d R_I = covarianceFromMsg(msg.angular_velocity_covariance);
+  const RateCovarianceCheck check = checkRateCovariance(R_I);
+  if (check != RateCovarianceCheck::Ok && check != RateCovarianceCheck::NonFinite) {
+    engine_->reject(Rejection::BadCovariance);
+    return;
+  }
+  const Eigen::Quaterniond* q_BI = mountRotation(msg.header.frame_id);
+  if (!q_BI) return;
+  imu_.q_BI = *q_BI;
+  Input input;
+  input.source = Source::Imu;
+  input.stamp = stampOr(msg.header.stamp, record_);
+  input.value = *q_BI * toEigen(msg.angular_velocity);
+  input.rate_covariance_B =
+      R_I.isZero(0.0) || !R_I.allFinite() ? R_I : rotateCovariance(R_I, q_BI->toRotationMatrix());
+  if (engine_->dynamicModel()) {
+    input.payload = std::make_shared<ImuPayload>(imu_);  // may wait for the clock
+  } else {
+    // Applied before submit() returns: point at the reused message, no allocation.
+    input.payload = std::shared_ptr<const void>(std::shared_ptr<const void>(), &imu_);
+  }
+  submit(input);
+}
+
+void BagPropagator::onTwist(const rosbag::MessageInstance& m) {
+  // As the node: the first message fixes the topic's type.
+  if (!twist_type_) twist_type_ = m.getDataType();
+  if (m.getDataType() != *twist_type_) {
+    engine_->reject(Rejection::WrongType);
+    return;
+  }
+  Input input;
+  input.source = Source::Twist;
+  std::string frame_id;
+  if (isType<geometry_msgs::TwistStamped>(m)) {
+    decodeInto(m, buffer_, twist_stamped_);
+    input.stamp = stampOr(twist_stamped_.header.stamp, record_);
+    input.value = toEigen(twist_stamped_.twist.angular);
+    frame_id = twist_stamped_.header.frame_id;
+  } else {
+    decodeInto(m, buffer_, twist_);
+    input.stamp = toStamp(record_);
+    input.value = toEigen(twist_.angular);
+  }
+  const Eigen::Quaterniond* q_BS = mountRotation(frame_id);
+  if (!q_BS) return;
+  input.value = *q_BS * input.value;
+  submit(input);
+}
+
+void BagPropagator::onTorque(const rosbag::MessageInstance& m) {
+  if (!wrench_type_) wrench_type_ = m.getDataType();
+  if (m.getDataType() != *wrench_type_) {
+    engine_->reject(Rejection::WrongType);
+    return;
+  }
+  Input input;
+  input.source = Source::Torque;
+  input.frame = config_.torque_frame;
+  std::string frame_id;
+  if (isType<geometry_msgs::WrenchStamped>(m)) {
+    decodeInto(m, buffer_, wrench_stamped_);
+    input.stamp = stampOr(wrench_stamped_.header.stamp, record_);
+    input.value = toEigen(wrench_stamped_.wrench.torque);
+    frame_id = wrench_stamped_.header.frame_id;
+  } else {
+    decodeInto(m, buffer_, wrench_);
+    input.stamp = toStamp(record_);
+    input.value = toEigen(wrench_.torque);
+  }
+  const auto& p = config_.parameters;
+  if (frame_id == p.body_frame || frame_id == p.fixed_frame) {
+    input.frame = frame_id == p.body_frame ? TorqueFrame::Body : TorqueFrame::Fixed;
+  } else if (!frame_id.empty() && input.value.allFinite()) {
+    // A third frame: rotated into the body through the bag's static transforms.
+    const auto q_B_frame = staticRotation(p.body_frame, frame_id);
+    if (!q_B_frame) {
+      engine_->reject(Rejection::NoTransform);
+      return;
+    }
+    input.value = *q_B_frame * input.value;
+    input.frame = TorqueFrame::Body;
+  }
+  submit(input);
+}
+
+void BagPropagator::onBias(const rosbag::MessageInstance& m) {
+  decodeInto(m, buffer_, bias_msg_);
+  const std::string& frame = bias_msg_.header.frame_id;
+  const Eigen::Quaterniond* q_B = mountRotation(frame);
+  if (!q_B) {
+    engine_->rejectBias();
+    return;
+  }
+  const Stamp stamp = stampOr(bias_msg_.header.stamp, record_);
+  if (!o_.io_floor) engine_->submitBias(stamp, *q_B * toEigen(bias_msg_.vector));
+}
+
+void BagPropagator::submit(Input& input) {
+  if (o_.io_floor) {
+    // The same outputs without propagating: one identity state per input.
+    ++floor_accepted_;
+    EngineState s;
+    s.stamp = input.stamp;
+    s.w_B = input.value;
+    publishState(s);
+    inputApplied(input, s);
+    return;
+  }
+  engine_->submit(input);
+  if (!clock_driven_ && engine_->dynamicModel()) tickTo(input.stamp);
+}
+
+void BagPropagator::tickTo(Stamp now) {
+  // Steps of at most half the grid budget, so no grid stamp is ever deferred; a jump longer
+  // than max_dt stays one tick (a gap, as the node treats a clock that jumps ahead).
+  const auto& p = config_.parameters;
+  const auto step = static_cast<Stamp>(0.5 * 1000.0 / p.publish_rate * 1e9);
+  if (last_tick_ && now > *last_tick_ && double(now - *last_tick_) * 1e-9 <= p.max_dt) {
+    for (Stamp t = *last_tick_ + step; t < now; t += step) engine_->clockTick(t);
+  }
+  engine_->clockTick(now);
+  last_tick_ = last_tick_ ? std::max(*last_tick_, now) : now;
+}
+
+const Eigen::Quaterniond* BagPropagator::mountRotation(const std::string& frame_id) {
+  static const Eigen::Quaterniond kIdentity = Eigen::Quaterniond::Identity();
+  if (frame_id.empty() || frame_id == config_.parameters.body_frame) return &kIdentity;
+  auto it = mounts_.find(frame_id);
+  if (it == mounts_.end()) {
+    it = mounts_.emplace(frame_id, staticRotation(config_.parameters.body_frame, frame_id)).first;
+  }
+  if (!it->second) {
+    engine_->reject(Rejection::NoTransform);
+    return nullptr;
+  }
+  return &*it->second;
+}
+
+std::optional<Eigen::Quaterniond> BagPropagator::staticRotation(const std::string& target,
+                                                                const std::string& source) {
+  if (!static_tf_) {
+    // The bag's static transforms, read once (a handful of messages).
+    static_tf_ = std::make_unique<tf2::BufferCore>();
+    if (topicType(bag_, o_.static_tf_topic)) {
+      rosbag::View view(
+          bag_,
+          rosbag::TopicQuery(std::vector<std::string>{recordedName(bag_, o_.static_tf_topic)}));
+      for (const rosbag::MessageInstance& m : view) {
+        if (!isType<tf2_msgs::TFMessage>(m)) continue;
+        tf2_msgs::TFMessage tf;
+        decodeInto(m, buffer_, tf);
+        for (const auto& t : tf.transforms) static_tf_->setTransform(t, "bag", true);
+      }
+    }
+  }
+  try {
+    return rotationOf(static_tf_->lookupTransform(target, source, ros::Time(0))).normalized();
+  } catch (const tf2::TransformException&) {
+    std::fprintf(stderr,
+                 "propagate_bag: no static transform %s -> %s in %s: its messages are "
+                 "dropped\n",
+                 target.c_str(), source.c_str(), o_.input.c_str());
+    return std::nullopt;
+  }
+}
+
+void BagPropagator::summary(std::FILE* out) const {
+  const EngineCounters& c = engine_->counters();
+  std::string by_topic;
+  for (const auto& [topic, n] : read_) {
+    by_topic += (by_topic.empty() ? "" : ", ") + topic + " " + std::to_string(n);
+  }
+  std::string dropped;
+  auto add = [&dropped](const char* name, std::uint64_t n) {
+    if (n > 0)
+      dropped += (dropped.empty() ? "" : ", ") + std::string(name) + " " + std::to_string(n);
+  };
+  add("stale", c.dropped_stale);
+  add("non-finite", c.rejected_non_finite);
+  add("out-of-range", c.rejected_out_of_range);
+  add("no-rate", c.rejected_no_rate);
+  add("type", c.rejected_type);
+  add("covariance", c.rejected_covariance);
+  add("no-tf", c.dropped_no_tf);
+  add("no-time", c.dropped_no_time);
+  add("bias", c.rejected_bias);
+  const std::uint64_t accepted = o_.io_floor ? floor_accepted_ : c.accepted;
+  std::fprintf(
+      out,
+      "propagate_bag: %llu messages (%s), %llu accepted, dropped: %s; %llu resets, "
+      "%llu gaps, %llu late; %llu states -> %s; %.3f s wall, %.0f msg/s, %.0fx real "
+      "time%s\n",
+      static_cast<unsigned long long>(messages_), by_topic.c_str(),
+      static_cast<unsigned long long>(accepted), dropped.empty() ? "none" : dropped.c_str(),
+      static_cast<unsigned long long>(c.resets), static_cast<unsigned long long>(c.gaps),
+      static_cast<unsigned long long>(c.late), static_cast<unsigned long long>(states_),
+      o_.output.c_str(), wall_, wall_ > 0 ? double(messages_) / wall_ : 0.0,
+      wall_ > 0 ? bag_seconds_ / wall_ : 0.0, o_.io_floor ? " (I/O floor: no propagation)" : "");
+}
+
+int run(int argc, char** argv) {
+  const Options o = parseOptions(argc, argv);
+  catchInterrupts();
+  rosbag::Bag bag;
+  openBag(bag, o.input);
+  PendingFile output(o.output);  // destroyed last: the writer closes before it is removed
+  BagPropagator propagator(o, bag);
+  propagator.run(output.temporary());
+  output.commit();
+  propagator.summary(stdout);
+  return 0;
+}
+
+}  // namespace
+}  // namespace tools
+}  // namespace attitude_propagator
+
+int main(int argc, char** argv) {
+  try {
+    return attitude_propagator::tools::run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "propagate_bag: %s\n", e.what());
+    return 1;
+  }
+}

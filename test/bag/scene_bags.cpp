@@ -1,0 +1,283 @@
+#include "scene_bags.h"
+
+#include <dirent.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+
+#include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <geometry_msgs/TwistStamped.h>
+#include <geometry_msgs/WrenchStamped.h>
+#include <nav_msgs/Odometry.h>
+#include <rosbag/bag.h>
+#include <rosgraph_msgs/Clock.h>
+#include <sensor_msgs/Imu.h>
+#include <tf2_msgs/TFMessage.h>
+
+#include "attitude_propagator/coning_motion.h"
+#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/rigid_body.h"
+#include "attitude_propagator/torque_free_motion.h"
+
+namespace ap = attitude_propagator;
+
+namespace bagtest {
+
+namespace {
+
+// Reproducible uniform numbers in [0, 1) (Knuth's MMIX LCG, top 53 bits) and normal ones
+// (Box-Muller).
+double uniformRandom(std::uint64_t& state) {
+  state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+  return static_cast<double>(state >> 11) * 0x1.0p-53;
+}
+
+double normalRandom(std::uint64_t& state) {
+  const double u1 = 1.0 - uniformRandom(state), u2 = uniformRandom(state);
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
+}
+
+// Mean of f over [a, b] by 5-point Gauss-Legendre: exact for polynomials of degree 9; on the
+// scenes' rates (frequencies below 10 rad/s, b - a = 5 ms) the error is below 1e-20.
+template <class F>
+Eigen::Vector3d intervalMean(F f, double a, double b) {
+  static const double x[5] = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831,
+                              0.9061798459386640};
+  static const double w[5] = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889,
+                              0.4786286704993665, 0.2369268850561891};
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (int i = 0; i < 5; ++i) sum += w[i] * f(0.5 * (a + b) + 0.5 * (b - a) * x[i]);
+  return 0.5 * sum;
+}
+
+ros::Time rosTime(Stamp stamp) {
+  ros::Time t;
+  t.fromNSec(static_cast<std::uint64_t>(stamp));
+  return t;
+}
+
+void toMsg(const Eigen::Quaterniond& q, geometry_msgs::Quaternion& m) {
+  m.x = q.x(), m.y = q.y(), m.z = q.z(), m.w = q.w();
+}
+
+void toMsg(const Eigen::Vector3d& v, geometry_msgs::Vector3& m) {
+  m.x = v.x(), m.y = v.y(), m.z = v.z();
+}
+
+void writeRate(rosbag::Bag& bag, const SceneBag& s, Stamp stamp, const Eigen::Vector3d& w) {
+  const ros::Time t = rosTime(stamp);
+  if (s.rate_type == RateType::Imu) {
+    sensor_msgs::Imu m;
+    m.header.stamp = t;
+    m.header.frame_id = s.rate_frame;
+    toMsg(w, m.angular_velocity);
+    m.orientation_covariance[0] = -1.0;  // REP-145: no orientation in a raw IMU message
+    bag.write(s.rate_topic, t, m);
+  } else {
+    geometry_msgs::TwistStamped m;
+    m.header.stamp = t;
+    m.header.frame_id = s.rate_frame;
+    toMsg(w, m.twist.angular);
+    bag.write(s.rate_topic, t, m);
+  }
+}
+
+void writeTruth(rosbag::Bag& bag, const SceneBag& s, Stamp stamp, const Eigen::Quaterniond& q) {
+  const ros::Time t = rosTime(stamp);
+  geometry_msgs::TransformStamped transform;
+  transform.header.stamp = t;
+  transform.header.frame_id = "map";
+  transform.child_frame_id = "body_truth";
+  toMsg(q, transform.transform.rotation);
+  switch (s.truth) {
+    case TruthType::None:
+      return;
+    case TruthType::Pose: {
+      geometry_msgs::PoseStamped m;
+      m.header = transform.header;
+      m.pose.orientation = transform.transform.rotation;
+      return bag.write(s.truth_topic, t, m);
+    }
+    case TruthType::PoseWithCovariance: {
+      geometry_msgs::PoseWithCovarianceStamped m;
+      m.header = transform.header;
+      m.pose.pose.orientation = transform.transform.rotation;
+      return bag.write(s.truth_topic, t, m);
+    }
+    case TruthType::Transform:
+      return bag.write(s.truth_topic, t, transform);
+    case TruthType::Odometry: {
+      nav_msgs::Odometry m;
+      m.header = transform.header;
+      m.child_frame_id = transform.child_frame_id;
+      m.pose.pose.orientation = transform.transform.rotation;
+      return bag.write(s.truth_topic, t, m);
+    }
+    case TruthType::Tf: {
+      tf2_msgs::TFMessage m;
+      geometry_msgs::TransformStamped other = transform;  // another pair in the same message
+      other.child_frame_id = "elsewhere";
+      m.transforms = {other, transform};
+      return bag.write(s.truth_topic, t, m);
+    }
+  }
+}
+
+}  // namespace
+
+Stamp stampAt(double t) { return kStart + static_cast<Stamp>(std::llround(t * 1e9)); }
+double secondsOf(Stamp stamp) { return static_cast<double>(stamp - kStart) * 1e-9; }
+
+Motion coning(double beta, double omega) {
+  const ap::ConingMotion cone{beta, omega};
+  return {[cone](double t) { return cone.attitude(t); },
+          [cone](double t) { return cone.bodyRate(t); }};
+}
+
+Motion tumbling() {
+  const auto body = ap::RigidBody::fromPrincipalMoments(Eigen::Vector3d(1.0, 2.0, 3.0));
+  const auto motion = std::make_shared<ap::TorqueFreeMotion>(
+      body, ap::DynamicState{Eigen::Quaterniond::Identity(), Eigen::Vector3d(1.0, 0.5, 0.8)});
+  return {[motion](double t) { return motion->evaluate(t).q_WB; },
+          [motion](double t) { return motion->evaluate(t).w_B; }};
+}
+
+Motion torquedFromRest(const Eigen::Vector3d& n, double torque, double inertia) {
+  const double a = torque / inertia;  // angular acceleration
+  return {[n, a](double t) { return ap::expMap(0.5 * a * t * t * n); },
+          [n, a](double t) { return Eigen::Vector3d(a * t * n); }};
+}
+
+Written writeSceneBag(const std::string& path, const SceneBag& s) {
+  rosbag::Bag bag(path, rosbag::bagmode::Write);
+  Written out;
+  std::uint64_t random = s.seed;
+  const double h = 1.0 / s.rate_hz;
+  const long n = std::lround(s.duration * s.rate_hz);
+  const double dt_truth = 1.0 / s.truth_hz;
+  long next_truth = 0;
+  for (long k = 0; k <= n; ++k) {
+    const double t = k * h;
+    // Truth samples up to this instant, in stamp order with the rates.
+    for (; next_truth * dt_truth <= t + 1e-12; ++next_truth) {
+      const double tt = next_truth * dt_truth;
+      const double stamped = tt + s.truth_offset;
+      if (stamped > s.gap_from && stamped < s.gap_to) continue;
+      const Stamp stamp = stampAt(stamped);
+      writeTruth(bag, s, stamp, s.fixed * s.motion.attitude(tt) * s.mount);
+      if (s.truth != TruthType::None) out.truth_stamps.push_back(stamp);
+    }
+    const Eigen::Vector3d w = s.averaged ? intervalMean(s.motion.rate, t - h, t) : s.motion.rate(t);
+    const double delay = k > 0 && s.jitter > 0.0 ? s.jitter * normalRandom(random) : 0.0;
+    const bool lost = k > 3 && s.drop > 0.0 && uniformRandom(random) < s.drop;
+    if (lost) continue;
+    const Stamp stamp = stampAt(t + delay);
+    writeRate(bag, s, stamp, w);
+    out.rate_stamps.push_back(stamp);
+    out.rate_times.push_back(t);
+  }
+  bag.close();
+  return out;
+}
+
+void writeTorqueBag(const std::string& path, const Eigen::Vector3d& torque, double hz,
+                    double duration, double clock_hz, const std::string& frame) {
+  rosbag::Bag bag(path, rosbag::bagmode::Write);
+  const long n = std::lround(duration * hz);
+  const double dt_clock = clock_hz > 0.0 ? 1.0 / clock_hz : 0.0;
+  long next_clock = 0;
+  for (long k = 0; k <= n; ++k) {
+    const double t = k / hz;
+    for (; clock_hz > 0.0 && next_clock * dt_clock <= t + 1e-12; ++next_clock) {
+      rosgraph_msgs::Clock c;
+      c.clock = rosTime(stampAt(next_clock * dt_clock));
+      bag.write("/clock", c.clock, c);
+    }
+    geometry_msgs::WrenchStamped m;
+    m.header.stamp = rosTime(stampAt(t));
+    m.header.frame_id = frame;
+    toMsg(torque, m.wrench.torque);
+    bag.write("/torque", m.header.stamp, m);
+  }
+  bag.close();
+}
+
+RunResult run(const std::string& command) {
+  RunResult r;
+  std::FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) throw std::runtime_error("popen failed: " + command);
+  char buffer[4096];
+  std::size_t got;
+  while ((got = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) r.output.append(buffer, got);
+  const int status = ::pclose(pipe);
+  r.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+std::string quote(const std::string& text) {
+  std::string q = "'";
+  for (char c : text) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+TempDir::TempDir() {
+  char pattern[] = "/tmp/bag_tools_test.XXXXXX";
+  if (!::mkdtemp(pattern)) throw std::runtime_error("mkdtemp failed");
+  path_ = pattern;
+}
+
+TempDir::~TempDir() { std::system(("rm -rf " + quote(path_)).c_str()); }
+
+std::vector<std::string> TempDir::list() const {
+  std::vector<std::string> names;
+  if (DIR* dir = ::opendir(path_.c_str())) {
+    while (const dirent* e = ::readdir(dir)) {
+      const std::string name = e->d_name;
+      if (name != "." && name != "..") names.push_back(name);
+    }
+    ::closedir(dir);
+  }
+  return names;
+}
+
+std::vector<std::vector<std::pair<std::string, std::string>>> readCsv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read " + path);
+  auto split = [](const std::string& line) {
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    std::string cell;
+    while (std::getline(ss, cell, ',')) cells.push_back(cell);
+    return cells;
+  };
+  std::string line;
+  std::getline(in, line);
+  const auto header = split(line);
+  std::vector<std::vector<std::pair<std::string, std::string>>> rows;
+  while (std::getline(in, line)) {
+    const auto cells = split(line);
+    std::vector<std::pair<std::string, std::string>> row;
+    for (std::size_t i = 0; i < header.size() && i < cells.size(); ++i)
+      row.emplace_back(header[i], cells[i]);
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+std::string field(const std::vector<std::pair<std::string, std::string>>& row,
+                  const std::string& column) {
+  for (const auto& [name, value] : row) {
+    if (name == column) return value;
+  }
+  throw std::runtime_error("no column " + column);
+}
+
+}  // namespace bagtest

@@ -1,0 +1,99 @@
+// Small bags written from closed-form motions, for the tests of the bag tools: a rate topic as
+// a gyro would deliver it (point or interval-averaged samples, receipt jitter, lost samples)
+// and a truth attitude topic (any supported type, its own rate, a clock offset, gaps, a
+// rotated fixed frame and a mounted sensor), or a torque topic.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+namespace bagtest {
+
+using Stamp = std::int64_t;
+/// Physical time 0 of every scene: a stamp near today's epoch, so that the tools meet
+/// stamps as real bags have them.
+constexpr Stamp kStart = 1700000000LL * 1000000000LL;
+Stamp stampAt(double t);        ///< kStart + t seconds, rounded to the nanosecond
+double secondsOf(Stamp stamp);  ///< (stamp - kStart) in seconds
+
+/// A motion: the sensor's attitude q_WS(t) and the body rate w_S(t) that generates it.
+struct Motion {
+  std::function<Eigen::Quaterniond(double)> attitude;
+  std::function<Eigen::Vector3d(double)> rate;
+};
+Motion coning(double beta = 0.1, double omega = 2.0 * M_PI * 1.1);
+/// Torque-free triaxial body (moments 1, 2, 3, w0 = (1, 0.5, 0.8) rad/s): |w| varies.
+Motion tumbling();
+/// From rest under a constant torque T about the unit axis n of a principal moment I:
+/// w = (T / I) t n, q = Exp(T t^2 / (2 I) n).
+Motion torquedFromRest(const Eigen::Vector3d& n, double torque, double inertia);
+
+enum class RateType { Imu, TwistStamped };
+enum class TruthType { None, Pose, PoseWithCovariance, Transform, Odometry, Tf };
+
+struct SceneBag {
+  Motion motion;
+  double duration = 20.0;  ///< s
+  double rate_hz = 200.0;
+  bool averaged = false;  ///< each sample the mean rate over the period it closes
+  double jitter = 0.0;    ///< s, standard deviation of the receipt delay about its mean
+  double drop = 0.0;      ///< probability that a sample is lost (never the first four)
+  std::uint64_t seed = 1;
+  RateType rate_type = RateType::Imu;
+  std::string rate_topic = "/imu/data_raw";
+  std::string rate_frame = "";  ///< frame_id of the rate messages
+  TruthType truth = TruthType::Pose;
+  std::string truth_topic = "/truth";
+  double truth_hz = 200.0;
+  double truth_offset = 0.0;              ///< s: the truth of instant t is stamped t + truth_offset
+  double gap_from = -1.0, gap_to = -1.0;  ///< s: no truth sample stamped in between
+  Eigen::Quaterniond fixed = Eigen::Quaterniond::Identity();  ///< A = q_VW
+  Eigen::Quaterniond mount = Eigen::Quaterniond::Identity();  ///< q_ST
+};
+
+struct Written {
+  std::vector<Stamp> rate_stamps;   ///< as written
+  std::vector<double> rate_times;   ///< physical instants of those samples, s
+  std::vector<Stamp> truth_stamps;  ///< as written
+};
+
+/// Writes the scene's bag; q_VT(t) = A q_WS(t) q_ST is the truth of instant t.
+Written writeSceneBag(const std::string& path, const SceneBag& scene);
+
+/// A bag with only a torque topic (geometry_msgs/WrenchStamped in frame `frame`, a constant
+/// torque from t = 0 at `hz`), and a /clock topic at `clock_hz` when positive.
+void writeTorqueBag(const std::string& path, const Eigen::Vector3d& torque, double hz,
+                    double duration, double clock_hz, const std::string& frame);
+
+/// A command's exit status and its output (stdout and stderr together).
+struct RunResult {
+  int status = -1;
+  std::string output;
+};
+RunResult run(const std::string& command);
+
+/// Quoting for a shell command line.
+std::string quote(const std::string& text);
+
+/// A fresh directory under /tmp, removed with everything in it by the destructor.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  std::string file(const std::string& name) const { return path_ + "/" + name; }
+  std::vector<std::string> list() const;  ///< names of the files in it
+
+ private:
+  std::string path_;
+};
+
+/// Rows of a CSV file with a header, as maps from column to text.
+std::vector<std::vector<std::pair<std::string, std::string>>> readCsv(const std::string& path);
+std::string field(const std::vector<std::pair<std::string, std::string>>& row,
+                  const std::string& column);
+
+}  // namespace bagtest
