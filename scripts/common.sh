@@ -21,6 +21,7 @@ DEBIAN_PACKAGES=(
   python3-rostopic python3-tf2-ros python3-tf2-msgs python3-sensor-msgs python3-diagnostic-msgs
   python3-std-srvs python3-geometry-msgs python3-std-msgs python3-rosgraph-msgs python3-yaml
   libeigen3-dev libboost-dev libboost-math-dev
+  librosbag-storage-dev libnav-msgs-dev libyaml-cpp-dev python3-rosbag
   libgtest-dev googletest libbenchmark-dev python3-matplotlib
   clang libclang-rt-14-dev
 )
