@@ -32,12 +32,7 @@ constexpr int kMaxCalls = 64;
 constexpr double kMaxHorizon = 10.0;
 constexpr double kMaxGridSteps = 1000.0;
 
-std::vector<std::string> allIntegratorNames() {
-  std::istringstream in(ap::integratorNames());
-  std::vector<std::string> names;
-  for (std::string name; in >> name;) names.push_back(name);
-  return names;
-}
+std::vector<std::string> allIntegratorNames() { return ap::integratorNames(); }
 
 ap::RigidBody makeBody(ByteReader& in) {
   switch (in.choice(4)) {

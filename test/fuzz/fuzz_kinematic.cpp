@@ -24,12 +24,7 @@ namespace {
 // Bounds the work per input (a burst counts every sample).
 constexpr int kMaxCalls = 256;
 
-std::vector<std::string> allIntegratorNames() {
-  std::istringstream in(ap::integratorNames());
-  std::vector<std::string> names;
-  for (std::string name; in >> name;) names.push_back(name);
-  return names;
-}
+std::vector<std::string> allIntegratorNames() { return ap::integratorNames(); }
 
 /// A smooth, moderate rate (rad/s), so long runs of ordinary samples reach the cf4 window.
 Eigen::Vector3d smoothRate(double t) {
