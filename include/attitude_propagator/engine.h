@@ -18,8 +18,8 @@
 #include <Eigen/Geometry>
 
 #include "attitude_propagator/dynamic_propagator.h"
+#include "attitude_propagator/integrator.h"
 #include "attitude_propagator/kinematic_propagator.h"
-#include "attitude_propagator/parameters.h"
 
 namespace attitude_propagator {
 
@@ -129,8 +129,6 @@ struct EngineConfig {
   /// rest waits for the next call.
   std::uint64_t work_budget = std::uint64_t{1} << 18;
 
-  /// The engine's part of a validated node configuration.
-  static EngineConfig from(const NodeConfig& node);
 };
 
 class AttitudeEngine {

@@ -36,20 +36,6 @@ const char* sourceName(Source source) {
   return "input";
 }
 
-EngineConfig EngineConfig::from(const NodeConfig& node) {
-  EngineConfig config;
-  config.model = node.model;
-  config.kinematic = node.kinematic;
-  config.dynamic = node.dynamic;
-  config.publish_rate = node.parameters.publish_rate;
-  config.rate_stddev = node.parameters.angular_velocity_stddev;
-  config.initial_orientation_stddev = node.parameters.initial_orientation_stddev;
-  // The engine subtracts the bias (the parameter, then the bias topic) for both models.
-  config.gyro_bias_B = node.kinematic.gyro_bias_B;
-  config.kinematic.gyro_bias_B.setZero();
-  return config;
-}
-
 AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink)
     : config_(config), sink_(sink) {
   if (config_.model == Model::Dynamic) {

@@ -64,7 +64,7 @@ AttitudePropagatorRos::AttitudePropagatorRos(ros::NodeHandle nh, ros::NodeHandle
       imu_nh_(nh, "imu"),
       config_(loadParameters(pnh)),
       updater_(nh, pnh, pnh.getNamespace()) {
-  engine_ = std::make_unique<AttitudeEngine>(EngineConfig::from(config_), *this);
+  engine_ = std::make_unique<AttitudeEngine>(engineConfig(config_), *this);
   sim_time_ = ros::Time::isSimTime();
   advertise();
   subscribe();
@@ -619,7 +619,7 @@ void AttitudePropagatorRos::onReconfigure(AttitudePropagatorConfig& live, std::u
   guarded("reconfigure", [&] {
     try {
       NodeConfig next = validateParameters(p);
-      if (engine_changes) error = engine_->reconfigure(EngineConfig::from(next));
+      if (engine_changes) error = engine_->reconfigure(engineConfig(next));
       if (error.empty()) config_ = std::move(next);
     } catch (const std::invalid_argument& e) {
       error = e.what();

@@ -294,7 +294,7 @@ class Method : public EngineSink {
     p.model = "kinematic";
     p.integrator = integrator;
     p.rate_samples = samples;
-    engine_ = std::make_unique<AttitudeEngine>(EngineConfig::from(validateParameters(p)), *this);
+    engine_ = std::make_unique<AttitudeEngine>(engineConfig(validateParameters(p)), *this);
   }
 
   std::string name() const { return integrator_ + "/" + samples_; }

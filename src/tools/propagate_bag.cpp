@@ -236,7 +236,7 @@ class BagPropagator : public EngineSink {
  public:
   BagPropagator(const Options& o, rosbag::Bag& bag)
       : o_(o), bag_(bag), config_(validateParameters(o.parameters)) {
-    engine_ = std::make_unique<AttitudeEngine>(EngineConfig::from(config_), *this);
+    engine_ = std::make_unique<AttitudeEngine>(engineConfig(config_), *this);
   }
 
   /// Checks the topics, then runs; writes into `path` (a temporary name).

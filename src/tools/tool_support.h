@@ -17,7 +17,7 @@
 #include <rosbag/view.h>
 
 #include "attitude_propagator/engine.h"
-#include "attitude_propagator/parameters.h"
+#include "attitude_propagator/config/parameters.h"
 
 namespace attitude_propagator {
 namespace tools {

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The core library includes only what it may: the C++ standard library, Eigen, Boost and its
-# own headers (include/attitude_propagator/*.h, not the ROS layer's). An allow-list, because
+# own headers (include/attitude_propagator/*.h, not the ROS layer's); the config library
+# (node parameters, src/config) may also include its own (attitude_propagator/config/*.h). An allow-list, because
 # on Debian the ROS headers sit in /usr/include next to Boost's, where a stray include would
 # compile. The ROS layer's headers live outside the core's include directory
 # (src/ros/include), so the core's build cannot find them either.
@@ -16,7 +17,11 @@ system_error thread tuple type_traits typeindex typeinfo unordered_map unordered
 valarray variant vector "
 
 allowed() {
-  local header=$1
+  local header=$1 file=$2
+  case "$file" in
+    src/config/* | include/attitude_propagator/config/*)
+      [[ "$header" == \"attitude_propagator/config/*.h\" && -f "include/${header//\"/}" ]] && return 0 ;;
+  esac
   case "$header" in
     \<Eigen/*\> | \<unsupported/Eigen/*\> | \<boost/*\>) return 0 ;;
     \"attitude_propagator/*.h\")
@@ -38,9 +43,10 @@ while IFS= read -r line; do
   rest=${line#*:}
   lineno=${rest%%:*}
   header=$(sed -E 's/^[[:space:]]*#[[:space:]]*include[[:space:]]*([<"][^>"]*[>"]).*/\1/' <<<"${rest#*:}")
-  if ! allowed "$header"; then
+  if ! allowed "$header" "$file"; then
     echo "$file:$lineno: $header is not allowed in the core (std, Eigen, Boost, attitude_propagator/*.h)"
     status=1
   fi
-done < <(grep -nHE '^[[:space:]]*#[[:space:]]*include' src/core/*.cpp include/attitude_propagator/*.h)
+done < <(grep -nHE '^[[:space:]]*#[[:space:]]*include' src/core/*.cpp include/attitude_propagator/*.h \
+  src/config/*.cpp include/attitude_propagator/config/*.h)
 exit $status

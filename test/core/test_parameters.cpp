@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-#include "attitude_propagator/parameters.h"
+#include "attitude_propagator/config/parameters.h"
 
 namespace ap = attitude_propagator;
 namespace fs = std::filesystem;

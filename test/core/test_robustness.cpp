@@ -20,7 +20,7 @@
 #include "attitude_propagator/kinematic_propagator.h"
 #include "attitude_propagator/limits.h"
 #include "attitude_propagator/orientation_covariance.h"
-#include "attitude_propagator/parameters.h"
+#include "attitude_propagator/config/parameters.h"
 #include "attitude_propagator/quaternion.h"
 #include "attitude_propagator/torque_free_motion.h"
 #include "rotation_matchers.h"

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "attitude_propagator/parameters.h"
+#include "attitude_propagator/config/parameters.h"
 #include "fuzz_support.h"
 
 namespace ap = attitude_propagator;

@@ -41,7 +41,7 @@
 #include "attitude_propagator/AttitudePropagatorConfig.h"
 #include "attitude_propagator/SetState.h"
 #include "attitude_propagator/engine.h"
-#include "attitude_propagator/parameters.h"
+#include "attitude_propagator/config/parameters.h"
 
 namespace attitude_propagator {
 

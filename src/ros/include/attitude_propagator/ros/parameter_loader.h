@@ -3,7 +3,7 @@
 
 #include <ros/node_handle.h>
 
-#include "attitude_propagator/parameters.h"
+#include "attitude_propagator/config/parameters.h"
 
 namespace attitude_propagator {
 

@@ -1,8 +1,10 @@
-// The node's parameters (docs/design.md §5): one struct holding every private parameter with its
-// default, one list describing them (forEachParameter), and one validator turning them into
-// the core's configuration. No ROS here: the ROS loader (src/ros/parameter_loader.cpp) only
-// reads values into this struct, and the README table and config/default.yaml are checked
-// against it (test/core/test_parameters.cpp).
+// The node's parameters (docs/design.md §7.7): one struct holding every private parameter with
+// its default, one list describing them (forEachParameter), and one validator turning them into
+// the engine's configuration. They live in the config library (attitude_propagator_config), not
+// in the numerics core: frames, tf and topic choices are the node's, and the node and the bag
+// tools share them. No ROS here: the ROS loader (src/ros/parameter_loader.cpp) only reads values
+// into this struct, and the README table and config/default.yaml are checked against it
+// (test/core/test_parameters.cpp).
 #pragma once
 
 #include <optional>
@@ -10,6 +12,7 @@
 #include <vector>
 
 #include "attitude_propagator/dynamic_propagator.h"
+#include "attitude_propagator/engine.h"
 #include "attitude_propagator/integrator.h"
 #include "attitude_propagator/kinematic_propagator.h"
 #include "attitude_propagator/limits.h"
@@ -127,5 +130,9 @@ struct NodeConfig {
 /// Throws std::invalid_argument whose message starts with the parameter's name and lists the
 /// accepted values, e.g. "model: unknown value 'x'; accepted: auto kinematic dynamic".
 NodeConfig validateParameters(const Parameters& parameters);
+
+/// The engine's part of a validated node configuration (the node and the bag tools run the
+/// same engine with the same parameters).
+EngineConfig engineConfig(const NodeConfig& node);
 
 }  // namespace attitude_propagator

@@ -1,4 +1,4 @@
-#include "attitude_propagator/parameters.h"
+#include "attitude_propagator/config/parameters.h"
 
 #include <algorithm>
 #include <cmath>
@@ -308,6 +308,20 @@ NodeConfig validateParameters(const Parameters& p) {
                                          "|w| <= 1e5 (rad/s)");
   }
   config.dynamic = dynamic;
+  return config;
+}
+
+EngineConfig engineConfig(const NodeConfig& node) {
+  EngineConfig config;
+  config.model = node.model;
+  config.kinematic = node.kinematic;
+  config.dynamic = node.dynamic;
+  config.publish_rate = node.parameters.publish_rate;
+  config.rate_stddev = node.parameters.angular_velocity_stddev;
+  config.initial_orientation_stddev = node.parameters.initial_orientation_stddev;
+  // The engine subtracts the bias (the parameter, then the bias topic) for both models.
+  config.gyro_bias_B = node.kinematic.gyro_bias_B;
+  config.kinematic.gyro_bias_B.setZero();
   return config;
 }
 
