@@ -19,7 +19,8 @@ void runKinematicStability(const KinematicScene& scene, double duration, std::FI
 
 /// Every kinematic method on the streams real gyros deliver (averaged rates, receipt jitter,
 /// lost samples, a noisy MEMS gyro), one CSV row each: scene, stream, method, settings, largest
-/// error along the path, and the error floor the stream's noise alone sets (empty if none).
+/// error along the path, the error floor the stream's noise alone sets (empty if none), and
+/// the largest error after the first quarter of the path (a stamp filter has settled by then).
 void runStreamSweep(const std::vector<KinematicScene>& scenes, std::FILE* out);
 
 /// Aborts (returns false, with a message) if a scene's closed form does not satisfy
