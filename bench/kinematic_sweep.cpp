@@ -27,11 +27,28 @@ constexpr double kNormLost = 0.1;
 // An attitude error beyond this is no longer an error estimate but a wrong answer.
 constexpr double kDiverged = 1.0;
 
-std::vector<RateSample> sampleScene(const KinematicScene& scene, double dt, long steps) {
+// Reproducible noise: a 64-bit LCG (Knuth's MMIX constants) and Box-Muller.
+struct Noise {
+  std::uint64_t state;
+  double uniform() {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(state >> 11) * 0x1.0p-53;
+  }
+  double normal() {
+    const double u1 = 1.0 - uniform(), u2 = uniform();
+    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
+  }
+};
+
+// Point samples k dt; with jitter > 0 each stamp after the anchor is late or early by a normal
+// receipt delay of that RMS (the rate is still the one at k dt).
+std::vector<RateSample> sampleScene(const KinematicScene& scene, double dt, long steps,
+                                    double jitter = 0.0) {
+  Noise noise{1};
   std::vector<RateSample> samples(steps + 1);
   for (long k = 0; k <= steps; ++k) {
     const double t = k * dt;
-    samples[k] = {t, scene.rate(t)};
+    samples[k] = {t + (k > 0 && jitter > 0.0 ? jitter * noise.normal() : 0.0), scene.rate(t)};
   }
   return samples;
 }
@@ -62,7 +79,8 @@ void measureErrors(Integrator method, const KinematicScene& scene,
   for (std::size_t k = 0; k < samples.size(); ++k) {
     propagator.addSample(samples[k].t, samples[k].w_B);
     norm_err = std::max(norm_err, std::abs(propagator.normError()));
-    last = ap::rotationAngle(propagator.orientation(), scene.attitude(samples[k].t));
+    // At the stamp the state holds at (the sample's, unless a jittered one was dropped).
+    last = ap::rotationAngle(propagator.orientation(), scene.attitude(propagator.time()));
     if (static_cast<long>(k) >= kStartUpSamples || k + 1 == samples.size()) {
       worst = std::max(worst, last);
     }
@@ -141,16 +159,19 @@ void runKinematicSweep(const std::vector<KinematicScene>& scenes, const TimingOp
 }
 
 void runKinematicStability(const KinematicScene& scene, double duration, std::FILE* out) {
-  for (int i = 0; i <= 16; ++i) {
-    const double omega_dt = 1e-3 * std::pow(10.0, i / 4.0);  // 1e-3 .. 10, four per decade
-    const double dt = omega_dt / scene.max_rate;
-    const long steps = std::max(1L, std::lround(duration / dt));
-    const auto samples = sampleScene(scene, dt, steps);
-    for (Integrator method : methodsFor(ap::Model::Kinematic)) {
-      Result r = baseResult(scene, method, dt, steps);
-      measureErrors(method, scene, samples, r);
-      r.status = classify(r);
-      writeRow(out, r);
+  for (double jitter : {0.0, 1e-4, 1e-3}) {  // receipt-stamped drivers add 0.1-2 ms
+    for (int i = 0; i <= 16; ++i) {
+      const double omega_dt = 1e-3 * std::pow(10.0, i / 4.0);  // 1e-3 .. 10, four per decade
+      const double dt = omega_dt / scene.max_rate;
+      const long steps = std::max(1L, std::lround(duration / dt));
+      const auto samples = sampleScene(scene, dt, steps, jitter);
+      for (Integrator method : methodsFor(ap::Model::Kinematic)) {
+        Result r = baseResult(scene, method, dt, steps);
+        r.jitter_s = jitter;
+        measureErrors(method, scene, samples, r);
+        r.status = classify(r);
+        writeRow(out, r);
+      }
     }
   }
 }
@@ -233,19 +254,6 @@ std::vector<StreamModel> streamModels() {
   m[10].filter = ap::StampFilter::SensorClock;
   return m;
 }
-
-// Reproducible noise: a 64-bit LCG (Knuth's MMIX constants) and Box-Muller.
-struct Noise {
-  std::uint64_t state;
-  double uniform() {
-    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-    return static_cast<double>(state >> 11) * 0x1.0p-53;
-  }
-  double normal() {
-    const double u1 = 1.0 - uniform(), u2 = uniform();
-    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
-  }
-};
 
 // Sample k is taken at k h. The anchor keeps its exact stamp and rate so every method starts
 // from the truth.

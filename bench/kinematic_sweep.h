@@ -14,7 +14,8 @@ namespace bench {
 void runKinematicSweep(const std::vector<KinematicScene>& scenes, const TimingOptions& timing,
                        std::FILE* out);
 
-/// Error after a fixed time against |w| dt, log-spaced from 1e-3 to 10.
+/// Error after a fixed time against |w| dt, log-spaced from 1e-3 to 10, on exact stamps and on
+/// stamps with 0.1 ms and 1 ms RMS receipt jitter (column jitter_s).
 void runKinematicStability(const KinematicScene& scene, double duration, std::FILE* out);
 
 /// Every kinematic method on the streams real gyros deliver (averaged rates, receipt jitter,
