@@ -24,11 +24,12 @@ struct Result {
   double momentum_rel_drift = NAN;  ///< largest ||M| - |M0|| / |M0| along the path
   double norm_err = NAN;            ///< largest ||q| - 1| of a step before renormalisation
   std::string status = "ok";        ///< ok, nonfinite, norm_lost, wrong_side, diverged
+  double jitter_s = NAN;            ///< stability map: receipt jitter of the stamps (s, RMS)
 };
 
 inline const char* csvHeader() {
   return "scene,method,auto,dt,omega_dt,tolerance,steps,ns_per_step,err_rad,final_err_rad,"
-         "energy_rel_drift,momentum_rel_drift,norm_err,status\n";
+         "energy_rel_drift,momentum_rel_drift,norm_err,status,jitter_s\n";
 }
 
 /// %.6g, or empty for NaN (not applicable).
@@ -40,11 +41,12 @@ inline std::string field(double v) {
 }
 
 inline void writeRow(std::FILE* out, const Result& r) {
-  std::fprintf(out, "%s,%s,%d,%.9g,%.6g,%s,%ld,%s,%s,%s,%s,%s,%s,%s\n", r.scene.c_str(),
+  std::fprintf(out, "%s,%s,%d,%.9g,%.6g,%s,%ld,%s,%s,%s,%s,%s,%s,%s,%s\n", r.scene.c_str(),
                r.method.c_str(), r.is_auto ? 1 : 0, r.dt, r.omega_dt, field(r.tolerance).c_str(),
                r.steps, field(r.ns_per_step).c_str(), field(r.err_rad).c_str(),
                field(r.final_err_rad).c_str(), field(r.energy_rel_drift).c_str(),
-               field(r.momentum_rel_drift).c_str(), field(r.norm_err).c_str(), r.status.c_str());
+               field(r.momentum_rel_drift).c_str(), field(r.norm_err).c_str(), r.status.c_str(),
+               field(r.jitter_s).c_str());
   std::fflush(out);
 }
 

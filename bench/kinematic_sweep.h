@@ -14,12 +14,14 @@ namespace bench {
 void runKinematicSweep(const std::vector<KinematicScene>& scenes, const TimingOptions& timing,
                        std::FILE* out);
 
-/// Error after a fixed time against |w| dt, log-spaced from 1e-3 to 10.
+/// Error after a fixed time against |w| dt, log-spaced from 1e-3 to 10, on exact stamps and on
+/// stamps with 0.1 ms and 1 ms RMS receipt jitter (column jitter_s).
 void runKinematicStability(const KinematicScene& scene, double duration, std::FILE* out);
 
 /// Every kinematic method on the streams real gyros deliver (averaged rates, receipt jitter,
 /// lost samples, a noisy MEMS gyro), one CSV row each: scene, stream, method, settings, largest
-/// error along the path, and the error floor the stream's noise alone sets (empty if none).
+/// error along the path, the error floor the stream's noise alone sets (empty if none), and
+/// the largest error after the first quarter of the path (a stamp filter has settled by then).
 void runStreamSweep(const std::vector<KinematicScene>& scenes, std::FILE* out);
 
 /// Aborts (returns false, with a message) if a scene's closed form does not satisfy

@@ -254,39 +254,61 @@ def running_max(values):
     return out
 
 
+def jitter_of(row):
+    """Receipt jitter of a stability row (s); rows written before the column existed had none."""
+    value = num(row, "jitter_s")
+    return 0.0 if math.isnan(value) else value
+
+
+def jitter_label(jitter):
+    return "exact stamps" if jitter == 0.0 else f"stamps with {jitter * 1e3:g} ms RMS jitter"
+
+
+def stability_panel(ax, group_rows, title):
+    for method, group in by_method(group_rows).items():
+        group.sort(key=lambda r: num(r, "omega_dt"))
+        colour, marker = style(method)
+        xs = [num(r, "omega_dt") for r in group]
+        ys = [min(num(r, "final_err_rad"), math.pi) if r["status"] != "nonfinite"
+              else math.pi for r in group]
+        ax.plot(xs, floored(ys), color=colour, marker=marker, markersize=4,
+                linewidth=1.3, label=method_label(method, group))
+        for x, y, r in zip(xs, floored(ys), group):
+            if r["status"] in FAILURE_MARKERS:
+                ax.plot([x], [y], linestyle="none", marker=FAILURE_MARKERS[r["status"]][0],
+                        markersize=11, color=colour, markeredgecolor="black", zorder=4)
+    ax.axhline(math.pi, color="gray", linewidth=0.8, linestyle=":")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("|Omega| dt [rad per step]")
+    ax.set_ylabel("attitude error after the fixed time [rad]")
+    ends = sorted(num(r, "dt") * num(r, "steps") for r in group_rows)
+    ax.set_title(f"{title}: error after {ends[len(ends) // 2]:.0f} s", fontsize=10)
+    ax.grid(True, which="major", alpha=0.3)
+    ax.legend(fontsize=8, loc="upper left")
+
+
 def stability_chart(rows, path):
-    scenes = [s for s in ["fast_spin", "free_body", "dzhanibekov"]
-              if any(r["scene"] == s for r in rows)]
-    fig, axes = plt.subplots(1, len(scenes), figsize=(6.5 * len(scenes), 6), squeeze=False)
-    for ax, scene in zip(axes.flat, scenes):
-        group_rows = [r for r in rows if r["scene"] == scene]
-        for method, group in by_method(group_rows).items():
-            group.sort(key=lambda r: num(r, "omega_dt"))
-            colour, marker = style(method)
-            xs = [num(r, "omega_dt") for r in group]
-            ys = [min(num(r, "final_err_rad"), math.pi) if r["status"] != "nonfinite"
-                  else math.pi for r in group]
-            ax.plot(xs, floored(ys), color=colour, marker=marker, markersize=4,
-                    linewidth=1.3, label=method_label(method, group))
-            for x, y, r in zip(xs, floored(ys), group):
-                if r["status"] in FAILURE_MARKERS:
-                    ax.plot([x], [y], linestyle="none", marker=FAILURE_MARKERS[r["status"]][0],
-                            markersize=11, color=colour, markeredgecolor="black", zorder=4)
-        ax.axhline(math.pi, color="gray", linewidth=0.8, linestyle=":")
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel("|Omega| dt [rad per step]")
-        ax.set_ylabel("attitude error after the fixed time [rad]")
-        ends = sorted(num(r, "dt") * num(r, "steps") for r in group_rows)
-        ax.set_title(f"{scene}: error after {ends[len(ends) // 2]:.0f} s")
-        ax.grid(True, which="major", alpha=0.3)
-        ax.legend(fontsize=8, loc="upper left")
+    """Kinematic scene: one panel per receipt jitter (top row); dynamic scenes below."""
+    kinematic = [r for r in rows if r["scene"] == "fast_spin"]
+    jitters = sorted({jitter_of(r) for r in kinematic})
+    panels = [(f"fast_spin, {jitter_label(j)}", [r for r in kinematic if jitter_of(r) == j])
+              for j in jitters]
+    panels += [(scene, [r for r in rows if r["scene"] == scene])
+               for scene in ["free_body", "dzhanibekov"] if any(r["scene"] == scene for r in rows)]
+    columns = max(len(jitters), 1)
+    lines = -(-len(panels) // columns)
+    fig, axes = plt.subplots(lines, columns, figsize=(6.5 * columns, 5.5 * lines), squeeze=False)
+    for ax, (title, group_rows) in zip(axes.flat, panels):
+        stability_panel(ax, group_rows, title)
+    for ax in list(axes.flat)[len(panels):]:
+        ax.axis("off")
     handles = [plt.Line2D([], [], linestyle="none", marker=m, markersize=10, color="gray",
                           markeredgecolor="black", label=label)
                for m, label in FAILURE_MARKERS.values()]
     fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=10)
     fig.suptitle("Stability map: where each method fails (pi is the largest possible error)")
-    fig.tight_layout(rect=(0, 0.07, 1, 1))
+    fig.tight_layout(rect=(0, 0.05, 1, 1))
     fig.savefig(path, dpi=80)
     plt.close(fig)
 

@@ -5,8 +5,9 @@
 //   invariants.csv  energy and |M| drift against time on a long free-body run
 //   real_streams.csv  every kinematic method on real gyro streams (averaged, jittered, lost
 //                     samples, noisy MEMS) on the coning and tumbling scenes
-// Usage: bench_sweep [out_dir] [--quick] [--streams]   (--quick: fewer repetitions, for a smoke
-// test; --streams: only real_streams.csv)
+// Usage: bench_sweep [out_dir] [--quick] [--streams | --stability]   (--quick: fewer
+// repetitions, for a smoke test; --streams: only real_streams.csv; --stability: only
+// stability.csv)
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -24,6 +25,7 @@ namespace {
 struct Options {
   std::string out_dir = ".";
   bool streams_only = false;
+  bool stability_only = false;
   bench::TimingOptions timing;
 };
 
@@ -32,6 +34,8 @@ Options parse(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--streams") == 0) {
       options.streams_only = true;
+    } else if (std::strcmp(argv[i], "--stability") == 0) {
+      options.stability_only = true;
     } else if (std::strcmp(argv[i], "--quick") == 0) {
       options.timing.rounds = 1;
       options.timing.min_chunk_ms = 0.0;
@@ -83,22 +87,27 @@ int main(int argc, char** argv) {
     }
     if (!bench::checkClosedForm(bench::tumblingScene())) return 1;
     if (!checkReferences()) return 1;
-    std::FILE* streams = std::fopen((options.out_dir + "/real_streams.csv").c_str(), "w");
-    if (streams == nullptr) throw std::runtime_error("cannot write real_streams.csv");
-    bench::runStreamSweep({bench::coningScene(), bench::tumblingScene()}, streams);
-    std::fclose(streams);
+    if (!options.stability_only) {
+      std::FILE* streams = std::fopen((options.out_dir + "/real_streams.csv").c_str(), "w");
+      if (streams == nullptr) throw std::runtime_error("cannot write real_streams.csv");
+      bench::runStreamSweep({bench::coningScene(), bench::tumblingScene()}, streams);
+      std::fclose(streams);
+    }
     if (options.streams_only) return 0;
-    std::FILE* sweep = openCsv(options.out_dir + "/sweep.csv");
-    bench::runKinematicSweep(scenes, options.timing, sweep);
-    auto dynamic = dynamicScenes();
-    bench::runDynamicSweep(dynamic, options.timing, sweep);
-    std::fclose(sweep);
+    if (!options.stability_only) {
+      std::FILE* sweep = openCsv(options.out_dir + "/sweep.csv");
+      bench::runKinematicSweep(scenes, options.timing, sweep);
+      auto dynamic = dynamicScenes();
+      bench::runDynamicSweep(dynamic, options.timing, sweep);
+      std::fclose(sweep);
+    }
 
     std::FILE* stability = openCsv(options.out_dir + "/stability.csv");
     bench::runKinematicStability(bench::fastSpinScene(), 1.0, stability);
     bench::runDynamicStability(bench::freeBodyScene(), 100.0, stability);
     bench::runDynamicStability(bench::dzhanibekovScene(), 30.0, stability);
     std::fclose(stability);
+    if (options.stability_only) return 0;
 
     std::FILE* invariants = std::fopen((options.out_dir + "/invariants.csv").c_str(), "w");
     std::fputs("method,dt,tolerance,t,energy_rel_drift,momentum_rel_drift,err_rad\n", invariants);

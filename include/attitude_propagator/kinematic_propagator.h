@@ -36,10 +36,11 @@ class KinematicPropagator {
   explicit KinematicPropagator(const KinematicConfig& config);
 
   /// Feeds the body rate w_B measured at time t (the gyro bias is subtracted; with the stamp
-  /// filter on, t is a receipt stamp and the filtered stamp is used). The first sample anchors time: the state at
-  /// its stamp is the initial (or set) state. The orientation then holds at the newest stamp.
-  /// A NaN or infinite stamp or rate is RejectedNonFinite, |w_B| > kMaxBodyRate (limits.h)
-  /// RejectedOutOfRange; neither changes the state. Never throws.
+  /// filter on, t is a receipt stamp and the filtered stamp is used, and the orientation
+  /// follows the filter's later stamps of the samples before, RestampCorrection). The first
+  /// sample anchors time: the state at its stamp is the initial (or set) state. The orientation
+  /// then holds at the newest stamp. A NaN or infinite stamp or rate is RejectedNonFinite,
+  /// |w_B| > kMaxBodyRate (limits.h) RejectedOutOfRange; neither changes the state. Never throws.
   StampOutcome addSample(double t, const Eigen::Vector3d& w_B);
 
   /// Back to the initial orientation, waiting for an anchoring sample.
@@ -77,6 +78,9 @@ class KinematicPropagator {
   }
 
  private:
+  StampOutcome addStamped(double t, const Eigen::Vector3d& w_B);
+  void restamp(const SensorClockFilter::Result& clock, const Eigen::Vector3d& w_B,
+               StampOutcome outcome);
   void anchor(double t, const Eigen::Vector3d& w_B);
   StampOutcome integrate(const RateSample& sample);
   Eigen::Quaterniond restartFromAnchor(const RateWindow& window) const;
@@ -98,6 +102,7 @@ class KinematicPropagator {
   int max_gap_fill_;
   StampFilter stamp_filter_;
   SensorClockFilter clock_;
+  RestampCorrection restamp_;  // after clock_, whose memory it shares
   Eigen::Vector3d gyro_bias_B_;
   std::uint64_t filled_samples_ = 0;
   std::array<double, 5> intervals_{};  // the last intervals integrated, for the nominal period

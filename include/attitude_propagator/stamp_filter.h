@@ -6,11 +6,17 @@
 // periods (a stamp about m periods after the last one is m samples later: m - 1 were lost),
 // fits the line t(n) by least squares with exponential forgetting, and returns the line at
 // the sample's index: the receipt jitter is averaged over the filter's memory.
+//
+// A stamp is returned when its sample arrives, from the line known then; the line keeps
+// improving afterwards. RestampCorrection carries the later, better stamps of the samples
+// already integrated into the orientation, to first order.
 #pragma once
 
 #include <array>
 #include <cstdint>
 #include <string>
+
+#include <Eigen/Geometry>
 
 namespace attitude_propagator {
 
@@ -60,8 +66,13 @@ class SensorClockFilter {
   double period() const { return slope_; }
   /// Stamp of the model's sample index 0 (the first since the last start): t(n) = offset + period n.
   double offset() const { return base_t_ + (origin_t_ - slope_ * static_cast<double>(index_)); }
+  /// The line's stamp of sample `index` (since the last start) minus t: how far the model now
+  /// puts that sample from the stamp t it was given, free of the round-off of epoch-sized stamps.
+  double lineMinus(std::uint64_t index, double t) const;
   /// Standard deviation of the stamps about the line (s).
   double jitter() const;
+  /// The forgetting memory (samples).
+  double memory() const { return options_.memory; }
   std::uint64_t rejected() const { return rejected_; }
   std::uint64_t missed() const { return missed_; }
   std::uint64_t restarts() const { return restarts_; }
@@ -91,6 +102,48 @@ class SensorClockFilter {
   std::uint64_t rejected_ = 0, missed_ = 0, restarts_ = 0;
   std::array<double, 6> recent_{};  // the last receipt stamps, for a new period after a restart
   std::size_t recent_count_ = 0;
+};
+
+/// First-order correction of the orientation for stamps the clock model moved after they were
+/// integrated. A sample n integrated at t_n instead of its sensor-clock stamp t_n* leaves the
+/// world-frame orientation error  -sum_n (t_n - t_n*) R_WB(t_n) (w_{n+1} - w_n)  (the error of
+/// sum_n w_n dt_n against the truth at the newest stamp, summed by parts). The clock model's
+/// line gives t_n* (SensorClockFilter::lineMinus); every new sample and every move of the line
+/// changes the estimate, and the change is returned to be applied. The line of the moment
+/// keeps being used for a sample with the filter's forgetting factor: each term's weight is
+/// handed over, a fraction 1/memory per sample, to a frozen part at the line of that step,
+/// so a drifting clock never re-stamps far into the past. O(1) time and memory per sample.
+class RestampCorrection {
+ public:
+  explicit RestampCorrection(double memory);
+
+  /// Takes the sample just integrated: the clock's answer for it, its body rate and the
+  /// orientation it reached. `anchor`: the state's time is defined at this sample's stamp
+  /// (its own stamp is never corrected). Returns the world-frame rotation vector v by which
+  /// the orientation is to be turned now, q_WB <- Exp(v) q_WB.
+  Eigen::Vector3d add(const SensorClockFilter& clock, const SensorClockFilter::Result& sample,
+                      const Eigen::Vector3d& w_B, const Eigen::Quaterniond& q_WB, bool anchor);
+
+  /// Forgets the samples: the next one starts a new history.
+  void reset() { started_ = false; }
+
+ private:
+  void start(const SensorClockFilter& clock, double t, const Eigen::Vector3d& w_B,
+             const Eigen::Quaterniond& q_WB, bool anchor);
+
+  double forget_;
+  bool started_ = false;
+  bool count_newest_ = false;  // the newest sample's term is to be added with the next sample
+  // The newest sample: the origin of the sums.
+  std::uint64_t index_ = 0;
+  double t_ = 0.0;
+  Eigen::Vector3d w_B_ = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d R_WB_ = Eigen::Matrix3d::Identity();
+  // Weighted sums over the terms still re-stamped of g_n = R_WB(t_n) (w_{n+1} - w_n), x g_n and
+  // y g_n, x = n - index_, y = t_n - t_ (the origin moves with every sample, as in the filter).
+  Eigen::Vector3d s0_ = Eigen::Vector3d::Zero(), sx_ = Eigen::Vector3d::Zero(),
+                  sy_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d applied_ = Eigen::Vector3d::Zero();  // the live sums' correction applied so far
 };
 
 }  // namespace attitude_propagator

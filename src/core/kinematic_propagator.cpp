@@ -97,15 +97,42 @@ KinematicPropagator::KinematicPropagator(const KinematicConfig& config)
       rate_samples_(config.rate_samples),
       max_gap_fill_(std::clamp(config.max_gap_fill, 0, 8)),
       stamp_filter_(config.stamp_filter),
+      restamp_(clock_.memory()),
       gyro_bias_B_(checkedBias(config.gyro_bias_B)) {
   checkPolicy(policy_);
 }
 
 StampOutcome KinematicPropagator::addSample(double t, const Eigen::Vector3d& w_B) {
+  if (stamp_filter_ == StampFilter::None || !std::isfinite(t) || !w_B.allFinite() ||
+      !(w_B.norm() <= kMaxBodyRate)) {
+    return addStamped(t, w_B);
+  }
+  const SensorClockFilter::Result clock = clock_.filter(t);
+  const StampOutcome outcome = addStamped(clock.t, w_B);
+  restamp(clock, w_B - gyro_bias_B_, outcome);
+  return outcome;
+}
+
+// The stamp filter's later stamps for the samples integrated before turn the whole path since
+// the anchor (the anchor's state too, for the start-up re-integration from it): a rotation on
+// the world side commutes with every body-side step that follows.
+void KinematicPropagator::restamp(const SensorClockFilter::Result& clock,
+                                  const Eigen::Vector3d& w_B, StampOutcome outcome) {
+  const bool anchored = outcome == StampOutcome::Anchored || outcome == StampOutcome::HeldGap ||
+                        outcome == StampOutcome::ResetBackwardJump;
+  if (!anchored && outcome != StampOutcome::Advanced) {  // not integrated
+    if (clock.verdict == SensorClockFilter::Verdict::Restarted) restamp_.reset();
+    return;
+  }
+  const Eigen::Quaterniond turn = expMap(restamp_.add(clock_, clock, w_B, q_WB_, anchored));
+  q_WB_ = (turn * q_WB_).normalized();
+  anchor_q_WB_ = (turn * anchor_q_WB_).normalized();
+}
+
+StampOutcome KinematicPropagator::addStamped(double t, const Eigen::Vector3d& w_B) {
   if (!std::isfinite(t) || !w_B.allFinite()) return StampOutcome::RejectedNonFinite;
   // The door bound of limits.h: |w| h stays far inside the doubles, so no step turns NaN.
   if (!(w_B.norm() <= kMaxBodyRate)) return StampOutcome::RejectedOutOfRange;
-  if (stamp_filter_ == StampFilter::SensorClock) t = clock_.filter(t).t;
   const Eigen::Vector3d w = w_B - gyro_bias_B_;
   if (!anchored_) {
     anchor(t, w);
@@ -143,6 +170,7 @@ void KinematicPropagator::reset() {
   norm_error_ = 0.0;
   steps_ = 0;
   clock_.reset();
+  restamp_.reset();
 }
 
 void KinematicPropagator::setState(double t, const Eigen::Quaterniond& q_WB,
@@ -161,6 +189,7 @@ void KinematicPropagator::anchor(double t, const Eigen::Vector3d& w_B) {
   window_.clear();
   window_.push({t, w_B});
   anchor_q_WB_ = q_WB_;
+  restamp_.reset();  // the anchor's stamp is the state's time: the history starts again
   samples_since_anchor_ = 1;
   anchored_ = true;
   steps_ = 0;

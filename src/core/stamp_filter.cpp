@@ -44,6 +44,12 @@ void SensorClockFilter::reset() {
 
 double SensorClockFilter::jitter() const { return std::sqrt(variance_); }
 
+double SensorClockFilter::lineMinus(std::uint64_t index, double t) const {
+  // base_t_ - t is exact for nearby stamps; the line's part is relative to base_t_.
+  return (base_t_ - t) +
+         (origin_t_ + slope_ * (static_cast<double>(index) - static_cast<double>(index_)));
+}
+
 SensorClockFilter::Result SensorClockFilter::filter(double t_receipt) {
   recent_[recent_count_++ % recent_.size()] = t_receipt;
   if (samples_ == 0) {
@@ -157,6 +163,61 @@ double SensorClockFilter::medianRecentInterval() const {
   std::sort(intervals.begin(), intervals.begin() + (n - 1));
   const double median = intervals[(n - 1) / 2];
   return median > 0.0 ? median : slope_;
+}
+
+RestampCorrection::RestampCorrection(double memory) : forget_(1.0 - 1.0 / memory) {
+  if (!(memory > 1.0)) throw std::invalid_argument("RestampCorrection: memory > 1 required");
+}
+
+Eigen::Vector3d RestampCorrection::add(const SensorClockFilter& clock,
+                                       const SensorClockFilter::Result& sample,
+                                       const Eigen::Vector3d& w_B, const Eigen::Quaterniond& q_WB,
+                                       bool anchor) {
+  if (!started_ || sample.verdict == SensorClockFilter::Verdict::Restarted) {
+    // A new line numbers the samples again: the earlier terms stay as last corrected.
+    start(clock, sample.t, w_B, q_WB, anchor);
+    return Eigen::Vector3d::Zero();
+  }
+  // The origin moves to this sample: x -> x - m, y -> y - d; the newest sample's term, whose
+  // rate difference is known now, joins at x = -m, y = -d.
+  const double m = static_cast<double>(clock.index() - index_);
+  const double d = sample.t - t_;
+  sx_ -= m * s0_;
+  sy_ -= d * s0_;
+  if (count_newest_) {
+    const Eigen::Vector3d g = R_WB_ * (w_B - w_B_);
+    s0_ += g;
+    sx_ -= m * g;
+    sy_ -= d * g;
+  }
+  index_ = clock.index();
+  t_ = sample.t;
+  w_B_ = w_B;
+  R_WB_ = q_WB.toRotationMatrix();
+  count_newest_ = true;
+  // sum e_n g_n with e_n = t_n - t_n* = y - (t*(index_) - t_) - period x, at today's line.
+  const Eigen::Vector3d live = sy_ - clock.lineMinus(index_, t_) * s0_ - clock.period() * sx_;
+  const Eigen::Vector3d turn = live - applied_;
+  // Forgetting: the fraction 1/memory of every term stays frozen at today's line.
+  s0_ *= forget_;
+  sx_ *= forget_;
+  sy_ *= forget_;
+  applied_ = forget_ * live;
+  return turn;
+}
+
+void RestampCorrection::start(const SensorClockFilter& clock, double t, const Eigen::Vector3d& w_B,
+                              const Eigen::Quaterniond& q_WB, bool anchor) {
+  started_ = true;
+  count_newest_ = !anchor;
+  index_ = clock.index();
+  t_ = t;
+  w_B_ = w_B;
+  R_WB_ = q_WB.toRotationMatrix();
+  s0_.setZero();
+  sx_.setZero();
+  sy_.setZero();
+  applied_.setZero();
 }
 
 }  // namespace attitude_propagator
