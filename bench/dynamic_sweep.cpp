@@ -24,8 +24,9 @@ constexpr double kDiverged = 1.0;  // rad, or a relative energy change of this s
 // dopri5 is swept over its tolerance at the output step of the node's default grid (max_step =
 // 1/publish_rate = 0.01 s): a propagator must produce a state that often, whatever its method.
 constexpr double kDopri5OutputStep = 0.01;
+// Down to kMinTolerance: a DynamicPropagator refuses a tighter one (below round-off).
 const std::vector<double> kDopri5Tolerances = {1e-4, 1e-5,  1e-6,  1e-7,  1e-8,
-                                               1e-9, 1e-10, 1e-11, 1e-12, 1e-13};
+                                               1e-9, 1e-10, 1e-11, 1e-12};
 
 ap::RigidBody bodyOf(const DynamicScene& scene) {
   // Hairer-Lubich-Wanner's body (2, 1, 2/3) breaks the triangle inequality: a valid

@@ -117,6 +117,12 @@ struct DynamicPropagator::Impl {
         initial(checkedState(c.initial, "initial state")) {
     requirePositiveFinite(c.max_step, "max_step");
     requirePositiveFinite(c.tolerance, "tolerance");
+    if (c.tolerance < kMinTolerance || c.tolerance > kMaxTolerance) {
+      // Below round-off dopri5's control cannot converge; above it, it is no control at all.
+      throw std::invalid_argument("tolerance: must be in [" + std::to_string(kMinTolerance) +
+                                  ", " + std::to_string(kMaxTolerance) + "], got " +
+                                  std::to_string(c.tolerance));
+    }
     requirePositiveFinite(c.time_policy.max_dt, "max_dt");
     requirePositiveFinite(c.time_policy.backward_jump, "backward_jump");
     if (!(c.torque_timeout >= 0.0) || !std::isfinite(c.torque_timeout)) {
