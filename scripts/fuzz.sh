@@ -47,7 +47,12 @@ fi
 
 export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=0}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
-flags=(-timeout="$timeout_s" -rss_limit_mb=2048 -max_len=2048 -print_final_stats=1)
+# A fixed seed and a fresh working corpus (the committed seeds only) make a run repeatable: the
+# test command explores the same inputs on every machine, a faster one just further along.
+# FUZZ_SEED=0 draws a random seed, FUZZ_KEEP_CORPUS=1 grows the working corpus across runs
+# (for longer exploration by hand).
+seed="${FUZZ_SEED:-1}"
+flags=(-timeout="$timeout_s" -rss_limit_mb=2048 -max_len=2048 -print_final_stats=1 -seed="$seed")
 
 xml_escape() { sed -e 's/&/\&amp;/g' -e 's/</\&lt;/g' -e 's/>/\&gt;/g' -e 's/"/\&quot;/g'; }
 
@@ -94,6 +99,7 @@ for target in "${targets[@]}"; do
   fi
   # New inputs go to the working corpus in the build dir; the committed seeds stay as they are.
   corpus="$build/corpus/$target"
+  [ "${FUZZ_KEEP_CORPUS:-0}" = 1 ] || rm -rf "$corpus"
   mkdir -p "$corpus"
   before=$(ls "$findings" | wc -l)
   start=$SECONDS

@@ -26,8 +26,8 @@ class RigidBody {
                                         TriangleInequality triangle = TriangleInequality::Require);
 
   /// A full symmetric inertia tensor in B, diagonalised with Eigen's SelfAdjointEigenSolver:
-  /// I_B = R_BP diag(I1, I2, I3) R_BP^T with the eigenvectors as the columns of R_BP, the
-  /// third one flipped if needed so that det R_BP = +1 (q_BP is a proper rotation). A diagonal
+  /// I_B = C_BP diag(I1, I2, I3) C_BP^T with the eigenvectors as the columns of C_BP, the
+  /// third one flipped if needed so that det C_BP = +1 (q_BP is a proper rotation). A diagonal
   /// tensor keeps P = B. Symmetry is checked to 1e-12 of the largest entry.
   /// Throws std::invalid_argument for a non-symmetric, non-finite or not positive definite
   /// tensor or one whose principal moments leave [kMinInertia, kMaxInertia] or break the

@@ -86,11 +86,11 @@ RigidBody RigidBody::fromTensor(const Eigen::Matrix3d& I_B) {
   }
   const Eigen::Vector3d& moments = solver.eigenvalues();
   checkMoments(moments);
-  Eigen::Matrix3d R_BP = solver.eigenvectors();
-  // Eigenvectors are defined up to sign: make the frame right-handed so that R_BP is a
+  Eigen::Matrix3d C_BP = solver.eigenvectors();
+  // Eigenvectors are defined up to sign: make the frame right-handed so that C_BP is a
   // rotation and q_BP a unit quaternion of it.
-  if (R_BP.determinant() < 0.0) R_BP.col(2) = -R_BP.col(2);
-  return RigidBody(moments, Eigen::Quaterniond(R_BP).normalized());
+  if (C_BP.determinant() < 0.0) C_BP.col(2) = -C_BP.col(2);
+  return RigidBody(moments, Eigen::Quaterniond(C_BP).normalized());
 }
 
 RigidBody RigidBody::fromParameter(const std::vector<double>& values) {
@@ -110,8 +110,8 @@ RigidBody RigidBody::fromParameter(const std::vector<double>& values) {
 }
 
 Eigen::Matrix3d RigidBody::tensor_B() const {
-  const Eigen::Matrix3d R_BP = q_BP_.toRotationMatrix();
-  return R_BP * moments_P_.asDiagonal() * R_BP.transpose();
+  const Eigen::Matrix3d C_BP = q_BP_.toRotationMatrix();
+  return C_BP * moments_P_.asDiagonal() * C_BP.transpose();
 }
 
 bool RigidBody::isSphere(double rel_tol) const {

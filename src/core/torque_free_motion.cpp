@@ -128,14 +128,14 @@ void TorqueFreeMotion::initTriaxial(const RigidBody& body, const Eigen::Vector3d
     return;
   }
 
-  // The sorted frame S (I1 < I2 < I3): a signed permutation of P, made a proper rotation by
+  // The sorted frame F (I1 < I2 < I3): a signed permutation of P, made a proper rotation by
   // flipping its third axis when the permutation is odd.
   const std::array<int, 3> sorted = body.sortedAxes();
-  Eigen::Matrix3d R_PS = Eigen::Matrix3d::Zero();
-  for (int j = 0; j < 3; ++j) R_PS(sorted[j], j) = 1.0;
-  if (R_PS.determinant() < 0.0) R_PS.col(2) = -R_PS.col(2);
-  Eigen::Quaterniond q_PF(R_PS);
-  Eigen::Vector3d M = R_PS.transpose() * M_P;
+  Eigen::Matrix3d C_PF = Eigen::Matrix3d::Zero();
+  for (int j = 0; j < 3; ++j) C_PF(sorted[j], j) = 1.0;
+  if (C_PF.determinant() < 0.0) C_PF.col(2) = -C_PF.col(2);
+  Eigen::Quaterniond q_PF(C_PF);
+  Eigen::Vector3d M = C_PF.transpose() * M_P;
   const Eigen::Vector3d I(I_P_[sorted[0]], I_P_[sorted[1]], I_P_[sorted[2]]);
   I_F_ = I;
   const double I1 = I[0], I2 = I[1], I3 = I[2];
@@ -148,7 +148,7 @@ void TorqueFreeMotion::initTriaxial(const RigidBody& body, const Eigen::Vector3d
   // with w (M_i^2 / I_i = I_i w_i^2) and summed in long double: near the separatrix Delta2 is
   // a difference of two nearly equal terms, and its relative error sets the error of the
   // period (dK = dm_c / (2 m_c)); the state as given is the truth to propagate.
-  const Eigen::Vector3d w = R_PS.transpose() * w0_P_;  // a signed permutation: exact
+  const Eigen::Vector3d w = C_PF.transpose() * w0_P_;  // a signed permutation: exact
   using Wide = long double;
   const Wide w1s = Wide(w[0]) * w[0], w2s = Wide(w[1]) * w[1], w3s = Wide(w[2]) * w[2];
   const Wide wI1 = I1, wI2 = I2, wI3 = I3;
