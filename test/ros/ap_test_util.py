@@ -263,3 +263,15 @@ class SimClock:
             self.set(min(self.now_ns + step_ns, to_ns))
             if pause:
                 time.sleep(pause)
+
+
+class Stamps:
+    """Increasing stamps (integer ns) for the inputs of one kinematic node, step_s apart."""
+
+    def __init__(self, start_s, step_s=0.1):
+        self.ns = start_s * NS_PER_S
+        self.step = int(round(step_s * NS_PER_S))
+
+    def next(self, steps=1):
+        self.ns += steps * self.step
+        return time_ns(self.ns)

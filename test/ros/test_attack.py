@@ -16,7 +16,7 @@ from rosgraph_msgs.msg import Log
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Empty
 
-from ap_test_util import (NS_PER_S, Diagnostics, Node, Recorder, as_tuple, axis_angle,
+from ap_test_util import (Diagnostics, Node, Recorder, Stamps, as_tuple, axis_angle,
                           call_with_timeout, check_finite_state, make_imu, qmul,
                           rotation_angle, time_ns, wait_connected, wait_for)
 
@@ -33,18 +33,6 @@ def exp_rotation(w, t):
     """Exp(t w) as a quaternion: the rotation of a constant body rate w over t seconds."""
     n = math.sqrt(sum(c * c for c in w))
     return IDENTITY if n == 0.0 else axis_angle(w, n * t)
-
-
-class Stamps:
-    """Increasing stamps (integer ns) for one kinematic node, H apart."""
-
-    def __init__(self, start_s, step_s=0.1):
-        self.ns = start_s * NS_PER_S
-        self.step = int(round(step_s * NS_PER_S))
-
-    def next(self, steps=1):
-        self.ns += steps * self.step
-        return time_ns(self.ns)
 
 
 class RosoutLines:
