@@ -97,6 +97,25 @@ class GridTest(unittest.TestCase):
                  "diagnostics after the burst")
         self.assertEqual(self.counter("trq", "gaps"), gaps)
 
+    def test_3_an_input_far_ahead_does_not_stop_the_grid(self):
+        # A torque stamped in the year 2100 arrives right after ~reset, before the next clock
+        # tick anchors the propagator again. It must wait for the clock like any input stamped
+        # ahead of it: the grid states at the clock keep coming.
+        node = self.nodes["trq"]
+        node.reset()
+        msg = WrenchStamped()
+        msg.header.stamp = rospy.Time(4102444800)
+        msg.header.frame_id = "body_trq"
+        msg.wrench.torque = Vector3(0.4, 0.0, 0.0)
+        received = self.counter("trq", "received")
+        self.torque_pub.publish(msg)
+        self.diag.wait_counter("/trq/attitude_propagator", "received", received + 1)
+        start = (self.clock.now_ns // NS_PER_S + 1) * NS_PER_S
+        self.clock.set(start)
+        self.clock.run(start + NS_PER_S // 2, PERIOD_NS)
+        state = node.state.wait_at(time_ns(start + NS_PER_S // 2), timeout=STOP_TIMEOUT)
+        self.assertEqual(state.angular_velocity.x, 0.0)  # the torque is not in force yet
+
 
 if __name__ == "__main__":
     rostest.rosrun("attitude_propagator", "grid", GridTest)
