@@ -275,3 +275,15 @@ class Stamps:
     def next(self, steps=1):
         self.ns += steps * self.step
         return time_ns(self.ns)
+
+
+def check_each(test, cases, check):
+    """check(case) for every case, then one failure listing every case that failed. (Instead
+    of unittest's subTest, whose failures the rosunit XML does not attribute to the test.)"""
+    failures = []
+    for case in cases:
+        try:
+            check(case)
+        except AssertionError as e:
+            failures.append("%r: %s" % (case, e))
+    test.assertFalse(failures, "\n".join(failures))

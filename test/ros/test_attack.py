@@ -17,8 +17,8 @@ from sensor_msgs.msg import Imu
 from std_srvs.srv import Empty
 
 from ap_test_util import (Diagnostics, Node, Recorder, Stamps, as_tuple, axis_angle,
-                          call_with_timeout, check_finite_state, make_imu, qmul,
-                          rotation_angle, time_ns, wait_connected, wait_for)
+                          call_with_timeout, check_each, check_finite_state, make_imu, qmul,
+                          rotation_angle, wait_connected, wait_for)
 
 TOL = 1e-9  # cf4 is exact for a constant rate; only round-off remains
 SQRT_HALF = math.sqrt(0.5)
@@ -375,21 +375,26 @@ class AttackTest(unittest.TestCase):
         cases = [((1e200, 0.0, 0.0, 1e200), (SQRT_HALF, 0.0, 0.0, SQRT_HALF)),
                  ((1e308, 1e308, 1e308, 1e308), (0.5, 0.5, 0.5, 0.5)),
                  ((-1e308, 0.0, 1e-300, 0.0), (-1.0, 0.0, 0.0, 0.0))]
-        for given, unit in cases:
-            with self.subTest(q=given, model="dynamic"):
-                self.reset("ex")
-                response = self.set_state("ex", rospy.Time(0), given)
-                self.assertTrue(response.success, response.message)
-                for msg in self.new_states("ex", 3):
-                    check_finite_state(self, msg)
-                    self.assertRotation(as_tuple(msg.orientation), unit, 1e-15)
-            with self.subTest(q=given, model="kinematic"):
-                stamp = self.stamps["kin"].next()
-                response = self.set_state("kin", stamp, given)
-                self.assertTrue(response.success, response.message)
-                msg = self.nodes["kin"].state.wait_at(stamp)
+
+        def dynamic(case):
+            given, unit = case
+            self.reset("ex")
+            response = self.set_state("ex", rospy.Time(0), given)
+            self.assertTrue(response.success, response.message)
+            for msg in self.new_states("ex", 3):
                 check_finite_state(self, msg)
                 self.assertRotation(as_tuple(msg.orientation), unit, 1e-15)
+
+        def kinematic(case):
+            given, unit = case
+            stamp = self.stamps["kin"].next()
+            response = self.set_state("kin", stamp, given)
+            self.assertTrue(response.success, response.message)
+            msg = self.nodes["kin"].state.wait_at(stamp)
+            check_finite_state(self, msg)
+            self.assertRotation(as_tuple(msg.orientation), unit, 1e-15)
+        check_each(self, cases, dynamic)
+        check_each(self, cases, kinematic)
         self.assert_dynamic_alive("ex")
         self.assert_kinematic_alive("kin", KIN_Q0)
 

@@ -9,7 +9,8 @@ import rostest
 from geometry_msgs.msg import Vector3, WrenchStamped
 
 from ap_test_util import (NS_PER_S, Diagnostics, Node, SimClock, as_tuple, axis_angle,
-                          rotation_angle, time_ns, wait_connected, wait_for)
+                          check_each, rotation_angle, time_ns, wait_connected,
+                          wait_for)
 
 PERIOD_NS = 10 ** 7  # 1 / publish_rate (100 Hz)
 MS = 10 ** 6
@@ -42,25 +43,25 @@ class GridTest(unittest.TestCase):
         # The state at W must come out; the sphere turns at 0.5 rad/s about z from t0.
         node = self.nodes["sph"]
         w = 0.5
-        for i in range(10):
-            with self.subTest(trial=i):
-                whole_ns = (20 + 3 * i) * NS_PER_S
-                t0 = whole_ns - NS_PER_S + i * MS + 300 * 1000 * i  # phase i.(1 + 0.3) ms
-                self.clock.set(t0)
-                response = node.set_state(time_ns(t0), (0, 0, 0, 1), (0, 0, w))
-                self.assertTrue(response.success, response.message)
-                self.clock.set(t0 + 70 * MS)
-                self.clock.run(whole_ns, PERIOD_NS, pause=0.002)
-                self.assertEqual(self.clock.now_ns, whole_ns)
-                state = node.state.wait_at(time_ns(whole_ns), timeout=STOP_TIMEOUT)
-                angle = w * (whole_ns - t0) / NS_PER_S
-                self.assertRotation(as_tuple(state.orientation), axis_angle((0, 0, 1), angle),
-                                    1e-9)
-                # Every grid stamp after the anchor up to W, each once.
-                stamps = [m.header.stamp.to_nsec() for m in node.state.messages
-                          if t0 < m.header.stamp.to_nsec() <= whole_ns]
-                expected = list(range(t0 - t0 % PERIOD_NS + PERIOD_NS, whole_ns + 1, PERIOD_NS))
-                self.assertEqual(sorted(stamps), expected)
+        def trial(i):
+            whole_ns = (20 + 3 * i) * NS_PER_S
+            t0 = whole_ns - NS_PER_S + i * MS + 300 * 1000 * i  # phase i.(1 + 0.3) ms
+            self.clock.set(t0)
+            response = node.set_state(time_ns(t0), (0, 0, 0, 1), (0, 0, w))
+            self.assertTrue(response.success, response.message)
+            self.clock.set(t0 + 70 * MS)
+            self.clock.run(whole_ns, PERIOD_NS, pause=0.002)
+            self.assertEqual(self.clock.now_ns, whole_ns)
+            state = node.state.wait_at(time_ns(whole_ns), timeout=STOP_TIMEOUT)
+            angle = w * (whole_ns - t0) / NS_PER_S
+            self.assertRotation(as_tuple(state.orientation), axis_angle((0, 0, 1), angle),
+                                1e-9)
+            # Every grid stamp after the anchor up to W, each once.
+            stamps = [m.header.stamp.to_nsec() for m in node.state.messages
+                      if t0 < m.header.stamp.to_nsec() <= whole_ns]
+            expected = list(range(t0 - t0 % PERIOD_NS + PERIOD_NS, whole_ns + 1, PERIOD_NS))
+            self.assertEqual(sorted(stamps), expected)
+        check_each(self, range(10), trial)
 
     def test_2_starved_callbacks_publish_every_grid_stamp_and_see_no_gap(self):
         # A torque at t0 from rest, then /clock as a burst of 300 ticks of 0.01 s with no

@@ -13,7 +13,7 @@ import roslib.packages
 import rospy
 import rostest
 
-from ap_test_util import wait_for
+from ap_test_util import check_each
 
 BODY = {"inertia": [1.0, 2.0, 3.0]}
 HUGE_RATE = [1e200, 1e200, 1e200]
@@ -72,49 +72,51 @@ class ParameterLimitsTest(unittest.TestCase):
             rospy.set_param("/%s/%s" % (name, key), value)
 
     def test_refused_at_start(self):
-        for i, (params, name) in enumerate(REFUSED):
-            with self.subTest(params=params):
-                node = "limit_node_%d" % i
-                self.set_params(node, params)
-                result = subprocess.run([self.node, "__name:=" + node], stdout=subprocess.PIPE,
-                                        stderr=subprocess.PIPE, timeout=30, text=True)
-                self.assertEqual(result.returncode, 1, result.stderr)
-                fatal = [line for line in result.stderr.splitlines() if "[FATAL]" in line]
-                self.assertEqual(len(fatal), 1, result.stderr)
-                self.assertIn("refusing to start: %s: " % name, fatal[0])
-                self.assertIn("accepted", fatal[0])
+        def check(case):
+            i, (params, name) = case
+            node = "limit_node_%d" % i
+            self.set_params(node, params)
+            result = subprocess.run([self.node, "__name:=" + node], stdout=subprocess.PIPE,
+                                    stderr=subprocess.PIPE, timeout=30, text=True)
+            self.assertEqual(result.returncode, 1, result.stderr)
+            fatal = [line for line in result.stderr.splitlines() if "[FATAL]" in line]
+            self.assertEqual(len(fatal), 1, result.stderr)
+            self.assertIn("refusing to start: %s: " % name, fatal[0])
+            self.assertIn("accepted", fatal[0])
+        check_each(self, list(enumerate(REFUSED)), check)
 
     def test_accepted_extremes_run_in_bounded_cpu_and_stop_on_sigint(self):
-        for i, params in enumerate(ACCEPTED):
-            with self.subTest(params=params):
-                node = "extreme_node_%d" % i
-                self.set_params(node, params)
-                log = tempfile.TemporaryFile(mode="w+")
-                process = subprocess.Popen([self.node, "__name:=" + node],
-                                           stdout=subprocess.DEVNULL, stderr=log, text=True)
-                try:
-                    rospy.wait_for_service("/%s/reset" % node, timeout=20.0)
-                    time.sleep(1.0)  # past start-up
-                    cpu0, wall0 = cpu_seconds(process.pid), time.monotonic()
-                    time.sleep(MEASURE_S)
-                    share = (cpu_seconds(process.pid) - cpu0) / (time.monotonic() - wall0)
-                    self.assertIsNone(process.poll(), "the node died")
-                    self.assertLess(share, MAX_CPU_SHARE, "CPU share of one core")
-                    start = time.monotonic()
-                    process.send_signal(signal.SIGINT)
-                    process.wait(timeout=10.0)
-                    stopped = time.monotonic() - start
-                    print("%s: CPU %.3f of a core, stopped %.3f s after SIGINT"
-                          % (node, share, stopped), flush=True)
-                    self.assertLess(stopped, MAX_STOP_S, "seconds from SIGINT to exit")
-                finally:
-                    if process.poll() is None:
-                        process.kill()
-                        process.wait()
-                    log.seek(0)
-                    print("%s: %s" % (node, log.read()[-2000:]), flush=True)
-                    log.close()
+        def check(case):
+            i, params = case
+            node = "extreme_node_%d" % i
+            self.set_params(node, params)
+            log = tempfile.TemporaryFile(mode="w+")
+            process = subprocess.Popen([self.node, "__name:=" + node],
+                                       stdout=subprocess.DEVNULL, stderr=log, text=True)
+            try:
+                rospy.wait_for_service("/%s/reset" % node, timeout=20.0)
+                time.sleep(1.0)  # past start-up
+                cpu0, wall0 = cpu_seconds(process.pid), time.monotonic()
+                time.sleep(MEASURE_S)
+                share = (cpu_seconds(process.pid) - cpu0) / (time.monotonic() - wall0)
+                self.assertIsNone(process.poll(), "the node died")
+                self.assertLess(share, MAX_CPU_SHARE, "CPU share of one core")
+                start = time.monotonic()
+                process.send_signal(signal.SIGINT)
+                process.wait(timeout=10.0)
+                stopped = time.monotonic() - start
+                print("%s: CPU %.3f of a core, stopped %.3f s after SIGINT"
+                      % (node, share, stopped), flush=True)
+                self.assertLess(stopped, MAX_STOP_S, "seconds from SIGINT to exit")
+            finally:
+                if process.poll() is None:
+                    process.kill()
+                    process.wait()
+                log.seek(0)
+                print("%s: %s" % (node, log.read()[-2000:]), flush=True)
+                log.close()
 
+        check_each(self, list(enumerate(ACCEPTED)), check)
 
 if __name__ == "__main__":
     rostest.rosrun("attitude_propagator", "param_limits", ParameterLimitsTest)
