@@ -11,8 +11,10 @@ from attitude_propagator.msg import AttitudeState
 from attitude_propagator.srv import SetState, SetStateRequest
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Quaternion, Vector3
+from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Empty
+from tf2_msgs.msg import TFMessage
 
 
 def wait_for(condition, timeout=10.0, what="condition"):
@@ -173,3 +175,115 @@ def lookup(buffer, parent, child, stamp, timeout=10.0):
 
 def wait_connected(pub, timeout=20.0):
     wait_for(lambda: pub.get_num_connections() > 0, timeout, "a subscriber on " + pub.name)
+
+
+# ---- Shared by the robustness, grid and reconfiguration tests --------------------------------
+
+NS_PER_S = 10 ** 9
+
+
+def time_ns(ns):
+    """rospy.Time from integer nanoseconds (exact, unlike a float of seconds)."""
+    return rospy.Time(0, int(ns))
+
+
+def call_with_timeout(fn, timeout=5.0, what="a call"):
+    """fn() in a thread; fails instead of hanging when the other side does not answer."""
+    result = {}
+
+    def run():
+        try:
+            result["value"] = fn()
+        except Exception as e:  # handed to the caller
+            result["error"] = e
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    thread.join(timeout)
+    if thread.is_alive():
+        raise AssertionError("%s did not return within %.1f s" % (what, timeout))
+    if "error" in result:
+        raise result["error"]
+    return result.get("value")
+
+
+def check_finite_state(test, msg, unit_tol=1e-12):
+    """An AttitudeState that can be used: finite numbers, a unit quaternion."""
+    q = as_tuple(msg.orientation)
+    test.assertTrue(all(math.isfinite(c) for c in q), "orientation %s" % (q,))
+    test.assertLess(abs(math.sqrt(sum(c * c for c in q)) - 1.0), unit_tol, "|q| of %s" % (q,))
+    w = (msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z)
+    test.assertTrue(all(math.isfinite(c) for c in w), "angular_velocity %s" % (w,))
+    test.assertTrue(math.isfinite(msg.kinetic_energy), "kinetic_energy %r" % msg.kinetic_energy)
+    test.assertTrue(all(math.isfinite(c) for c in msg.orientation_covariance),
+                    "orientation_covariance %s" % (msg.orientation_covariance,))
+
+
+class TfRecorder:
+    """Every transform on /tf whose parent or child is one of `frames`, in arrival order."""
+
+    def __init__(self, frames):
+        self.lock = threading.Lock()
+        self.frames = set(frames)
+        self.transforms = []
+        self.sub = rospy.Subscriber("/tf", TFMessage, self._cb, queue_size=100000)
+
+    def _cb(self, msg):
+        with self.lock:
+            for t in msg.transforms:
+                if t.header.frame_id in self.frames or t.child_frame_id in self.frames:
+                    self.transforms.append(t)
+
+    def at(self, stamp):
+        with self.lock:
+            return [t for t in self.transforms if t.header.stamp == stamp]
+
+    def since(self, stamp):
+        with self.lock:
+            return [t for t in self.transforms if t.header.stamp >= stamp]
+
+
+class SimClock:
+    """Publishes /clock in integer nanoseconds, only forwards."""
+
+    def __init__(self, subscribers, start_ns):
+        self.pub = rospy.Publisher("/clock", Clock, queue_size=100000)
+        wait_for(lambda: self.pub.get_num_connections() >= subscribers, 30.0,
+                 "%d subscribers on /clock" % subscribers)
+        self.now_ns = None
+        self.set(start_ns)
+
+    def set(self, ns):
+        self.now_ns = int(ns)
+        self.pub.publish(Clock(clock=time_ns(self.now_ns)))
+
+    def run(self, to_ns, step_ns, pause=0.001):
+        """Steps the clock to to_ns (the last step may be shorter); pause: wall seconds
+        between ticks, 0 for a burst."""
+        while self.now_ns < to_ns:
+            self.set(min(self.now_ns + step_ns, to_ns))
+            if pause:
+                time.sleep(pause)
+
+
+class Stamps:
+    """Increasing stamps (integer ns) for the inputs of one kinematic node, step_s apart."""
+
+    def __init__(self, start_s, step_s=0.1):
+        self.ns = start_s * NS_PER_S
+        self.step = int(round(step_s * NS_PER_S))
+
+    def next(self, steps=1):
+        self.ns += steps * self.step
+        return time_ns(self.ns)
+
+
+def check_each(test, cases, check):
+    """check(case) for every case, then one failure listing every case that failed. (Instead
+    of unittest's subTest, whose failures the rosunit XML does not attribute to the test.)"""
+    failures = []
+    for case in cases:
+        try:
+            check(case)
+        except AssertionError as e:
+            failures.append("%r: %s" % (case, e))
+    test.assertFalse(failures, "\n".join(failures))
