@@ -76,7 +76,7 @@ struct EngineCounters {
   std::uint64_t gaps = 0;            ///< longer than max_dt: state held
   std::uint64_t resets = 0;          ///< backward jumps and reset()
   std::uint64_t failed_steps = 0;    ///< the integrator could not complete an interval
-  std::uint64_t pending_overflow = 0;  ///< dynamic: queue full, oldest applied early
+  std::uint64_t pending_overflow = 0;  ///< dynamic: queue full, the furthest ahead dropped
   std::uint64_t deferred_ticks = 0;  ///< dynamic: grid stamps left for the next call (budget)
   std::uint64_t rejected_bias = 0;   ///< gyro bias samples: non-finite, too large or bad frame
 };
@@ -119,7 +119,8 @@ struct EngineConfig {
   /// Orientation uncertainty (rad) at an anchor of the initial state: P_B = stddev² I.
   double initial_orientation_stddev = 0.0;
   Eigen::Vector3d gyro_bias_B = Eigen::Vector3d::Zero();  ///< rad/s, until a bias sample
-  /// Dynamic model: inputs stamped ahead of the clock wait, at most this many.
+  /// Dynamic model: inputs stamped ahead of the clock wait, at most this many; past it the
+  /// one stamped furthest ahead is dropped (counted).
   std::size_t max_pending = 4096;
   /// Dynamic model: grid stamps handled per call at most; the rest wait for the next call.
   std::size_t grid_budget = 1000;

@@ -240,6 +240,7 @@ bool AttitudeEngine::handleOutcome(StampOutcome outcome, std::optional<Source> s
       held_torque_.reset();
       P_B_ = initialCovariance();
       last_published_.reset();
+      rebaseIfFar(stamp);  // back from a far-future stamp: the origin follows
       return true;
     case StampOutcome::DroppedStale:
       if (input) ++counters_.dropped_stale;
@@ -288,18 +289,23 @@ void AttitudeEngine::submitKinematic(const Input& input) {
 
 void AttitudeEngine::submitDynamic(const Input& input) {
   const double t = coreTime(input.stamp);
-  if (!dynamic_->anchored() || t <= dynamic_->time()) {
+  // Not anchored: the input anchors, unless the clock is known and behind its stamp; then the
+  // clock's next grid stamp anchors, and the input waits for its stamp like any other (an
+  // input stamped in the year 2100 must not carry the propagator away from the clock).
+  const bool wait_for_clock = !dynamic_->anchored() && clock_ && input.stamp > *clock_;
+  if (!wait_for_clock && (!dynamic_->anchored() || t <= dynamic_->time())) {
     applyDynamic(input);  // anchors, or late (the core places it), or a jump back
     return;
   }
   // Ahead of the propagator: held until the clock reaches its stamp, so the state published
   // at a grid stamp sees exactly the inputs stamped up to it.
   if (pending_.size() >= config_.max_pending) {
+    // Full: the input stamped furthest ahead of the clock goes (applying one early would carry
+    // the propagator ahead of the clock, and nothing could be published until it caught up).
     ++counters_.pending_overflow;
     sink_.note({EngineNote::PendingFull, input.source, input.stamp});
-    const Input oldest = pending_.front();
-    pending_.erase(pending_.begin());
-    applyDynamic(oldest);
+    if (input.stamp >= pending_.back().stamp) return;
+    pending_.pop_back();
   }
   const auto at =
       std::upper_bound(pending_.begin(), pending_.end(), input.stamp,

@@ -504,7 +504,7 @@ void AttitudePropagatorRos::note(const EngineNote& note) {
     case EngineNote::PendingFull:
       ROS_WARN_THROTTLE(kWarnPeriod,
                         "%s: more inputs stamped ahead of ROS time than the queue holds: the "
-                        "oldest applied early (%lu so far)",
+                        "one stamped furthest ahead dropped (%lu so far)",
                         what, c.pending_overflow);
       break;
     case EngineNote::Deferred:

@@ -215,6 +215,20 @@ TEST(EngineKinematic, AStampYearsAheadIsAGapAndPrecisionIsKeptAfterIt) {
   EXPECT_ROTATION_NEAR(sink.states.back().q_WB, held * aboutAxis(w, 0.5), 1e-12);
 }
 
+TEST(EngineKinematic, BackFromAFarFutureStampPrecisionIsKept) {
+  // Stamps jump to 2100 (a gap) and back (a reset): core time must be precise again after.
+  Recorder sink;
+  ap::AttitudeEngine engine(kinematicConfig(), sink);
+  const Eigen::Vector3d w(0.0, 0.0, 0.5);
+  engine.submit(rate(at(0.0), w));
+  engine.submit(rate(at(0.1), w));
+  engine.submit(rate(4102444800LL * kSecond, w));
+  engine.submit(rate(at(0.2), w));  // back: a reset to the initial state, anchored here
+  EXPECT_EQ(engine.counters().resets, 1u);
+  for (int k = 1; k <= 10; ++k) engine.submit(rate(at(0.2 + 0.1 * k), w));
+  EXPECT_ROTATION_NEAR(sink.states.back().q_WB, aboutAxis(w, 0.5), 1e-13);
+}
+
 TEST(EngineKinematic, ClockGoingBackResetsAndForgetsTime) {
   Recorder sink;
   ap::AttitudeEngine engine(kinematicConfig(), sink);
@@ -370,6 +384,29 @@ TEST(EngineDynamic, TheClockGoingBackResetsAndPublishesTheInitialStateAtOnce) {
   EXPECT_ROTATION_NEAR(sink.states.back().q_WB, Eigen::Quaterniond::Identity(), 0.0);
   runClock(engine, 5.0, 6.0, 0.01);
   EXPECT_ROTATION_NEAR(sink.states.back().q_WB, aboutAxis(Eigen::Vector3d::UnitZ(), 0.2), 1e-12);
+}
+
+TEST(EngineDynamic, InputsFarAheadNeverCarryThePropagatorAwayFromTheClock) {
+  Recorder sink;
+  ap::EngineConfig config = torqueConfig();
+  config.max_pending = 16;
+  ap::AttitudeEngine engine(config, sink);
+  const ap::Stamp year_2100 = 4102444800LL * kSecond;
+  // Right after a reset, with the clock known: a torque stamped in 2100 waits for its stamp.
+  engine.clockTick(at(0.0));
+  engine.reset();
+  engine.submit(torque(year_2100, Eigen::Vector3d(0.4, 0.0, 0.0)));
+  runClock(engine, 0.0, 0.5, 0.01);
+  EXPECT_EQ(sink.states.back().stamp, at(0.5));
+  // A flood of them: the queue keeps the earliest, drops the rest, and the grid goes on.
+  for (int k = 0; k < 100; ++k) {
+    engine.submit(torque(year_2100 + k * kSecond, Eigen::Vector3d(0.4, 0.0, 0.0)));
+  }
+  EXPECT_EQ(engine.pending(), 16u);
+  EXPECT_GE(engine.counters().pending_overflow, 84u);
+  runClock(engine, 0.5, 1.0, 0.01);
+  EXPECT_EQ(sink.states.back().stamp, at(1.0));
+  EXPECT_ROTATION_NEAR(sink.states.back().q_WB, Eigen::Quaterniond::Identity(), 0.0);
 }
 
 TEST(EngineDynamic, WorkPerCallIsBoundedAndTheRestFollows) {
