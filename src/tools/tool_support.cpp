@@ -300,8 +300,14 @@ void CsvFile::close() {
 
 namespace {
 
-enum Op : std::uint8_t { kMessage = 0x02, kBagHeader = 0x03, kIndex = 0x04, kChunk = 0x05,
-                         kChunkInfo = 0x06, kConnection = 0x07 };
+enum Op : std::uint8_t {
+  kMessage = 0x02,
+  kBagHeader = 0x03,
+  kIndex = 0x04,
+  kChunk = 0x05,
+  kChunkInfo = 0x06,
+  kConnection = 0x07
+};
 constexpr std::uint32_t kIndexVersion = 1;
 constexpr std::size_t kBagHeaderLength = 4096;  // header and padding, as rosbag writes it
 const char kVersionLine[] = "#ROSBAG V2.0\n";
@@ -442,18 +448,22 @@ void BagOutput::writeChunk() {
     stored = n;
   }
   out_.clear();
-  appendRecord(out_,
-               Fields()
-                   .add("op", Op::kChunk)
-                   .add("compression", std::string(compression_ == Compression::Lz4 ? "lz4" : "none"))
-                   .add("size", size),
-               data, stored);
+  appendRecord(
+      out_,
+      Fields()
+          .add("op", Op::kChunk)
+          .add("compression", std::string(compression_ == Compression::Lz4 ? "lz4" : "none"))
+          .add("size", size),
+      data, stored);
   for (std::uint32_t id = 0; id < connections_.size(); ++id) {
     Connection& c = connections_[id];
     if (c.count == 0) continue;
     appendRecord(out_,
-                 Fields().add("op", Op::kIndex).add("ver", kIndexVersion).add("conn", id).add(
-                     "count", c.count),
+                 Fields()
+                     .add("op", Op::kIndex)
+                     .add("ver", kIndexVersion)
+                     .add("conn", id)
+                     .add("count", c.count),
                  c.index.data(), c.index.size());
     info.counts.emplace_back(id, c.count);
     c.index.clear();

@@ -164,8 +164,9 @@ class CsvFile {
 /// list close the file. rosbag::Bag::write seeks to the end of the file twice per message, which
 /// with glibc's read-write FILE costs an fstat, an lseek and a read each, plus one write per
 /// message uncompressed: about six system calls per message against about two per chunk here.
-/// Memory: one chunk and its index, and a few bytes per chunk; rosbag::Bag keeps every
-/// message's index entry. The file is readable by rosbag (C++ and Python) as if it wrote it.
+/// Memory: one chunk and its index, and a few bytes per chunk. The file is laid out as
+/// rosbag::Bag lays it out (the same records, header padding and chunk threshold), so rosbag's
+/// readers, `rosbag info` and `rosbag reindex` take it as their own.
 class BagOutput {
  public:
   enum class Compression { None, Lz4 };
@@ -180,9 +181,9 @@ class BagOutput {
   /// Appends `msg` on `topic` at record time `time` (at least ros::TIME_MIN).
   template <class M>
   void write(const std::string& topic, const ros::Time& time, const M& msg) {
-    const std::uint32_t id = connection(topic, ros::message_traits::datatype<M>(),
-                                        ros::message_traits::md5sum<M>(),
-                                        ros::message_traits::definition<M>());
+    const std::uint32_t id =
+        connection(topic, ros::message_traits::datatype<M>(), ros::message_traits::md5sum<M>(),
+                   ros::message_traits::definition<M>());
     const std::uint32_t length = ros::serialization::serializationLength(msg);
     ros::serialization::OStream out(beginMessage(id, time, length), length);
     ros::serialization::serialize(out, msg);
