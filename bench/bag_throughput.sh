@@ -7,9 +7,10 @@
 # Runs propagate_bag with --io-floor (reads, decodes and writes the same outputs without
 # propagating) and with each kinematic integrator, then evaluate_bag_core over all of them in
 # one pass; each run three times, the fastest kept (the machine may be shared). Prints per run
-# the wall time, the multiple of real time, the ratio to the I/O floor and the peak resident
-# memory (GNU time), and evaluate_bag_core's time against the sum of the five propagate_bag
-# runs. The same with --csv output when CSV=1.
+# the wall time, the CPU time (user + system), the multiple of real time, the ratio to the I/O
+# floor and the peak resident memory (GNU time), and evaluate_bag_core's time against the sum of
+# the five propagate_bag runs. Bag output is uncompressed (the default); cf4 is also run with
+# --compression lz4. The same with --csv output when CSV=1.
 #
 # Usage: bash bench/bag_throughput.sh [SECONDS_OF_DATA] [WORK_DIR]   (from the devel space built
 # by scripts/build.sh; never part of the tests)
@@ -66,11 +67,12 @@ EOF
 fi
 ls -l "$BAG"
 
-# Runs "$@" three times; prints "wall_s max_rss_kb" of the fastest.
+# Runs "$@" three times; prints "wall_s max_rss_kb cpu_s" of the fastest.
 measure() {
   local best="" line
   for _ in 1 2 3; do
-    line=$(/usr/bin/time -f "%e %M" "$@" 2>&1 >/dev/null | tail -n 1)
+    line=$(/usr/bin/time -f "%e %M %U %S" "$@" 2>&1 >/dev/null | tail -n 1 |
+      awk '{ print $1, $2, $3 + $4 }')
     if [ -z "$best" ] || awk -v a="${line%% *}" -v b="${best%% *}" 'BEGIN { exit !(a < b) }'; then
       best="$line"
     fi
@@ -78,30 +80,39 @@ measure() {
   echo "$best"
 }
 
-report() {  # name wall rss floor
-  awk -v n="$1" -v w="$2" -v m="$3" -v f="$4" -v s="$SECONDS_OF_DATA" \
-    'BEGIN { printf "  %-22s %8.3f s  %7.0fx real time  %5.2fx I/O floor  %6.1f MB RSS\n", n, w, s / w, w / f, m / 1024 }'
+report() {  # name wall rss floor cpu floor_cpu
+  awk -v n="$1" -v w="$2" -v m="$3" -v f="$4" -v c="$5" -v fc="$6" -v s="$SECONDS_OF_DATA" \
+    'BEGIN { printf "  %-22s %8.3f s wall %7.3f s CPU  %7.0fx real time  %5.2fx I/O floor (CPU %5.2fx)  %6.1f MB RSS\n", n, w, c, s / w, w / f, c / fc, m / 1024 }'
 }
 
 run_propagate() {  # output option (-o FILE.bag or --csv FILE.csv)
   local out_opt="$1" out_file="$2"
   echo "propagate_bag $out_opt (${SECONDS_OF_DATA} s of 200 Hz IMU):"
-  read -r floor rss < <(measure "$BIN/propagate_bag" "$BAG" "$out_opt" "$out_file" --no-progress --io-floor)
-  report "I/O floor" "$floor" "$rss" "$floor"
+  read -r floor rss floor_cpu < <(measure "$BIN/propagate_bag" "$BAG" "$out_opt" "$out_file" \
+    --no-progress --io-floor)
+  report "I/O floor" "$floor" "$rss" "$floor" "$floor_cpu" "$floor_cpu"
   SUM=0
   for integrator in euler rk4 exp exp2 cf4; do
-    read -r wall rss < <(measure "$BIN/propagate_bag" "$BAG" "$out_opt" "$out_file" --no-progress \
-      --set integrator="$integrator")
-    report "$integrator" "$wall" "$rss" "$floor"
+    read -r wall rss cpu < <(measure "$BIN/propagate_bag" "$BAG" "$out_opt" "$out_file" \
+      --no-progress --set integrator="$integrator")
+    report "$integrator" "$wall" "$rss" "$floor" "$cpu" "$floor_cpu"
     SUM=$(awk -v a="$SUM" -v b="$wall" 'BEGIN { print a + b }')
   done
+  if [ "$out_opt" = -o ]; then
+    read -r floor rss floor_cpu < <(measure "$BIN/propagate_bag" "$BAG" -o "$out_file" \
+      --no-progress --io-floor --compression lz4)
+    report "I/O floor, lz4" "$floor" "$rss" "$floor" "$floor_cpu" "$floor_cpu"
+    read -r wall rss cpu < <(measure "$BIN/propagate_bag" "$BAG" -o "$out_file" --no-progress \
+      --set integrator=cf4 --compression lz4)
+    report "cf4, lz4" "$wall" "$rss" "$floor" "$cpu" "$floor_cpu"
+  fi
   rm -f "$out_file"
 }
 
 run_propagate -o "$WORK/out.bag"
 
 echo "evaluate_bag_core (5 integrators x 2 rate_samples readings, one pass):"
-read -r wall rss < <(measure "$BIN/evaluate_bag_core" "$BAG" --truth /truth --csv "$WORK/eval" --no-progress)
+read -r wall rss _ < <(measure "$BIN/evaluate_bag_core" "$BAG" --truth /truth --csv "$WORK/eval" --no-progress)
 awk -v w="$wall" -v m="$rss" -v sum="$SUM" \
   'BEGIN { printf "  %-22s %8.3f s  %5.2fx the sum of the five propagate_bag runs (%.3f s)  %6.1f MB RSS\n", "all methods", w, w / sum, sum, m / 1024 }'
 "$BIN/evaluate_bag_core" "$BAG" --truth /truth --csv "$WORK/eval" --no-progress

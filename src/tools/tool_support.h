@@ -158,6 +158,74 @@ class CsvFile {
   std::vector<char> buffer_;
 };
 
+/// A bag (format 2.0) written a chunk at a time. Messages are serialised into an in-memory chunk
+/// that goes to the file in one write when it passes the threshold (LZ4-compressed with
+/// rosbag's own roslz4 if asked), followed by its index records; the connections and the chunk
+/// list close the file. rosbag::Bag::write seeks to the end of the file twice per message, which
+/// with glibc's read-write FILE costs an fstat, an lseek and a read each, plus one write per
+/// message uncompressed: about six system calls per message against about two per chunk here.
+/// Memory: one chunk and its index, and a few bytes per chunk. The file is laid out as
+/// rosbag::Bag lays it out (the same records, header padding and chunk threshold), so rosbag's
+/// readers, `rosbag info` and `rosbag reindex` take it as their own.
+class BagOutput {
+ public:
+  enum class Compression { None, Lz4 };
+  static constexpr std::uint32_t kChunkThreshold = 768 * 1024;  // rosbag's default
+
+  BagOutput(const std::string& path, Compression compression,
+            std::uint32_t chunk_threshold = kChunkThreshold);
+  ~BagOutput();
+  BagOutput(const BagOutput&) = delete;
+  BagOutput& operator=(const BagOutput&) = delete;
+
+  /// Appends `msg` on `topic` at record time `time` (at least ros::TIME_MIN).
+  template <class M>
+  void write(const std::string& topic, const ros::Time& time, const M& msg) {
+    const std::uint32_t id =
+        connection(topic, ros::message_traits::datatype<M>(), ros::message_traits::md5sum<M>(),
+                   ros::message_traits::definition<M>());
+    const std::uint32_t length = ros::serialization::serializationLength(msg);
+    ros::serialization::OStream out(beginMessage(id, time, length), length);
+    ros::serialization::serialize(out, msg);
+    if (chunk_.size() > threshold_) writeChunk();
+  }
+  /// Writes the last chunk and the index; throws ToolError when anything failed to reach the
+  /// disk.
+  void close();
+
+ private:
+  struct Connection {
+    std::string topic, datatype, md5sum, definition;
+    std::vector<std::uint8_t> index;  // this chunk's (time, offset) entries, as recorded
+    std::uint32_t count = 0;          // messages in this chunk
+  };
+  struct ChunkInfo {
+    std::uint64_t position;
+    ros::Time start, end;
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> counts;  // (connection, messages)
+  };
+  std::uint32_t connection(const std::string& topic, const char* datatype, const char* md5sum,
+                           const char* definition);
+  std::uint8_t* beginMessage(std::uint32_t id, const ros::Time& time, std::uint32_t length);
+  void writeChunk();
+  void writeHeader(std::uint64_t index_position);
+  void put(const std::vector<std::uint8_t>& bytes);
+
+  std::string path_;
+  std::FILE* file_ = nullptr;
+  Compression compression_;
+  std::uint32_t threshold_;
+  std::uint64_t position_ = 0;  // bytes written so far
+  bool failed_ = false;
+  bool chunk_open_ = false;
+  std::vector<Connection> connections_;
+  std::vector<std::uint8_t> chunk_;  // the open chunk's records, uncompressed
+  std::vector<std::uint8_t> out_;    // what goes to the file next
+  std::vector<char> compressed_;
+  ros::Time chunk_start_, chunk_end_;
+  std::vector<ChunkInfo> chunks_;
+};
+
 /// A stamp as seconds with nanosecond digits ("1700000000.005000000"), exact.
 std::string formatStamp(Stamp stamp);
 

@@ -4,6 +4,7 @@
 // clear error, a non-zero exit and no output.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -237,6 +238,72 @@ TEST(PropagateBag, IoFloorWritesTheSameMessages) {
   EXPECT_EQ(readOutput(dir.file("a.bag")).count, readOutput(dir.file("b.bag")).count);
 }
 
+/// Every message of a bag: topic, record time and serialised bytes, in rosbag's time order.
+struct Recorded {
+  std::string topic;
+  ros::Time time;
+  std::vector<std::uint8_t> bytes;
+  bool operator==(const Recorded& o) const {
+    return topic == o.topic && time == o.time && bytes == o.bytes;
+  }
+};
+
+std::vector<Recorded> readRecorded(rosbag::Bag& bag) {
+  std::vector<Recorded> all;
+  for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
+    Recorded r{m.getTopic(), m.getTime(), std::vector<std::uint8_t>(m.size())};
+    ros::serialization::OStream out(r.bytes.data(), m.size());
+    m.write(out);
+    all.push_back(std::move(r));
+  }
+  return all;
+}
+
+// The output bag is written chunk by chunk by the tool itself; rosbag must read it as its own,
+// compressed (lz4) or not: the same messages over several chunks, the connections' types, the
+// index behind a time-range query (counted from the input's record times), and the compressed
+// file several times smaller (the coning stream repeats its frames and layouts).
+TEST(PropagateBag, OutputBagReadsBackCompressedOrNot) {
+  TempDir dir;
+  SceneBag scene;
+  scene.motion = coning();
+  scene.duration = 20.0;  // 4001 inputs, 12003 outputs of about 260 bytes: four 768 KiB chunks
+  scene.truth = TruthType::None;
+  const Written w = writeSceneBag(dir.file("in.bag"), scene);
+  const std::string common = kPropagate + " " + dir.file("in.bag") + " --set integrator=cf4";
+  const RunResult plain = run(common + " -o " + dir.file("none.bag") + " --compression none");
+  ASSERT_EQ(plain.status, 0) << plain.output;
+  const RunResult lz4 = run(common + " -o " + dir.file("lz4.bag") + " --compression lz4");
+  ASSERT_EQ(lz4.status, 0) << lz4.output;
+
+  rosbag::Bag a(dir.file("none.bag"), rosbag::bagmode::Read);
+  rosbag::Bag b(dir.file("lz4.bag"), rosbag::bagmode::Read);
+  const std::vector<Recorded> messages = readRecorded(a);
+  ASSERT_EQ(messages.size(), 3 * w.rate_stamps.size());
+  EXPECT_TRUE(messages == readRecorded(b));
+  EXPECT_GT(a.getSize(), 2 * 768u * 1024u);
+  EXPECT_LT(3 * b.getSize(), a.getSize());
+  for (const rosbag::ConnectionInfo* c : rosbag::View(b).getConnections()) {
+    if (c->topic == "/imu/data") {
+      EXPECT_EQ(c->datatype, ros::message_traits::datatype<sensor_msgs::Imu>());
+      EXPECT_EQ(c->md5sum, ros::message_traits::md5sum<sensor_msgs::Imu>());
+      EXPECT_EQ(c->msg_def, ros::message_traits::definition<sensor_msgs::Imu>());
+    }
+  }
+  // Record times are the inputs'; a query over the middle third finds exactly those inputs.
+  ros::Time from, to;
+  from.fromNSec(static_cast<std::uint64_t>(w.rate_stamps[w.rate_stamps.size() / 3]));
+  to.fromNSec(static_cast<std::uint64_t>(w.rate_stamps[2 * w.rate_stamps.size() / 3]));
+  const auto inside = static_cast<std::uint32_t>(
+      std::count_if(w.rate_stamps.begin(), w.rate_stamps.end(), [&](Stamp s) {
+        return s >= static_cast<Stamp>(from.toNSec()) && s <= static_cast<Stamp>(to.toNSec());
+      }));
+  for (rosbag::Bag* bag : {&a, &b}) {
+    rosbag::View tf(*bag, rosbag::TopicQuery("/tf"), from, to);
+    EXPECT_EQ(tf.size(), inside);
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Bad bags and options: one line naming the problem, exit 1, nothing under the output name.
 // ---------------------------------------------------------------------------------------------
@@ -291,6 +358,7 @@ TEST(PropagateBag, BadParametersAreRefused) {
   writeSceneBag(dir.file("good.bag"), scene);
   expectRefused(dir, dir.file("good.bag") + " --set no_such=1", "no_such: unknown parameter");
   expectRefused(dir, dir.file("good.bag") + " --set integrator=rk5", "integrator:");
+  expectRefused(dir, dir.file("good.bag") + " --compression zip", "--compression zip");
   writeText(dir.file("bad.yaml"), "max_dt: [1, 2]\n");
   expectRefused(dir, dir.file("good.bag") + " --config " + dir.file("bad.yaml"),
                 "max_dt: wrong type");
