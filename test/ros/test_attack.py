@@ -304,7 +304,8 @@ class AttackTest(unittest.TestCase):
         self.send_rate(ns, b, w)
         msg = rec.wait_at(b)
         self.assertRotation(as_tuple(msg.orientation), qmul(KIN_Q0, exp_rotation(w, 0.3)), TOL)
-        self.assertTrue(all(c == 0.0 for c in msg.orientation_covariance))  # none given
+        # none given (attack.test: no default noise, a known start)
+        self.assertTrue(all(c == 0.0 for c in msg.orientation_covariance))
         self.assert_kinematic_alive(ns, KIN_Q0)
 
     def test_row11b_orientation_covariance_growth_is_clamped(self):
