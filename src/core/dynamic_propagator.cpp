@@ -103,6 +103,11 @@ struct DynamicPropagator::Impl {
 
   std::uint64_t steps = 0;
   std::uint64_t failed_steps = 0;
+  // After a failed interval, the same state under the same inputs fails again: until an input
+  // or a new anchor changes something, an interval at least half as long fails at once, with
+  // no work (a body spun past what the integrator can follow must not cost a budget per tick).
+  bool stuck = false;
+  double stuck_interval = 0.0;
   StepStatus last_failure = StepStatus::Ok;
   StepStatus failure = StepStatus::Ok;  // why the current call's integration failed
   std::uint64_t work = 0;               // work units spent by the current call
@@ -170,6 +175,7 @@ struct DynamicPropagator::Impl {
 
   /// Makes x at time t the anchor: the grid restarts at t.
   void pin(double t, const DynamicState x) {  // by value: x may be current_B
+    stuck = false;
     anchored = true;
     grid_origin = t;
     grid_index = 0;
@@ -261,7 +267,10 @@ struct DynamicPropagator::Impl {
   StampOutcome failAndHold(double t, const DynamicState& held) {
     ++failed_steps;
     last_failure = failure;
+    const double interval = t - time;
     pin(t, held);
+    stuck = true;
+    stuck_interval = interval;
     return StampOutcome::FailedStep;
   }
 
@@ -284,6 +293,10 @@ struct DynamicPropagator::Impl {
         return StampOutcome::HeldGap;
       case StampClass::Forward: {
         const DynamicState held = current_B;
+        if (stuck && t - time >= 0.5 * stuck_interval) {
+          failure = last_failure;  // the same reason as the interval that failed
+          return failAndHold(t, held);
+        }
         return advanceState(t) ? StampOutcome::Advanced : failAndHold(t, held);
       }
     }
@@ -312,6 +325,7 @@ struct DynamicPropagator::Impl {
     const DynamicState held = current_B;
     if (commitAt(std::max(t, knot_time))) {
       apply();
+      stuck = false;  // an input changed what the integrator faces
       if (now <= knot_time) {
         setCurrent(knot_time, knot);
         return true;
@@ -320,6 +334,7 @@ struct DynamicPropagator::Impl {
     }
     failAndHold(now, held);
     apply();  // at the new anchor: knot_time == now
+    stuck = false;
     setCurrent(knot_time, knot);
     return false;
   }

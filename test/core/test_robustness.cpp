@@ -182,6 +182,31 @@ TEST(Robustness, Dopri5StopsAtTheStepBudget) {
   expectSaneState(p);
 }
 
+TEST(Robustness, AFailedIntervalIsNotRetriedUntilSomethingChanges) {
+  // dopri5 with a tiny budget on a fast spin: the first interval fails after some work; the
+  // next ones, with the same state and inputs, fail at once with none; a new torque (an input
+  // that changes what the integrator faces) makes it try again.
+  ap::DynamicConfig config = dynamicConfig(ap::Integrator::Dopri5, {1.0, 2.0, 3.0});
+  config.torque_input = true;
+  config.tolerance = ap::kMinTolerance;
+  config.step_budget = 1000;
+  config.initial.w_B = Eigen::Vector3d(0.1, 0.5, 0.3) * ap::kMaxBodyRate;
+  ap::DynamicPropagator p(config);
+  p.advanceTo(0.0);
+  EXPECT_EQ(p.advanceTo(0.01), StampOutcome::FailedStep);
+  EXPECT_GT(p.lastCallWork(), 0u);
+  for (int k = 2; k <= 5; ++k) {
+    EXPECT_EQ(p.advanceTo(0.01 * k), StampOutcome::FailedStep);
+    EXPECT_EQ(p.lastCallWork(), 0u);
+    EXPECT_EQ(p.time(), 0.01 * k);
+  }
+  expectSameState(p.state(), config.initial);
+  p.setTorque(0.05, Eigen::Vector3d(1.0, 0.0, 0.0), ap::TorqueFrame::Body);
+  EXPECT_EQ(p.advanceTo(0.06), StampOutcome::FailedStep);
+  EXPECT_GT(p.lastCallWork(), 0u);  // tried again
+  expectSaneState(p);
+}
+
 // ---- 3. Configurations that would hang ---------------------------------------------------------
 
 TEST(Robustness, ValidatorRefusesConfigurationsThatWouldHang) {
