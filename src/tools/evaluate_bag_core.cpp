@@ -532,19 +532,10 @@ void Evaluation::run(rosbag::Bag& bag) {
   rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{rates_topic_, truth_topic_}));
   Progress progress(view.size(), o_.progress);
   std::uint64_t done = 0;
-  try {
-    for (const rosbag::MessageInstance& m : view) {
-      record_ = m.getTime();
-      handle(m);
-      progress.update(++done);
-      if ((done & 1023u) == 0) throwIfInterrupted();
-    }
-  } catch (const rosbag::BagException& e) {
-    progress.finish();
-    throw ToolError(o_.input + ": damaged after " + std::to_string(done) + " messages (" +
-                    e.what() + ")");
-  }
-  throwIfInterrupted();
+  visitMessages(view, o_.input, progress, done, [this](const rosbag::MessageInstance& m) {
+    record_ = m.getTime();
+    handle(m);
+  });
   if (calibrating_) calibrate();
   flush(true);
   progress.finish();

@@ -353,19 +353,10 @@ void BagPropagator::run(const std::string& path) {
   rosbag::View view(bag_, rosbag::TopicQuery(topics));
   bag_seconds_ = (view.getEndTime() - view.getBeginTime()).toSec();
   Progress progress(view.size(), o_.progress);
-  try {
-    for (const rosbag::MessageInstance& m : view) {
-      record_ = m.getTime();
-      dispatch(m);
-      progress.update(++messages_);
-      if ((messages_ & 1023u) == 0) throwIfInterrupted();
-    }
-  } catch (const rosbag::BagException& e) {
-    progress.finish();
-    throw ToolError(o_.input + ": damaged after " + std::to_string(messages_) + " messages (" +
-                    e.what() + ")");
-  }
-  throwIfInterrupted();
+  visitMessages(view, o_.input, progress, messages_, [this](const rosbag::MessageInstance& m) {
+    record_ = m.getTime();
+    dispatch(m);
+  });
   writer_->close();
   progress.finish();
   wall_ = progress.elapsed();

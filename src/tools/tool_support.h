@@ -123,6 +123,26 @@ class Progress {
 void catchInterrupts();
 void throwIfInterrupted();
 
+/// Visits every message of `view` in order, counting into `count`, with the progress line and
+/// a check for Ctrl-C every 1024 messages. A bag found damaged mid-way is one ToolError that
+/// names `input` and how far it got.
+template <class Visit>
+void visitMessages(rosbag::View& view, const std::string& input, Progress& progress,
+                   std::uint64_t& count, Visit visit) {
+  try {
+    for (const rosbag::MessageInstance& m : view) {
+      visit(m);
+      progress.update(++count);
+      if ((count & 1023u) == 0) throwIfInterrupted();
+    }
+  } catch (const rosbag::BagException& e) {
+    progress.finish();
+    throw ToolError(input + ": damaged after " + std::to_string(count) + " messages (" +
+                    e.what() + ")");
+  }
+  throwIfInterrupted();
+}
+
 /// An output written under a temporary name in the same directory and renamed to its own
 /// name by commit(): a failed or interrupted run leaves nothing under the name.
 class PendingFile {
