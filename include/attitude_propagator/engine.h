@@ -72,13 +72,13 @@ struct EngineCounters {
   std::uint64_t dropped_stale = 0;
   std::uint64_t dropped_no_tf = 0;
   std::uint64_t dropped_no_time = 0;
-  std::uint64_t late = 0;            ///< dynamic: arrived after the clock passed its stamp
-  std::uint64_t gaps = 0;            ///< longer than max_dt: state held
-  std::uint64_t resets = 0;          ///< backward jumps and reset()
-  std::uint64_t failed_steps = 0;    ///< the integrator could not complete an interval
+  std::uint64_t late = 0;              ///< dynamic: arrived after the clock passed its stamp
+  std::uint64_t gaps = 0;              ///< longer than max_dt: state held
+  std::uint64_t resets = 0;            ///< backward jumps and reset()
+  std::uint64_t failed_steps = 0;      ///< the integrator could not complete an interval
   std::uint64_t pending_overflow = 0;  ///< dynamic: queue full, the furthest ahead dropped
-  std::uint64_t deferred_ticks = 0;  ///< dynamic: grid stamps left for the next call (budget)
-  std::uint64_t rejected_bias = 0;   ///< gyro bias samples: non-finite, too large or bad frame
+  std::uint64_t deferred_ticks = 0;    ///< dynamic: grid stamps left for the next call (budget)
+  std::uint64_t rejected_bias = 0;     ///< gyro bias samples: non-finite, too large or bad frame
 };
 
 /// Something the node should log (throttled per kind).
@@ -129,7 +129,6 @@ struct EngineConfig {
   /// a second of CPU, so a starved node catching up still answers services and SIGINT. The
   /// rest waits for the next call.
   std::uint64_t work_budget = std::uint64_t{1} << 18;
-
 };
 
 class AttitudeEngine {
@@ -226,7 +225,7 @@ class AttitudeEngine {
   std::string model_name_;
   Eigen::Matrix3d default_R_B_;
   Eigen::Matrix3d P_B_ = Eigen::Matrix3d::Zero();
-  std::vector<Input> pending_;  // sorted by stamp
+  std::vector<Input> pending_;        // sorted by stamp
   std::optional<Input> held_torque_;  // the last torque applied, for reconfigure()
   Eigen::Vector3d gyro_bias_B_ = Eigen::Vector3d::Zero();
   std::vector<std::pair<Stamp, Eigen::Vector3d>> pending_gyro_bias_;  // sorted by stamp, bounded

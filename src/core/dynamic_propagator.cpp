@@ -124,8 +124,8 @@ struct DynamicPropagator::Impl {
     requirePositiveFinite(c.tolerance, "tolerance");
     if (c.tolerance < kMinTolerance || c.tolerance > kMaxTolerance) {
       // Below round-off dopri5's control cannot converge; above it, it is no control at all.
-      throw std::invalid_argument("tolerance: must be in [" + std::to_string(kMinTolerance) +
-                                  ", " + std::to_string(kMaxTolerance) + "], got " +
+      throw std::invalid_argument("tolerance: must be in [" + std::to_string(kMinTolerance) + ", " +
+                                  std::to_string(kMaxTolerance) + "], got " +
                                   std::to_string(c.tolerance));
     }
     requirePositiveFinite(c.time_policy.max_dt, "max_dt");

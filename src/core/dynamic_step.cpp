@@ -426,7 +426,8 @@ StepStatus DynamicStepper::dopri5(PrincipalState& x, const PrincipalTorque& torq
     if (!(std::abs(dt) > smallest) && t != h) return StepStatus::NoConvergence;
     // Hopeless within the budget even if the step grew tenfold from here: give up early, so a
     // failing interval costs little (the controller grows a step by 5x at most per sub-step).
-    if (t != h && std::abs(h - t) / std::abs(dt) > 10.0 * static_cast<double>(budget - info.attempts)) {
+    if (t != h &&
+        std::abs(h - t) / std::abs(dt) > 10.0 * static_cast<double>(budget - info.attempts)) {
       return StepStatus::OverBudget;
     }
     for (int i = 0; i < 4; ++i) y[i] /= norm;

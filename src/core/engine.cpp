@@ -50,8 +50,9 @@ AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink)
     throw std::invalid_argument("publish_rate: must be positive and finite");
   }
   if (!config_.gyro_bias_B.allFinite() || config_.gyro_bias_B.norm() > kMaxBodyRate) {
-    throw std::invalid_argument("gyro_bias: must be finite, each magnitude at most the largest "
-                                "accepted body rate");
+    throw std::invalid_argument(
+        "gyro_bias: must be finite, each magnitude at most the largest "
+        "accepted body rate");
   }
   gyro_bias_B_ = config_.gyro_bias_B;
   default_R_B_ = config_.rate_stddev * config_.rate_stddev * Eigen::Matrix3d::Identity();
@@ -106,9 +107,8 @@ Stamp AttitudeEngine::gridStamp(std::int64_t k) const {
 }
 
 std::int64_t AttitudeEngine::gridIndexAtOrBefore(Stamp now) const {
-  auto k = static_cast<std::int64_t>(std::floor(static_cast<long double>(now) *
-                                                static_cast<long double>(config_.publish_rate) /
-                                                1e9L));
+  auto k = static_cast<std::int64_t>(std::floor(
+      static_cast<long double>(now) * static_cast<long double>(config_.publish_rate) / 1e9L));
   // The rounding of the grid stamps themselves moves k by one at most.
   if (gridStamp(k) > now) --k;
   if (gridStamp(k + 1) <= now) ++k;
@@ -212,7 +212,8 @@ bool AttitudeEngine::submitBias(Stamp stamp, const Eigen::Vector3d& gyro_bias_B)
 
 const Eigen::Vector3d& AttitudeEngine::biasAt(Stamp stamp) {
   std::size_t n = 0;
-  while (n < pending_gyro_bias_.size() && pending_gyro_bias_[n].first <= stamp) gyro_bias_B_ = pending_gyro_bias_[n++].second;
+  while (n < pending_gyro_bias_.size() && pending_gyro_bias_[n].first <= stamp)
+    gyro_bias_B_ = pending_gyro_bias_[n++].second;
   pending_gyro_bias_.erase(pending_gyro_bias_.begin(), pending_gyro_bias_.begin() + n);
   return gyro_bias_B_;
 }
@@ -428,9 +429,7 @@ void AttitudeEngine::emitState(Stamp stamp) {
 
 double AttitudeEngine::energyDrift() const { return dynamic_ ? dynamic_->energyDrift() : 0.0; }
 
-double AttitudeEngine::momentumDrift() const {
-  return dynamic_ ? dynamic_->momentumDrift() : 0.0;
-}
+double AttitudeEngine::momentumDrift() const { return dynamic_ ? dynamic_->momentumDrift() : 0.0; }
 
 void AttitudeEngine::resetState(bool forget_time) {
   if (kinematic_) kinematic_->reset();

@@ -76,7 +76,8 @@ AttitudePropagatorRos::AttitudePropagatorRos(ros::NodeHandle nh, ros::NodeHandle
   last_diagnosis_ = ros::WallTime::now();
   watchdog_timer_ = nh_.createWallTimer(ros::WallDuration(kWatchdogPeriod),
                                         &AttitudePropagatorRos::onWatchdog, this);
-  reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<AttitudePropagatorConfig>>(pnh_);
+  reconfigure_server_ =
+      std::make_unique<dynamic_reconfigure::Server<AttitudePropagatorConfig>>(pnh_);
   reconfigure_server_->setCallback(
       [this](AttitudePropagatorConfig& live, std::uint32_t level) { onReconfigure(live, level); });
   if (engine_->dynamicModel()) {
@@ -116,8 +117,7 @@ void AttitudePropagatorRos::subscribe() {
   }
   if (config_.parameters.publish_tf) {
     tf_watch_sub_ = nh_.subscribe("/tf", kQueueSize, &AttitudePropagatorRos::onTfSeen, this);
-    tf_static_watch_sub_ =
-        nh_.subscribe("/tf_static", 100, &AttitudePropagatorRos::onTfSeen, this);
+    tf_static_watch_sub_ = nh_.subscribe("/tf_static", 100, &AttitudePropagatorRos::onTfSeen, this);
   }
   if (sim_time_) {
     // Under sim time /clock is the time source: every tick is seen, in order with the inputs
@@ -139,8 +139,8 @@ void AttitudePropagatorRos::logModel() const {
     ROS_INFO(
         "attitude_propagator: kinematic model (integrator %s), publishing %s -> %s per "
         "%s message",
-        integratorName(engine_->integrator()).c_str(), p.fixed_frame.c_str(),
-        p.body_frame.c_str(), p.rate_input.c_str());
+        integratorName(engine_->integrator()).c_str(), p.fixed_frame.c_str(), p.body_frame.c_str(),
+        p.rate_input.c_str());
   }
 }
 
@@ -215,10 +215,9 @@ void AttitudePropagatorRos::submitRate(Source source, Stamp stamp, const Eigen::
 // Twist/TwistStamped and Wrench/WrenchStamped arrive on one topic each, told apart at run
 // time; both carry one vector of interest. The first message fixes the topic's type.
 template <class Stamped, class Plain, class Inner, class Field>
-bool AttitudePropagatorRos::decodeVectorInput(const topic_tools::ShapeShifter& msg,
-                                              TopicType& type, const char* topic,
-                                              Stamped& stamped, Plain& plain, Inner inner,
-                                              Field field, VectorInput& out) {
+bool AttitudePropagatorRos::decodeVectorInput(const topic_tools::ShapeShifter& msg, TopicType& type,
+                                              const char* topic, Stamped& stamped, Plain& plain,
+                                              Inner inner, Field field, VectorInput& out) {
   const bool known = isType<Stamped>(msg) || isType<Plain>(msg);
   if (known && type.datatype.empty()) type.datatype = msg.getDataType();
   if (!known || msg.getDataType() != type.datatype) {
@@ -357,8 +356,7 @@ const Eigen::Quaterniond* AttitudePropagatorRos::mountRotation(const std::string
   sensor_frame_ = frame_id;
   mount_known_ = true;
   ROS_INFO("rates in frame '%s' are rotated into '%s' by q = [%g, %g, %g, %g] (x y z w)",
-           frame_id.c_str(), body.c_str(), q_BS_.x(), q_BS_.y(), q_BS_.z(),
-           q_BS_.w());
+           frame_id.c_str(), body.c_str(), q_BS_.x(), q_BS_.y(), q_BS_.z(), q_BS_.w());
   if (!config_.torque_input) {
     // Cached for good: stop listening, or the listener would keep digesting our own /tf.
     tf_listener_.reset();
@@ -482,8 +480,9 @@ void AttitudePropagatorRos::note(const EngineNote& note) {
                         t, c.resets);
       break;
     case EngineNote::Stale:
-      ROS_WARN_THROTTLE(kWarnPeriod, "%s: stamp %.6f at or before the last one: dropped (%lu so far)",
-                        what, t, c.dropped_stale);
+      ROS_WARN_THROTTLE(kWarnPeriod,
+                        "%s: stamp %.6f at or before the last one: dropped (%lu so far)", what, t,
+                        c.dropped_stale);
       break;
     case EngineNote::NonFinite:
       ROS_WARN_THROTTLE(kWarnPeriod, "%s: NaN or infinite value or stamp: rejected (%lu so far)",
@@ -527,7 +526,8 @@ void AttitudePropagatorRos::onTfSeen(const ros::MessageEvent<const tf2_msgs::TFM
       if (++tf_conflicts_ == 1) {
         ROS_WARN(
             "tf: %s also publishes '%s' as the child of '%s' (we publish %s -> %s): a frame "
-            "has one parent. Publish our transform to a frame of its own (body_frame:=%s_attitude), "
+            "has one parent. Publish our transform to a frame of its own "
+            "(body_frame:=%s_attitude), "
             "or reverse_tf:=true for a tree rooted at the body, or publish_tf:=false%s",
             event.getPublisherName().c_str(), child.c_str(), t.header.frame_id.c_str(),
             parent.c_str(), child.c_str(), child.c_str(),
@@ -578,8 +578,9 @@ void AttitudePropagatorRos::publishImu(const sensor_msgs::Imu& input, const Engi
 bool AttitudePropagatorRos::onReset(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
   guarded("~reset", [&] {
     engine_->reset();
-    ROS_INFO_THROTTLE(kWarnPeriod, "reset to the initial state; the next input anchors time "
-                                   "(%lu resets so far)",
+    ROS_INFO_THROTTLE(kWarnPeriod,
+                      "reset to the initial state; the next input anchors time "
+                      "(%lu resets so far)",
                       engine_->counters().resets);
   });
   return true;
@@ -628,10 +629,11 @@ void AttitudePropagatorRos::onReconfigure(AttitudePropagatorConfig& live, std::u
   if (!error.empty()) {
     ROS_WARN("reconfigure refused: %s; keeping the values in force", error.c_str());
   } else if (engine_changes) {
-    ROS_INFO("reconfigured: integrator %s, max_dt %g s, torque_timeout %g s, "
-             "angular_velocity_stddev %g rad/s (the propagator goes on from the current state)",
-             integratorName(engine_->integrator()).c_str(), config_.parameters.max_dt,
-             config_.parameters.torque_timeout, config_.parameters.angular_velocity_stddev);
+    ROS_INFO(
+        "reconfigured: integrator %s, max_dt %g s, torque_timeout %g s, "
+        "angular_velocity_stddev %g rad/s (the propagator goes on from the current state)",
+        integratorName(engine_->integrator()).c_str(), config_.parameters.max_dt,
+        config_.parameters.torque_timeout, config_.parameters.angular_velocity_stddev);
   }
   const Parameters& in_force = config_.parameters;
   live.angular_velocity_stddev = in_force.angular_velocity_stddev;

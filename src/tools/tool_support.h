@@ -16,8 +16,8 @@
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 
-#include "attitude_propagator/engine.h"
 #include "attitude_propagator/config/parameters.h"
+#include "attitude_propagator/engine.h"
 
 namespace attitude_propagator {
 namespace tools {
@@ -137,8 +137,8 @@ void visitMessages(rosbag::View& view, const std::string& input, Progress& progr
     }
   } catch (const rosbag::BagException& e) {
     progress.finish();
-    throw ToolError(input + ": damaged after " + std::to_string(count) + " messages (" +
-                    e.what() + ")");
+    throw ToolError(input + ": damaged after " + std::to_string(count) + " messages (" + e.what() +
+                    ")");
   }
   throwIfInterrupted();
 }

@@ -20,7 +20,9 @@ constexpr ap::Stamp kSecond = 1000000000;
 // An epoch stamp like a real ROS time (2026), so the origin handling is exercised.
 constexpr ap::Stamp kEpoch = 1780000000LL * kSecond;
 
-ap::Stamp at(double seconds) { return kEpoch + static_cast<ap::Stamp>(std::llround(seconds * 1e9)); }
+ap::Stamp at(double seconds) {
+  return kEpoch + static_cast<ap::Stamp>(std::llround(seconds * 1e9));
+}
 
 Eigen::Quaterniond aboutAxis(const Eigen::Vector3d& axis, double angle) {
   return Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis.normalized()));

@@ -23,25 +23,25 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
 #include <geometry_msgs/Twist.h>
-#include <geometry_msgs/Vector3Stamped.h>
 #include <geometry_msgs/TwistStamped.h>
+#include <geometry_msgs/Vector3Stamped.h>
 #include <geometry_msgs/Wrench.h>
 #include <geometry_msgs/WrenchStamped.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Clock.h>
 #include <sensor_msgs/Imu.h>
 #include <std_srvs/Empty.h>
+#include <tf2_msgs/TFMessage.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_listener.h>
-#include <tf2_msgs/TFMessage.h>
 #include <topic_tools/shape_shifter.h>
 
 #include <Eigen/Geometry>
 
 #include "attitude_propagator/AttitudePropagatorConfig.h"
 #include "attitude_propagator/SetState.h"
-#include "attitude_propagator/engine.h"
 #include "attitude_propagator/config/parameters.h"
+#include "attitude_propagator/engine.h"
 
 namespace attitude_propagator {
 
@@ -106,8 +106,7 @@ class AttitudePropagatorRos : public EngineSink {
   void ensureTfListener();
   /// The message stamp, or the receipt time for unstamped (zero-stamped) messages; nullopt
   /// (counted, warned) when there is no time at all (sim time before any /clock).
-  std::optional<Stamp> stampOf(const ros::Time& stamp, const ros::Time& receipt,
-                               const char* input);
+  std::optional<Stamp> stampOf(const ros::Time& stamp, const ros::Time& receipt, const char* input);
   void submitRate(Source source, Stamp stamp, const Eigen::Vector3d& w_B,
                   const Eigen::Matrix3d& R_B, const sensor_msgs::Imu::ConstPtr& imu,
                   const Eigen::Quaterniond& q_BS);
