@@ -9,6 +9,7 @@
 #include "attitude_propagator/limits.h"
 #include "attitude_propagator/orientation_covariance.h"
 #include "attitude_propagator/ros/conversions.h"
+#include "attitude_propagator/ros/imu_input.h"
 #include "attitude_propagator/ros/parameter_loader.h"
 
 namespace attitude_propagator {
@@ -166,48 +167,44 @@ void AttitudePropagatorRos::onImu(const ros::MessageEvent<const sensor_msgs::Imu
   guarded("imu/data_raw", [&] {
     pollClock();
     const sensor_msgs::Imu::ConstPtr& msg = event.getConstMessage();
-    if (msg->angular_velocity_covariance[0] == -1.0) {
-      // REP-145: element 0 at -1 marks "this message carries no angular velocity".
-      engine_->reject(Rejection::NoRate);
-      ROS_WARN_THROTTLE(kWarnPeriod,
-                        "imu/data_raw: angular_velocity_covariance[0] == -1 (no rate, REP-145): "
-                        "rejected (%lu so far)",
-                        engine_->counters().rejected_no_rate);
-      return;
-    }
-    const Eigen::Matrix3d R_S = covarianceFromMsg(msg->angular_velocity_covariance);
-    const RateCovarianceCheck check = checkRateCovariance(R_S);
-    if (check != RateCovarianceCheck::Ok && check != RateCovarianceCheck::NonFinite) {
-      // (Non-finite values are the engine's to reject and count as such.)
-      engine_->reject(Rejection::BadCovariance);
-      ROS_WARN_THROTTLE(kWarnPeriod,
-                        "imu/data_raw: angular_velocity_covariance rejected (%s; accepted: "
-                        "symmetric, variances in [0, %g] rad^2/s^2) (%lu so far)",
-                        rateCovarianceCheckName(check), kMaxRateVariance,
-                        engine_->counters().rejected_covariance);
+    if (const auto refusal = refuseImuRate(*msg)) {
+      engine_->reject(refusal->why);
+      const EngineCounters& c = engine_->counters();
+      if (refusal->why == Rejection::NoRate) {
+        ROS_WARN_THROTTLE(kWarnPeriod,
+                          "imu/data_raw: angular_velocity_covariance[0] == -1 (no rate, "
+                          "REP-145): rejected (%lu so far)",
+                          c.rejected_no_rate);
+      } else {
+        ROS_WARN_THROTTLE(kWarnPeriod,
+                          "imu/data_raw: angular_velocity_covariance rejected (%s; accepted: "
+                          "symmetric, variances in [0, %g] rad^2/s^2) (%lu so far)",
+                          rateCovarianceCheckName(refusal->check), kMaxRateVariance,
+                          c.rejected_covariance);
+      }
       return;
     }
     const auto stamp = stampOf(msg->header.stamp, event.getReceiptTime(), "imu/data_raw");
     if (!stamp) return;
     const Eigen::Quaterniond* q_BS = mountRotation(msg->header.frame_id);
     if (!q_BS) return;
-    const Eigen::Matrix3d R_B =
-        R_S.isZero(0.0) || !R_S.allFinite() ? R_S : rotateCovariance(R_S, q_BS->toRotationMatrix());
-    submitRate(Source::Imu, *stamp, *q_BS * toEigen(msg->angular_velocity), R_B,
-               imu_pub_.getNumSubscribers() > 0 ? msg : sensor_msgs::Imu::ConstPtr(), *q_BS);
+    Input input = imuRateInput(*msg, *q_BS, *stamp);
+    if (imu_pub_.getNumSubscribers() > 0) {
+      input.payload = std::make_shared<ImuPayload>(ImuPayload{msg, *q_BS});
+    }
+    submit(input);
   });
 }
 
-void AttitudePropagatorRos::submitRate(Source source, Stamp stamp, const Eigen::Vector3d& w_B,
-                                       const Eigen::Matrix3d& R_B,
-                                       const sensor_msgs::Imu::ConstPtr& imu,
-                                       const Eigen::Quaterniond& q_BS) {
+void AttitudePropagatorRos::onTwistRate(Stamp stamp, const Eigen::Vector3d& w_B) {
   Input input;
-  input.source = source;
+  input.source = Source::Twist;
   input.stamp = stamp;
   input.value = w_B;
-  input.rate_covariance_B = R_B;
-  if (imu) input.payload = std::make_shared<ImuPayload>(ImuPayload{imu, q_BS});
+  submit(input);
+}
+
+void AttitudePropagatorRos::submit(const Input& input) {
   last_input_ = ros::WallTime::now();
   engine_->submit(input);
 }
@@ -257,8 +254,7 @@ void AttitudePropagatorRos::onTwist(
     static const std::string kBody;
     const Eigen::Quaterniond* q_BS = mountRotation(in.frame_id ? *in.frame_id : kBody);
     if (!q_BS) return;
-    submitRate(Source::Twist, *stamp, *q_BS * toEigen(*in.value), Eigen::Matrix3d::Zero(), {},
-               *q_BS);
+    onTwistRate(*stamp, *q_BS * toEigen(*in.value));
   });
 }
 
@@ -282,8 +278,7 @@ void AttitudePropagatorRos::onTorque(
                             input)) {
       return;
     }
-    last_input_ = ros::WallTime::now();
-    engine_->submit(input);
+    submit(input);
   });
 }
 

@@ -32,6 +32,7 @@
 #include "attitude_propagator/engine.h"
 #include "attitude_propagator/orientation_covariance.h"
 #include "attitude_propagator/ros/conversions.h"
+#include "attitude_propagator/ros/imu_input.h"
 #include "tool_support.h"
 
 namespace attitude_propagator {
@@ -384,25 +385,14 @@ void BagPropagator::dispatch(const rosbag::MessageInstance& m) {
 void BagPropagator::onImu(const rosbag::MessageInstance& m) {
   decodeInto(m, buffer_, imu_.msg);
   const sensor_msgs::Imu& msg = imu_.msg;
-  if (msg.angular_velocity_covariance[0] == -1.0) {
-    engine_->reject(Rejection::NoRate);  // REP-145: no rate in this message
+  if (const auto refusal = refuseImuRate(msg)) {
+    engine_->reject(refusal->why);
     return;
   }
-  const Eigen::Matrix3d R_I = covarianceFromMsg(msg.angular_velocity_covariance);
-  const RateCovarianceCheck check = checkRateCovariance(R_I);
-  if (check != RateCovarianceCheck::Ok && check != RateCovarianceCheck::NonFinite) {
-    engine_->reject(Rejection::BadCovariance);
-    return;
-  }
-  const Eigen::Quaterniond* q_BI = mountRotation(msg.header.frame_id);
-  if (!q_BI) return;
-  imu_.q_BI = *q_BI;
-  Input input;
-  input.source = Source::Imu;
-  input.stamp = stampOr(msg.header.stamp, record_);
-  input.value = *q_BI * toEigen(msg.angular_velocity);
-  input.rate_covariance_B =
-      R_I.isZero(0.0) || !R_I.allFinite() ? R_I : rotateCovariance(R_I, q_BI->toRotationMatrix());
+  const Eigen::Quaterniond* q_BS = mountRotation(msg.header.frame_id);
+  if (!q_BS) return;
+  imu_.q_BI = *q_BS;
+  Input input = imuRateInput(msg, *q_BS, stampOr(msg.header.stamp, record_));
   if (engine_->dynamicModel()) {
     input.payload = std::make_shared<ImuPayload>(imu_);  // may wait for the clock
   } else {

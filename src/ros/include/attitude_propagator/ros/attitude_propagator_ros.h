@@ -107,9 +107,10 @@ class AttitudePropagatorRos : public EngineSink {
   /// The message stamp, or the receipt time for unstamped (zero-stamped) messages; nullopt
   /// (counted, warned) when there is no time at all (sim time before any /clock).
   std::optional<Stamp> stampOf(const ros::Time& stamp, const ros::Time& receipt, const char* input);
-  void submitRate(Source source, Stamp stamp, const Eigen::Vector3d& w_B,
-                  const Eigen::Matrix3d& R_B, const sensor_msgs::Imu::ConstPtr& imu,
-                  const Eigen::Quaterniond& q_BS);
+  /// A body rate from body_twist (no covariance: the configured default).
+  void onTwistRate(Stamp stamp, const Eigen::Vector3d& w_B);
+  /// Hands an input to the engine and notes when input last arrived (diagnostics).
+  void submit(const Input& input);
 
   // Time.
   void onDynamicTimer(const ros::TimerEvent& event);
