@@ -1,6 +1,6 @@
-// Dynamic benchmark scenes (docs/design.md §8): a body, an initial state and a torque held in the body
-// frame. Torque-free scenes are judged against the exact solution (docs/numerics.md §6), the torqued
-// one against a tight Bulirsch-Stoer reference (reference.h).
+// Dynamic benchmark scenes (docs/design.md §8): a body, an initial state and a torque held in the
+// body frame. Torque-free scenes are judged against the exact solution (docs/numerics.md §6), the
+// torqued one against a tight Bulirsch-Stoer reference (reference.h).
 #pragma once
 
 #include <cmath>

@@ -25,7 +25,7 @@ constexpr double kDiverged = 1.0;  // rad, or a relative energy change of this s
 // 1/publish_rate = 0.01 s): a propagator must produce a state that often, whatever its method.
 constexpr double kDopri5OutputStep = 0.01;
 // Down to kMinTolerance: a DynamicPropagator refuses a tighter one (below round-off).
-const std::vector<double> kDopri5Tolerances = {1e-4, 1e-5,  1e-6,  1e-7,  1e-8,
+const std::vector<double> kDopri5Tolerances = {1e-4, 1e-5,  1e-6,  1e-7, 1e-8,
                                                1e-9, 1e-10, 1e-11, 1e-12};
 
 ap::RigidBody bodyOf(const DynamicScene& scene) {
@@ -75,8 +75,8 @@ DynamicState truthAt(const DynamicScene& scene, const Truth& truth, double t) {
   return referenceStates(scene.moments, scene.initial, scene.torque_B, {t}).front();
 }
 
-/// Energy 1/2 w.Iw, |M| = |I w|, and the side of the separatrix (docs/numerics.md §6, moments sorted
-/// I1 < I2 < I3, Delta2 = G^2 - 2T I2): +-1 when M circulates about +-e1, +-2 about +-e3.
+/// Energy 1/2 w.Iw, |M| = |I w|, and the side of the separatrix (docs/numerics.md §6, moments
+/// sorted I1 < I2 < I3, Delta2 = G^2 - 2T I2): +-1 when M circulates about +-e1, +-2 about +-e3.
 struct Invariants {
   double energy;
   double momentum;

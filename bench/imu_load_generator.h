@@ -1,8 +1,8 @@
-// Load generator of the node benchmark (docs/design.md §8): publishes sensor_msgs/Imu on imu/data_raw
-// at rising rates, a few seconds each, and listens on imu/data. Every input header is stamped
-// with its send time; the node copies the input header into imu/data, so on receipt
-// now - stamp is the input-to-output latency, and the stamp tells which rate it belongs to.
-// Writes one CSV row per rate when done.
+// Load generator of the node benchmark (docs/design.md §8): publishes sensor_msgs/Imu on
+// imu/data_raw at rising rates, a few seconds each, and listens on imu/data. Every input header is
+// stamped with its send time; the node copies the input header into imu/data, so on receipt now -
+// stamp is the input-to-output latency, and the stamp tells which rate it belongs to. Writes one
+// CSV row per rate when done.
 //
 // Private parameters: rates (list of Hz), seconds (per rate), settle (s, quiet time after each
 // rate), mode (label in the CSV: node or nodelet), out (CSV path, written atomically).

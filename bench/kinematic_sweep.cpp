@@ -202,20 +202,20 @@ Eigen::Vector3d intervalMean(const KinematicScene& scene, double a, double b) {
 struct StreamModel {
   std::string name;
   double rate_hz = 200.0;
-  bool averaged = false;     // the gyro delivers interval means
-  bool mid_stamp = false;    // ... stamped at the interval's midpoint (else at its end)
-  double jitter = 0.0;       // s, receipt jitter (standard deviation)
-  double drop = 0.0;         // probability a sample is lost
-  bool mems = false;         // angle random walk and 16-bit quantization
+  bool averaged = false;   // the gyro delivers interval means
+  bool mid_stamp = false;  // ... stamped at the interval's midpoint (else at its end)
+  double jitter = 0.0;     // s, receipt jitter (standard deviation)
+  double drop = 0.0;       // probability a sample is lost
+  bool mems = false;       // angle random walk and 16-bit quantization
   ap::RateSamples setting = ap::RateSamples::Instantaneous;
   ap::StampFilter filter = ap::StampFilter::None;
   int max_gap_fill = 4;
 };
 
 // Noisy MEMS gyro: angle random walk 0.1 deg/sqrt(h), 16-bit output over +-2000 deg/s.
-constexpr double kArw = 0.1 * M_PI / 180.0 / 60.0;                     // rad/sqrt(s)
-constexpr double kLsb = 4000.0 / 65536.0 * M_PI / 180.0;               // rad/s
-constexpr double kDeg2000 = 2000.0 * M_PI / 180.0;                     // rad/s
+constexpr double kArw = 0.1 * M_PI / 180.0 / 60.0;        // rad/sqrt(s)
+constexpr double kLsb = 4000.0 / 65536.0 * M_PI / 180.0;  // rad/s
+constexpr double kDeg2000 = 2000.0 * M_PI / 180.0;        // rad/s
 
 std::vector<StreamModel> streamModels() {
   using RS = ap::RateSamples;
@@ -342,9 +342,10 @@ double median(std::vector<double> values) {
 }  // namespace
 
 void runStreamSweep(const std::vector<KinematicScene>& scenes, std::FILE* out) {
-  std::fputs("scene,stream,method,auto,rate_hz,rate_samples,stamp_filter,max_gap_fill,seeds,"
-             "err_rad,err_rad_max,floor_rad,err_settled_rad\n",
-             out);
+  std::fputs(
+      "scene,stream,method,auto,rate_hz,rate_samples,stamp_filter,max_gap_fill,seeds,"
+      "err_rad,err_rad_max,floor_rad,err_settled_rad\n",
+      out);
   constexpr int kSeeds = 5;  // median over seeds for the random streams
   for (const KinematicScene& scene : scenes) {
     for (const StreamModel& model : streamModels()) {

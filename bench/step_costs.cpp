@@ -2,8 +2,8 @@
 //
 // Each benchmark is one dependent chain (the next step starts from the last result), as in a
 // propagator, so the figure is latency, not throughput of independent steps. Pitfalls kept out
-// (docs/numerics.md §9): the state changes every iteration so nothing is constant-folded, results go
-// through benchmark::DoNotOptimize, and every step is renormalised as the propagators do.
+// (docs/numerics.md §9): the state changes every iteration so nothing is constant-folded, results
+// go through benchmark::DoNotOptimize, and every step is renormalised as the propagators do.
 //
 //   kinematicStep/<method>   one kinematicStep on a four-sample window, then normalise
 //   addSample/<method>       KinematicPropagator::addSample, the node's path per message

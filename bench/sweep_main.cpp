@@ -1,5 +1,5 @@
-// bench_sweep: runs every integrator on the scenes of docs/design.md §8 over a sweep of step sizes and
-// writes, into the output folder,
+// bench_sweep: runs every integrator on the scenes of docs/design.md §8 over a sweep of step sizes
+// and writes, into the output folder,
 //   sweep.csv       work-precision: error and median cost per step for every (scene, method, dt)
 //   stability.csv   error after a fixed time against |w| dt from 1e-3 to 10
 //   invariants.csv  energy and |M| drift against time on a long free-body run

@@ -1,6 +1,6 @@
-// Stateful dynamic propagation (docs/design.md §4): Euler equations I dw/dt = (I w) x w + T with the
-// kinematics dq/dt = 1/2 q (x) (0, w) (Coutsias–Romero eqs. 9 and 10), driven by held torques or
-// torque-free, with the time policy of docs/design.md §6.
+// Stateful dynamic propagation (docs/design.md §4): Euler equations I dw/dt = (I w) x w + T with
+// the kinematics dq/dt = 1/2 q (x) (0, w) (Coutsias–Romero eqs. 9 and 10), driven by held torques
+// or torque-free, with the time policy of docs/design.md §6.
 #pragma once
 
 #include <cstdint>
@@ -61,11 +61,11 @@ class DynamicPropagator {
   /// "numerical_<integrator name>". Logged at start and reported in AttitudeState.
   std::string modelName() const;
 
-  /// Advances the state to time t under docs/design.md §6: the first call anchors (the state at t is
-  /// the initial one), stale stamps do nothing, gaps over max_dt hold the state, a jump back
-  /// by more than the threshold resets to the initial state and anchors at t.
-  /// Never throws: if the integrator cannot complete the interval (see StampOutcome::FailedStep
-  /// and lastFailure()) the state at time() is held and re-anchored at t.
+  /// Advances the state to time t under docs/design.md §6: the first call anchors (the state at t
+  /// is the initial one), stale stamps do nothing, gaps over max_dt hold the state, a jump back by
+  /// more than the threshold resets to the initial state and anchors at t. Never throws: if the
+  /// integrator cannot complete the interval (see StampOutcome::FailedStep and lastFailure()) the
+  /// state at time() is held and re-anchored at t.
   StampOutcome advanceTo(double t);
 
   /// Torque tau (N m) from time t on, in the body or the fixed frame (T_B = Q^T t_W, notes

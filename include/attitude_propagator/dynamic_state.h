@@ -1,5 +1,5 @@
-// State and torque types of the dynamic model (docs/design.md §4), shared by the one-step integrators,
-// the exact torque-free motion and the stateful DynamicPropagator.
+// State and torque types of the dynamic model (docs/design.md §4), shared by the one-step
+// integrators, the exact torque-free motion and the stateful DynamicPropagator.
 #pragma once
 
 #include <Eigen/Geometry>

@@ -1,5 +1,5 @@
-// One step of the dynamic model (docs/design.md §4, docs/numerics.md §5): the Euler equations with torque
-// and the kinematics,
+// One step of the dynamic model (docs/design.md §4, docs/numerics.md §5): the Euler equations with
+// torque and the kinematics,
 //   I dw/dt = (I w) x w + T,   dq/dt = 1/2 q (x) (0, w)          (Coutsias–Romero eqs. 10 and 9),
 // integrated together on the state (q, w) by one of the dynamic integrators.
 //

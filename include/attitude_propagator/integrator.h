@@ -1,5 +1,6 @@
-// Names of the models and integrators (docs/design.md §4). The names are part of the public interface:
-// they are the values of the `model` and `integrator` parameters and appear in AttitudeState.
+// Names of the models and integrators (docs/design.md §4). The names are part of the public
+// interface: they are the values of the `model` and `integrator` parameters and appear in
+// AttitudeState.
 //
 // The integrators are one table (src/core/integrator.cpp), one row per method: its name, the
 // models it drives with their declared orders, the rate samples it reads, what it keeps

@@ -1,5 +1,6 @@
 // Stateful kinematic propagation from timestamped body-rate samples, with the time and
-// bad-input policy of docs/design.md §6–§7. No ROS: the node forwards stamps and rates to addSample().
+// bad-input policy of docs/design.md §6–§7. No ROS: the node forwards stamps and rates to
+// addSample().
 #pragma once
 
 #include <array>

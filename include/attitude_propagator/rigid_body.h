@@ -1,6 +1,6 @@
-// A rigid body's inertia (docs/design.md §4, docs/numerics.md §6). The user's body frame B may differ from the
-// principal frame P in which the Euler equations are diagonal; q_BP maps principal coordinates
-// to the user's body coordinates, so everything the user sees stays in B.
+// A rigid body's inertia (docs/design.md §4, docs/numerics.md §6). The user's body frame B may
+// differ from the principal frame P in which the Euler equations are diagonal; q_BP maps principal
+// coordinates to the user's body coordinates, so everything the user sees stays in B.
 #pragma once
 
 #include <array>

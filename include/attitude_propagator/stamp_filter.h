@@ -47,7 +47,7 @@ class SensorClockFilter {
   };
 
   struct Result {
-    double t = 0.0;           ///< the filtered stamp
+    double t = 0.0;  ///< the filtered stamp
     Verdict verdict = Verdict::Restarted;
     std::uint64_t missed = 0;  ///< periods lost before this sample
   };
@@ -64,7 +64,8 @@ class SensorClockFilter {
 
   /// Sensor period (s), 0 before two stamps.
   double period() const { return slope_; }
-  /// Stamp of the model's sample index 0 (the first since the last start): t(n) = offset + period n.
+  /// Stamp of the model's sample index 0 (the first since the last start): t(n) = offset + period
+  /// n.
   double offset() const { return base_t_ + (origin_t_ - slope_ * static_cast<double>(index_)); }
   /// The line's stamp of sample `index` (since the last start) minus t: how far the model now
   /// puts that sample from the stamp t it was given, free of the round-off of epoch-sized stamps.

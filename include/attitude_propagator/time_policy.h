@@ -1,5 +1,5 @@
-// The time policy of docs/design.md §6, shared by the kinematic and the dynamic propagators so the node
-// only forwards stamps.
+// The time policy of docs/design.md §6, shared by the kinematic and the dynamic propagators so the
+// node only forwards stamps.
 #pragma once
 
 namespace attitude_propagator {

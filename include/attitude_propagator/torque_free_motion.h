@@ -1,11 +1,13 @@
-// The exact motion of a free rigid body (integrator `exact`, docs/design.md §4, docs/numerics.md §6): the
-// body rate w(t) and the attitude q(t) in closed form, in the cheapest form the body allows.
+// The exact motion of a free rigid body (integrator `exact`, docs/design.md §4, docs/numerics.md
+// §6): the body rate w(t) and the attitude q(t) in closed form, in the cheapest form the body
+// allows.
 //
 // - sphere (I1 = I2 = I3): w constant, q(t) = q0 (x) Exp(t w).
 // - symmetric top (two equal moments I_perp, symmetry axis e_s with moment I_s):
 //   q(t) = Exp(t m_W / I_perp) (x) q0 (x) Exp(t c e_s), c = M_s (1/I_s - 1/I_perp), and
 //   M(t) = Exp(-t c e_s) M0 in the body.
-// - triaxial: Jacobi elliptic functions (docs/numerics.md §6 table, cases i and ii on either side of
+// - triaxial: Jacobi elliptic functions (docs/numerics.md §6 table, cases i and ii on either side
+// of
 //   the separatrix, iii on it). With the moments sorted I1 < I2 < I3 and e the axis M
 //   circulates about (e1 in case i, e3 in case ii, e3 on the separatrix),
 //   q(t) = R (x) Exp(psi(t) e) (x) P(M(t)), where P(M) is the rotation taking M/|M| onto e

@@ -72,8 +72,8 @@ void instantaneousWeights(const double* tau, std::size_t n, double x_a, double x
   }
 }
 
-void averagedWeights(const double* tau, std::size_t n, double x, double r20, double r31,
-                     double r30, double* c) {
+void averagedWeights(const double* tau, std::size_t n, double x, double r20, double r31, double r30,
+                     double* c) {
   double a = 0.0;
   double b = 0.0;
   if (n >= 3) {

@@ -31,8 +31,9 @@ SensorClockFilter::SensorClockFilter(const Options& options)
     : options_(options), forget_(1.0 - 1.0 / options.memory) {
   if (!(options.memory > 1.0) || !(options.reject_sigmas > 0.0) || options.restart_after < 1 ||
       !(options.restart_jump > 0.0)) {
-    throw std::invalid_argument("SensorClockFilter: memory > 1, reject_sigmas > 0, "
-                                "restart_after >= 1 and restart_jump > 0 required");
+    throw std::invalid_argument(
+        "SensorClockFilter: memory > 1, reject_sigmas > 0, "
+        "restart_after >= 1 and restart_jump > 0 required");
   }
 }
 

@@ -1,6 +1,6 @@
-// Core-only demo: propagates the coning motion (docs/numerics.md §8) from a built-in 200 Hz stream of
-// body rates with cf4 and prints the orientation as it evolves next to the closed form.
-// Usage: kinematic_demo [integrator] [seconds]
+// Core-only demo: propagates the coning motion (docs/numerics.md §8) from a built-in 200 Hz stream
+// of body rates with cf4 and prints the orientation as it evolves next to the closed form. Usage:
+// kinematic_demo [integrator] [seconds]
 #include <cmath>
 #include <cstdio>
 #include <exception>

@@ -61,8 +61,8 @@ void read(const std::string& name, XmlRpc::XmlRpcValue& v, std::vector<double>& 
   }
 }
 
-/// Every private parameter set on the server must be one we know (docs/design.md §7.7): a typo would
-/// otherwise silently leave a default in place.
+/// Every private parameter set on the server must be one we know (docs/design.md §7.7): a typo
+/// would otherwise silently leave a default in place.
 void rejectUnknownNames(const ros::NodeHandle& pnh) {
   std::vector<std::string> keys;
   if (!pnh.getParamNames(keys)) return;  // no master answer: nothing to check against

@@ -1,5 +1,5 @@
-// DynamicPropagator: model selection, the time policy of docs/design.md §6, stamp independence of the
-// state (docs/design.md §4), torque handling, and bad input.
+// DynamicPropagator: model selection, the time policy of docs/design.md §6, stamp independence of
+// the state (docs/design.md §4), torque handling, and bad input.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -149,9 +149,9 @@ TEST(DynPropagator, TimePolicy) {
                std::invalid_argument);
 }
 
-// docs/design.md §4: the state at a stamp does not depend on how the clock got there. One propagator
-// visits many irregular stamps, the other only the inputs' stamps and the end; torque samples
-// arrive at the same stamps for both (some between grid points, one late).
+// docs/design.md §4: the state at a stamp does not depend on how the clock got there. One
+// propagator visits many irregular stamps, the other only the inputs' stamps and the end; torque
+// samples arrive at the same stamps for both (some between grid points, one late).
 TEST(DynPropagator, StateAtStampIsIndependentOfIntermediateStamps) {
   for (const ap::Integrator integrator : kNumerical) {
     SCOPED_TRACE(ap::integratorName(integrator));
@@ -442,8 +442,8 @@ TEST(DynPropagatorExact, StateAtStampIsIndependentOfIntermediateStamps) {
   }
 }
 
-// Hairer-Lubich-Wanner's free body through the propagator (docs/numerics.md §8): anchored at 2 s and
-// walked through irregular stamps, M in the body at anchor + 10 s is the published M(10).
+// Hairer-Lubich-Wanner's free body through the propagator (docs/numerics.md §8): anchored at 2 s
+// and walked through irregular stamps, M in the body at anchor + 10 s is the published M(10).
 TEST(DynPropagatorExact, TriaxialMatchesPublishedValues) {
   ap::DynamicPropagator p(freeBodyConfig(ap::Integrator::Auto));
   EXPECT_EQ(p.modelName(), "exact_triaxial");

@@ -99,8 +99,8 @@ double pathError(const ap::KinematicConfig& config, const std::vector<Sample>& s
   for (std::size_t k = 0; k < samples.size(); ++k) {
     propagator.addSample(samples[k].stamp, samples[k].w_B);
     if (k < kStartUpSamples) continue;
-    worst = std::max(worst, ap::rotationAngle(propagator.orientation(),
-                                              cone.attitude(propagator.time())));
+    worst = std::max(worst,
+                     ap::rotationAngle(propagator.orientation(), cone.attitude(propagator.time())));
   }
   return worst;
 }
@@ -160,8 +160,8 @@ TEST(IntervalAverage, ExpIsExactOnPiecewiseConstantRates) {
 TEST(IntervalAverage, LieGroupMethodsIntegrateAConstantRateExactly) {
   const Eigen::Vector3d w(-0.4, 3.0, 1.5);
   const double angle = w.norm();
-  for (Integrator method : integrator_cases::methodsKeeping(ap::Model::Kinematic,
-                                                            ap::keeps::kConstantRate)) {
+  for (Integrator method :
+       integrator_cases::methodsKeeping(ap::Model::Kinematic, ap::keeps::kConstantRate)) {
     ap::KinematicConfig config = configFor(method, RateSamples::IntervalAverage);
     config.initial_q_WB = Eigen::Quaterniond::Identity();
     ap::KinematicPropagator propagator(config);
@@ -258,8 +258,7 @@ TEST(Jitter, DefaultNeverAmplifiesStampNoise) {
       }
       const double by_default = pathError(configFor(Integrator::Auto, kind), samples);
       EXPECT_LE(by_default, 1.5 * best)
-          << ap::rateSamplesName(kind) << " seed " << seed << ": " << by_default << " vs "
-          << best;
+          << ap::rateSamplesName(kind) << " seed " << seed << ": " << by_default << " vs " << best;
       EXPECT_LE(pathError(configFor(Integrator::Exp, kind), samples), 0.1);
     }
   }

@@ -15,12 +15,12 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
+#include "attitude_propagator/config/parameters.h"
 #include "attitude_propagator/dynamic_propagator.h"
 #include "attitude_propagator/dynamic_step.h"
 #include "attitude_propagator/kinematic_propagator.h"
 #include "attitude_propagator/limits.h"
 #include "attitude_propagator/orientation_covariance.h"
-#include "attitude_propagator/config/parameters.h"
 #include "attitude_propagator/quaternion.h"
 #include "attitude_propagator/torque_free_motion.h"
 #include "rotation_matchers.h"

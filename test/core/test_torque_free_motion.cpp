@@ -88,8 +88,8 @@ ap::DynamicState stateWithMomentum(const ap::RigidBody& body, const Eigen::Vecto
 
 }  // namespace
 
-// docs/numerics.md §8: I = (2, 1, 2/3), M0 = (cos 1.1, 0, sin 1.1). Their body frame is ours (P = B),
-// so M(t) compares component by component.
+// docs/numerics.md §8: I = (2, 1, 2/3), M0 = (cos 1.1, 0, sin 1.1). Their body frame is ours (P =
+// B), so M(t) compares component by component.
 TEST(DynTorqueFree, HairerLubichWannerPublishedValues) {
   const ap::RigidBody body =
       ap::RigidBody::fromPrincipalMoments({2.0, 1.0, 2.0 / 3.0}, Ignore::Ignore);
