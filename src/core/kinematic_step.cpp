@@ -120,8 +120,8 @@ bool wellConditioned(const double* ca, const double* cb, std::size_t n) {
 }
 
 // The rates at the two Gauss points of interval i from the most samples around it whose
-// weights are well conditioned (the linear interpolant, gains 1 and 2, always qualifies, and
-// so does the interval's own mean for averaged samples).
+// weights are well conditioned (the linear interpolant, gains 1 and 2/√3 ≈ 1.15, always
+// qualifies, and so does the interval's own mean for averaged samples).
 void gaussRates(const RateWindow& window, std::size_t i, double h, RateSamples kind,
                 Eigen::Vector3d& a, Eigen::Vector3d& b) {
   std::array<double, RateWindow::kCapacity> tau{}, ca{}, cb{};
