@@ -53,6 +53,20 @@ have_libfuzzer() {
   return $status
 }
 
+# A CMake build directory remembers the source directory it was configured for, and cmake refuses
+# it for any other (a second clone, or CI's fresh checkout, sharing the same cache folder). Such a
+# directory is emptied so that it is configured afresh.
+#   forget_other_source BUILD_DIR SOURCE_DIR
+forget_other_source() {
+  local build="$1" source="$2" recorded
+  [ -f "$build/CMakeCache.txt" ] || return 0
+  recorded="$(sed -n 's/^CMAKE_HOME_DIRECTORY:INTERNAL=//p' "$build/CMakeCache.txt")"
+  if [ "$(realpath -m "$recorded")" != "$(realpath -m "$source")" ]; then
+    echo "$build was configured for $recorded; configuring it afresh for $source"
+    rm -rf "$build/CMakeCache.txt" "$build/CMakeFiles"
+  fi
+}
+
 source_workspace() {
   set +u
   # shellcheck disable=SC1091

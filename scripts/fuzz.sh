@@ -37,6 +37,7 @@ if ! have_libfuzzer; then
   exit 2
 fi
 mkdir -p "$build" "$findings"
+forget_other_source "$build" "$fuzz_dir"
 echo "fuzz: building the targets in $build"
 if ! { cmake -S "$fuzz_dir" -B "$build" -DCMAKE_CXX_COMPILER=clang++ >"$build/cmake.log" 2>&1 &&
   cmake --build "$build" -j 2 >"$build/build.log" 2>&1; }; then

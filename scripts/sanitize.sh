@@ -11,6 +11,7 @@ source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 build="${SANITIZE_BUILD_DIR:-$WORKSPACE/sanitize}"
 results="${1:-$build/results}"
 mkdir -p "$build" "$results"
+forget_other_source "$build" "$REPO_DIR/test/sanitize"
 rm -f "$results/core_tests_sanitized.xml"
 
 echo "sanitize: building the core tests with ASan + UBSan in $build"
