@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "attitude_propagator/coning_motion.h"
@@ -140,21 +141,45 @@ TEST(ExpMethod, HoldsTheOpeningSampleRate) {
 }
 
 // Body rates compose on the right: a quarter turn about body x, then one about body y, is a
-// third of a turn about (1, 1, 1)/sqrt(3) (the octahedron of the notes §5).
+// third of a turn about (1, 1, 1)/sqrt(3) (the octahedron of the notes §5). The samples switch
+// from x to y at t = 1: exp and euler hold the opening sample's rate, so x acts over one more
+// interval h and y over one fewer; exp2, rk4 and cf4 see the switch as a ramp over [1, 1 + h],
+// which they integrate as the trapezoid Exp(h (w_x + w_y)/2) (exp2 exactly; rk4 and cf4 to
+// O((|w| h)^2): the cubic rings across the next intervals but its means over them add up to
+// the same rotation). Either is a departure of order |w| h = 8e-5 rad from the octahedron.
 TEST_P(AllKinematicMethods, OctahedronFromPiecewiseRates) {
   const double quarter = M_PI / 2;
   const int n = 20000;  // small steps so that even euler is close
+  const double h = 1.0 / n;
+  const Eigen::Vector3d w_x(quarter, 0, 0), w_y(0, quarter, 0);
   auto propagator = makePropagator(GetParam(), Eigen::Quaterniond::Identity());
-  // exp and euler hold the opening rate; exp2, rk4 and cf4 see the switch as a ramp over one
-  // sample interval, which costs them an error of order |w| h = 8e-5 rad.
-  for (int k = 0; k <= n; ++k) propagator.addSample(k * 1.0 / n, Eigen::Vector3d(quarter, 0, 0));
-  for (int k = 1; k <= n; ++k) {
-    propagator.addSample(1.0 + k * 1.0 / n, Eigen::Vector3d(0, quarter, 0));
-  }
+  for (int k = 0; k <= n; ++k) propagator.addSample(k * h, w_x);
+  for (int k = 1; k <= n; ++k) propagator.addSample(1.0 + k * h, w_y);
   const double third = 2 * M_PI / 3;
-  const Eigen::Quaterniond expected(
+  const Eigen::Quaterniond octahedron(
       Eigen::AngleAxisd(third, Eigen::Vector3d(1, 1, 1).normalized()));
-  EXPECT_ROTATION_NEAR(propagator.orientation(), expected, 2e-4);
+  // Measured 1.1e-4 (holding) and 5.6e-5 (ramp); bound 2e-4.
+  EXPECT_ROTATION_NEAR(propagator.orientation(), octahedron, 2e-4);
+
+  const bool holds = GetParam() == Integrator::Exp || GetParam() == Integrator::Euler;
+  // euler's renormalised step turns by 2 atan(|w| h/2) rather than |w| h (docs/numerics.md §2).
+  const double turn =
+      GetParam() == Integrator::Euler ? 2 * std::atan(quarter * h / 2) / h : quarter;
+  auto x_turn = [&](double t) {
+    return Eigen::Quaterniond(Eigen::AngleAxisd(turn * t, Eigen::Vector3d::UnitX()));
+  };
+  auto y_turn = [&](double t) {
+    return Eigen::Quaterniond(Eigen::AngleAxisd(turn * t, Eigen::Vector3d::UnitY()));
+  };
+  const Eigen::Quaterniond switched =
+      holds
+          ? x_turn(1.0 + h) * y_turn(1.0 - h)
+          : x_turn(1.0) * constantRateTruth(Eigen::Quaterniond::Identity(), 0.5 * (w_x + w_y), h) *
+                y_turn(1.0 - h);
+  // Measured 1.6e-13 (exp, exp2; euler 7e-15): round-off over 40000 steps; rk4 5.1e-10 and
+  // cf4 1.0e-9: their O((|w| h)^2) departure from the trapezoid. Bounds 5e-13 and 3e-9.
+  const bool trapezoid_exact = GetParam() != Integrator::Rk4 && GetParam() != Integrator::Cf4;
+  EXPECT_ROTATION_NEAR(propagator.orientation(), switched, trapezoid_exact ? 5e-13 : 3e-9);
 }
 
 INSTANTIATE_TEST_SUITE_P(Kinematic, AllKinematicMethods,
@@ -206,20 +231,64 @@ TEST(Cf4, FourthOrderOnJitteredSamples) {
   EXPECT_GE(errors[1] / errors[2], 12.0) << errors[1] << " -> " << errors[2];
 }
 
-// The Magnus form of docs/numerics.md §2 is an independent fourth-order step: one cf4 step and one
-// Magnus step on the same cubic agree to O(h^5).
+namespace {
+
+// Gauss-Legendre nodes of cf4 and of the Magnus step, 1/2 -+ sqrt(3)/6.
+const double kGauss1 = 0.5 - std::sqrt(3.0) / 6, kGauss2 = 0.5 + std::sqrt(3.0) / 6;
+
+// The commutator term of the fourth-order Magnus step, (sqrt(3)/12) h^2 A x B, for the rates A,
+// B at the Gauss points.
+Eigen::Vector3d magnusCommutator(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double h) {
+  return std::sqrt(3.0) / 12 * h * h * a.cross(b);
+}
+
+// The window of four samples of cf4's step across [0, h].
+ap::RateWindow coningWindow(const ConingMotion& cone, double h) {
+  ap::RateWindow window;
+  for (int k = -2; k <= 1; ++k) window.push({k * h, cone.bodyRate(k * h)});
+  return window;
+}
+
+}  // namespace
+
+// The Magnus form of docs/numerics.md §2 is an independent fourth-order step: one cf4 step and
+// one Magnus step on the same cubic differ by O(h^5), four orders of magnitude below the
+// commutator term both carry (cf4 with its exponentials in the other order, which flips the
+// commutator's sign, would differ by twice that term).
 TEST(Cf4, AgreesWithTheFourthOrderMagnusStep) {
   const ConingMotion cone;
-  for (double h : {0.02, 0.01}) {
-    ap::RateWindow window;
-    for (int k = -2; k <= 1; ++k) window.push({k * h, cone.bodyRate(k * h)});
-    const double c1 = 0.5 - std::sqrt(3.0) / 6, c2 = 0.5 + std::sqrt(3.0) / 6;
-    const Eigen::Vector3d a = window.interpolate(c1 * h), b = window.interpolate(c2 * h);
-    const Eigen::Quaterniond magnus =
-        ap::expMap(0.5 * h * (a + b) + std::sqrt(3.0) / 12 * h * h * a.cross(b));
+  // Measured 2.3e-10 and 7.3e-12, against commutator terms of 2.2e-6 and 2.7e-7.
+  const std::pair<double, double> cases[] = {{0.02, 7e-10}, {0.01, 2.2e-11}};
+  std::vector<double> differences;
+  for (const auto& [h, bound] : cases) {
+    const ap::RateWindow window = coningWindow(cone, h);
+    const Eigen::Vector3d a = window.interpolate(kGauss1 * h), b = window.interpolate(kGauss2 * h);
+    const Eigen::Quaterniond magnus = ap::expMap(0.5 * h * (a + b) + magnusCommutator(a, b, h));
     const Eigen::Quaterniond cf4 =
         ap::kinematicStep(Integrator::Cf4, Eigen::Quaterniond::Identity(), window);
-    EXPECT_LE(ap::rotationAngle(cf4, magnus), 50.0 * std::pow(cone.omega * h, 5));
+    differences.push_back(ap::rotationAngle(cf4, magnus));
+    EXPECT_LE(differences.back(), bound) << "h = " << h;
+  }
+  // O(h^5): halving h divides the difference by 2^5 (measured 31.96).
+  EXPECT_GE(differences[0] / differences[1], std::exp2(5 - integrator_cases::kOrderSlack));
+}
+
+// A wide cone (half-angle 0.5 rad), where the commutator term is most of what a step adds to
+// the trapezoidal rotation vector: one cf4 step on exact samples against the closed form is
+// far closer than that term, so a step without it, or with its sign flipped, fails.
+TEST(Cf4, OneStepKeepsTheConingCommutator) {
+  ConingMotion cone;
+  cone.beta = 0.5;
+  // Measured 6.4e-7 and 2.0e-8 (fifth order: the cubic's error and the method's).
+  const std::pair<double, double> cases[] = {{0.02, 2e-6}, {0.01, 6e-8}};
+  for (const auto& [h, bound] : cases) {
+    const Eigen::Quaterniond cf4 =
+        ap::kinematicStep(Integrator::Cf4, cone.attitude(0.0), coningWindow(cone, h));
+    EXPECT_LE(ap::rotationAngle(cf4, cone.attitude(h)), bound) << "h = " << h;
+    // The term the case is about, from the exact rates: 5.2e-5 and 6.5e-6 rad.
+    const double commutator =
+        magnusCommutator(cone.bodyRate(kGauss1 * h), cone.bodyRate(kGauss2 * h), h).norm();
+    ASSERT_GE(commutator, 20 * bound) << "h = " << h;
   }
 }
 
@@ -231,7 +300,10 @@ TEST(RateWindow, InterpolatesCubicsExactly) {
   }
   EXPECT_EQ(window.size(), ap::RateWindow::kCapacity);
   for (double tau : {0.005, 0.03, 0.039}) {
-    EXPECT_LE((window.interpolate(1e9 + tau) - cubic(tau)).norm(), 1e-6);
+    // The time asked for, rounded to the stamps' resolution (1.2e-7 s): the cubic at tau itself
+    // would differ by its slope times that rounding. Measured 2.2e-16; bound 1e-15.
+    const double t = 1e9 + tau;
+    EXPECT_LE((window.interpolate(t) - cubic(t - 1e9)).norm(), 1e-15);
   }
   window.push({1e9 + 0.05, cubic(0.05)});  // the oldest sample leaves
   EXPECT_EQ(window[0].t, 1e9 + 0.013);
