@@ -84,6 +84,157 @@ TEST(Parameters, AutoModelIsDynamicWithInertia) {
   EXPECT_DOUBLE_EQ(config.dynamic->max_step, 1.0 / 50.0);  // max_step 0: 1/publish_rate
 }
 
+// Every engine-side value set away from its default arrives unchanged where the engine reads
+// it: the validated configuration, then engineConfig(). The values are chosen unlike the
+// defaults (checked first), so a field left at its default or filled from another parameter
+// shows.
+TEST(Parameters, DynamicValuesReachTheEngineUnchanged) {
+  ap::Parameters p;
+  p.inertia = {1.0, 2.0, 2.5};
+  p.integrator = "dopri5";
+  p.torque_input = true;
+  p.torque_frame = "fixed";
+  p.torque_timeout = 2.5;
+  p.tolerance = 3e-7;
+  p.initial_angular_velocity = {0.125, -0.25, 0.375};
+  p.initial_orientation = {0.0, 0.0, 0.6, 0.8};
+  p.max_step = 0.004;
+  p.max_dt = 0.5;
+  p.publish_rate = 40.0;
+  p.angular_velocity_stddev = 0.02;
+  p.initial_orientation_stddev = 0.1;
+  p.gyro_bias = {0.001, -0.002, 0.003};
+  const ap::Parameters defaults;
+  ASSERT_NE(p.torque_frame, defaults.torque_frame);
+  ASSERT_NE(p.torque_timeout, defaults.torque_timeout);
+  ASSERT_NE(p.tolerance, defaults.tolerance);
+  ASSERT_NE(p.initial_angular_velocity, defaults.initial_angular_velocity);
+  ASSERT_NE(p.max_step, defaults.max_step);
+  ASSERT_NE(p.max_step, 1.0 / p.publish_rate);  // not the automatic value either
+  ASSERT_NE(p.max_dt, defaults.max_dt);
+
+  const ap::NodeConfig node = ap::validateParameters(p);
+  EXPECT_EQ(node.model, ap::Model::Dynamic);
+  EXPECT_TRUE(node.torque_input);
+  EXPECT_EQ(node.torque_frame, ap::TorqueFrame::Fixed);
+  const ap::EngineConfig engine = ap::engineConfig(node);
+  EXPECT_EQ(engine.model, ap::Model::Dynamic);
+  ASSERT_TRUE(node.dynamic.has_value());
+  ASSERT_TRUE(engine.dynamic.has_value());
+  for (const ap::DynamicConfig& d : {*node.dynamic, *engine.dynamic}) {
+    EXPECT_EQ(d.integrator, ap::Integrator::Dopri5);
+    EXPECT_TRUE(d.torque_input);
+    EXPECT_EQ(d.torque_timeout, 2.5);
+    EXPECT_EQ(d.tolerance, 3e-7);
+    EXPECT_EQ(d.initial.w_B, Eigen::Vector3d(0.125, -0.25, 0.375));
+    EXPECT_EQ(d.initial.q_WB.coeffs(), Eigen::Vector4d(0.0, 0.0, 0.6, 0.8));  // x y z w
+    EXPECT_EQ(d.max_step, 0.004);
+    EXPECT_EQ(d.time_policy.max_dt, 0.5);
+    EXPECT_EQ(d.body.principalMoments(), Eigen::Vector3d(1.0, 2.0, 2.5));
+  }
+  EXPECT_EQ(engine.publish_rate, 40.0);
+  EXPECT_EQ(engine.rate_stddev, 0.02);
+  EXPECT_EQ(engine.initial_orientation_stddev, 0.1);
+  EXPECT_EQ(engine.gyro_bias_B, Eigen::Vector3d(0.001, -0.002, 0.003));
+  EXPECT_EQ(engine.kinematic.gyro_bias_B, Eigen::Vector3d::Zero());  // subtracted once only
+}
+
+// The defaults reach the dynamic configuration as the README's table gives them: torque held
+// (timeout 0), tolerance 1e-9, at rest, torques in the body frame, max_dt 1 s.
+TEST(Parameters, DynamicDefaultsAreTheDocumentedOnes) {
+  ap::Parameters p;
+  p.inertia = {1.0, 2.0, 2.5};
+  const ap::NodeConfig node = ap::validateParameters(p);
+  ASSERT_TRUE(node.dynamic.has_value());
+  EXPECT_FALSE(node.torque_input);
+  EXPECT_EQ(node.torque_frame, ap::TorqueFrame::Body);
+  EXPECT_EQ(node.dynamic->integrator, ap::Integrator::Auto);
+  EXPECT_EQ(node.dynamic->torque_timeout, 0.0);
+  EXPECT_EQ(node.dynamic->tolerance, 1e-9);
+  EXPECT_EQ(node.dynamic->initial.w_B, Eigen::Vector3d::Zero());
+  EXPECT_EQ(node.dynamic->time_policy.max_dt, 1.0);
+  EXPECT_EQ(node.dynamic->max_step, 1.0 / 100.0);  // 1 / the default publish_rate
+  const ap::EngineConfig engine = ap::engineConfig(node);
+  EXPECT_EQ(engine.publish_rate, 100.0);
+  EXPECT_EQ(engine.rate_stddev, 0.01);
+  EXPECT_EQ(engine.initial_orientation_stddev, M_PI);
+}
+
+// The kinematic model takes the integrator, max_dt and the initial orientation, and ignores
+// the dynamic model's parameters (README: publish_rate, max_step, tolerance, torque_*,
+// initial_angular_velocity) without refusing them.
+TEST(Parameters, KinematicValuesReachTheEngineUnchanged) {
+  ap::Parameters p;
+  p.integrator = "exp2";
+  p.max_dt = 0.25;
+  p.initial_orientation = {0.6, 0.0, 0.0, 0.8};
+  p.angular_velocity_stddev = 0.5;
+  p.max_step = 0.004;
+  p.tolerance = 1e-4;
+  p.torque_timeout = 7.0;
+  p.torque_frame = "fixed";
+  p.initial_angular_velocity = {1.0, 2.0, 3.0};
+  const ap::NodeConfig node = ap::validateParameters(p);
+  EXPECT_EQ(node.model, ap::Model::Kinematic);
+  EXPECT_FALSE(node.dynamic.has_value());
+  const ap::EngineConfig engine = ap::engineConfig(node);
+  EXPECT_EQ(engine.model, ap::Model::Kinematic);
+  EXPECT_FALSE(engine.dynamic.has_value());
+  EXPECT_EQ(engine.kinematic.integrator, ap::Integrator::Exp2);
+  EXPECT_EQ(engine.kinematic.time_policy.max_dt, 0.25);
+  EXPECT_EQ(engine.kinematic.initial_q_WB.coeffs(), Eigen::Vector4d(0.6, 0.0, 0.0, 0.8));
+  EXPECT_EQ(engine.rate_stddev, 0.5);
+}
+
+// max_step: 0 means 1/publish_rate; otherwise the README's range [1e-5, 60] s, and at least
+// max_dt / 1e5 (one call crosses max_dt in at most 1e5 steps), the automatic value included.
+TEST(Parameters, MaxStepFollowsTheDocumentedRules) {
+  auto dynamic = [](double max_step, double max_dt, double publish_rate) {
+    ap::Parameters p;
+    p.inertia = {1.0, 2.0, 2.5};
+    p.max_step = max_step;
+    p.max_dt = max_dt;
+    p.publish_rate = publish_rate;
+    return p;
+  };
+  auto step = [](const ap::Parameters& p) { return ap::validateParameters(p).dynamic->max_step; };
+  EXPECT_EQ(step(dynamic(0.0, 1.0, 50.0)), 1.0 / 50.0);
+  EXPECT_EQ(step(dynamic(0.0, 60.0, 1000.0)), 1.0 / 1000.0);
+  EXPECT_EQ(step(dynamic(1e-5, 1.0, 100.0)), 1e-5);   // the smallest
+  EXPECT_EQ(step(dynamic(60.0, 60.0, 100.0)), 60.0);  // the largest
+  EXPECT_EQ(step(dynamic(6e-4, 60.0, 100.0)), 6e-4);  // max_dt / 1e5 exactly
+  expectRejected(dynamic(0.99e-5, 1.0, 100.0), "max_step");
+  expectRejected(dynamic(60.001, 60.0, 100.0), "max_step");
+  expectRejected(dynamic(5.9e-4, 60.0, 100.0), "max_step");  // below max_dt / 1e5
+  expectRejected(dynamic(2e-5, 3.0, 100.0), "max_step");     // below max_dt / 1e5 = 3e-5
+}
+
+// The other documented ranges, at their ends and just past them: torque_timeout in
+// [0, 3600] s, tolerance in [1e-12, 1e-2], |initial_angular_velocity| at most 1e5 rad/s.
+TEST(Parameters, DocumentedRangesAreInclusive) {
+  auto dynamic = [](auto change) {
+    ap::Parameters p;
+    p.inertia = {1.0, 2.0, 2.5};
+    change(p);
+    return p;
+  };
+  auto accepted = [](const ap::Parameters& p) { return ap::validateParameters(p).dynamic.value(); };
+  EXPECT_EQ(accepted(dynamic([](auto& p) { p.torque_timeout = 3600.0; })).torque_timeout, 3600.0);
+  expectRejected(dynamic([](auto& p) { p.torque_timeout = 3600.5; }), "torque_timeout");
+  EXPECT_EQ(accepted(dynamic([](auto& p) { p.tolerance = 1e-12; })).tolerance, 1e-12);
+  EXPECT_EQ(accepted(dynamic([](auto& p) { p.tolerance = 1e-2; })).tolerance, 1e-2);
+  expectRejected(dynamic([](auto& p) { p.tolerance = 0.9e-12; }), "tolerance");
+  expectRejected(dynamic([](auto& p) { p.tolerance = 0.011; }), "tolerance");
+  EXPECT_EQ(accepted(dynamic([](auto& p) {
+              p.initial_angular_velocity = {0.0, 6e4, 8e4};
+            })).initial.w_B,
+            Eigen::Vector3d(0.0, 6e4, 8e4));  // |w| = 1e5
+  expectRejected(dynamic([](auto& p) {
+                   p.initial_angular_velocity = {0.0, 6e4, 8.001e4};
+                 }),
+                 "initial_angular_velocity");
+}
+
 TEST(Parameters, InitialOrientationIsNormalised) {
   ap::Parameters p;
   p.initial_orientation = {0.0, 0.0, 2.0, 2.0};

@@ -69,12 +69,41 @@ TEST(DynRigidBody, ValidationNamesTheProblem) {
   Eigen::Matrix3d indefinite;
   indefinite << 1, 2, 0, 2, 1, 0, 0, 0, 1;  // eigenvalues -1, 1, 3
   expectInertiaError([&] { ap::RigidBody::fromTensor(indefinite); }, "positive");
-  // A flat lamina, I3 = I1 + I2, is a real body.
+  // A flat lamina, I3 = I1 + I2, is a real body; beyond it by more than round-off, none is.
   EXPECT_NO_THROW(ap::RigidBody::fromPrincipalMoments({1.0, 2.0, 3.0}));
+  expectInertiaError(
+      [] {
+        ap::RigidBody::fromPrincipalMoments({1.0, 2.0, 3.0 * (1.0 + 1e-9)});
+      },
+      "triangle");
+}
+
+// The documented range of the moments, [1e-15, 1e15] kg m^2, at its ends and past them, for
+// principal moments and for a tensor's.
+TEST(DynRigidBody, MomentsOutsideTheDocumentedRangeAreRefused) {
+  EXPECT_NO_THROW(ap::RigidBody::fromPrincipalMoments({1e-15, 1e-15, 1e-15}));
+  EXPECT_NO_THROW(ap::RigidBody::fromPrincipalMoments({1e15, 1e15, 1e15}));
+  expectInertiaError(
+      [] {
+        ap::RigidBody::fromPrincipalMoments({0.9e-15, 1e-15, 1e-15});
+      },
+      "must lie in");
+  expectInertiaError(
+      [] {
+        ap::RigidBody::fromPrincipalMoments({1e15, 1.1e15, 1e15});
+      },
+      "must lie in");
+  expectInertiaError(
+      [] {
+        ap::RigidBody::fromParameter({1e-16, 1e-16, 1e-16, 0.0, 0.0, 1e-17});
+      },
+      "must lie in");
 }
 
 TEST(DynRigidBody, TensorIsDiagonalisedAndBodyFrameKept) {
   // A known principal frame rotated into B: I_B = R diag(I) R^T.
+  // Measured over the 20 trials: at most 19 eps (moments), 1 eps (|q_BP|), 6 eps (det), 18
+  // eps (tensor), 14 eps (energy), 17 eps (momenta); bounds 64, 4 and 16 eps.
   std::uint64_t seed = 7;
   for (int trial = 0; trial < 20; ++trial) {
     const Eigen::Quaterniond q = randomUnitQuaternion(seed);
@@ -92,6 +121,27 @@ TEST(DynRigidBody, TensorIsDiagonalisedAndBodyFrameKept) {
     EXPECT_NEAR((body.angularMomentum_B(w_B) - I_B * w_B).norm(), 0.0, 64 * kEps);
     const Eigen::Vector3d m_W = body.angularMomentum_W(q, w_B);
     EXPECT_NEAR((m_W - q * (I_B * w_B)).norm(), 0.0, 64 * kEps);
+  }
+}
+
+// A symmetric top given as a rotated tensor: its two equal moments leave the eigenvectors in
+// their plane free, but the axis of the distinct moment is fixed, and symmetryAxis() must
+// point along it in the body frame (up to sign).
+TEST(DynRigidBody, SymmetricTensorKeepsItsSymmetryAxis) {
+  std::uint64_t seed = 13;
+  for (int trial = 0; trial < 20; ++trial) {
+    const Eigen::Matrix3d R = randomUnitQuaternion(seed).toRotationMatrix();
+    const Eigen::Matrix3d I_B = R * Eigen::Vector3d(2.0, 2.0, 3.0).asDiagonal() * R.transpose();
+    const ap::RigidBody body = ap::RigidBody::fromTensor(I_B);
+    ASSERT_TRUE(body.isSymmetric(1e-12));
+    ASSERT_FALSE(body.isSphere());
+    const int axis = body.symmetryAxis(1e-12);
+    // Measured over the 20 trials: 14 eps (moment), 3 eps (axis), 16 eps (eigenvector
+    // residual); bounds 64, 16 and 64 eps.
+    EXPECT_NEAR(body.principalMoments()[axis], 3.0, 64 * kEps);
+    const Eigen::Vector3d axis_B = body.q_BP() * Eigen::Vector3d::Unit(axis);
+    EXPECT_NEAR(std::abs(axis_B.dot(R.col(2))), 1.0, 16 * kEps);
+    EXPECT_NEAR((I_B * axis_B - 3.0 * axis_B).norm(), 0.0, 64 * kEps);
   }
 }
 

@@ -43,6 +43,25 @@ TEST(StreamParameters, ReachTheKinematicConfig) {
   EXPECT_EQ(k.gyro_bias_B, Eigen::Vector3d(0.01, -0.02, 0.03));
 }
 
+// The engine subtracts the gyro bias for both models: engineConfig() moves it from the
+// kinematic configuration to the engine's, so it is subtracted once. The other two settings
+// stay with the kinematic propagator.
+TEST(StreamParameters, ReachTheEngineOnce) {
+  for (const bool dynamic : {false, true}) {
+    SCOPED_TRACE(dynamic ? "dynamic" : "kinematic");
+    ap::Parameters p;
+    if (dynamic) p.inertia = {1.0, 2.0, 2.5};
+    p.rate_samples = "interval_average";
+    p.stamp_filter = "sensor_clock";
+    p.gyro_bias = {0.01, -0.02, 0.03};
+    const ap::EngineConfig engine = ap::engineConfig(ap::validateParameters(p));
+    EXPECT_EQ(engine.gyro_bias_B, Eigen::Vector3d(0.01, -0.02, 0.03));
+    EXPECT_EQ(engine.kinematic.gyro_bias_B, Eigen::Vector3d::Zero());
+    EXPECT_EQ(engine.kinematic.rate_samples, ap::RateSamples::IntervalAverage);
+    EXPECT_EQ(engine.kinematic.stamp_filter, ap::StampFilter::SensorClock);
+  }
+}
+
 TEST(StreamParameters, RefuseUnknownValuesWithTheAcceptedList) {
   ap::Parameters p;
   p.rate_samples = "averaged";

@@ -1,11 +1,31 @@
 #!/usr/bin/python3
-"""A bad parameter stops the node at start with one error naming it (bad_params.test)."""
+"""Parameters at start (bad_params.test): a bad parameter stops the node with one error naming
+it; good parameters give a node that works with them: their values on the parameter server,
+the configured frames on attitude_state and /tf, the configured publish rate, states that
+follow the closed form of the configured motion, and diagnostics OK.
+
+Every case is its own test method: rosunit's XML reports a failing unittest subTest as a
+failure of the suite only, with the test method marked passed, so a subTest failure would
+not be counted against any test."""
+import math
+import os
 import subprocess
+import tempfile
+import threading
+import time
 import unittest
 
 import roslib.packages
+import rospkg
 import rospy
 import rostest
+import yaml
+from attitude_propagator.msg import AttitudeState
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from sensor_msgs.msg import Imu
+
+from ap_test_util import (NS_PER_S, Recorder, TfRecorder, as_tuple, axis_angle, make_imu, qconj,
+                          qmul, rotation_angle, time_ns, wait_connected, wait_for)
 
 # (private parameter, value set on the master, text the single error must contain)
 CASES = [
@@ -25,10 +45,108 @@ CASES = [
     ("body_frame", "world", "body_frame: equals fixed_frame"),
 ]
 
+# A sphere turning at 0.5 rad/s about its z axis from a quarter turn about x: the exact model's
+# state at t is q0 (x) Exp((t - t_anchor) w), so consecutive states differ by Exp(w / rate).
+DYNAMIC = {
+    "model": "dynamic",
+    "rate_input": "none",
+    "inertia": [1.5, 1.5, 1.5],
+    "initial_orientation": [math.sin(math.pi / 4), 0.0, 0.0, math.cos(math.pi / 4)],
+    "initial_angular_velocity": [0.0, 0.0, 0.5],
+    "publish_rate": 20.0,
+    "max_dt": 0.5,
+    "tolerance": 1e-6,
+    "torque_timeout": 2.0,
+    "fixed_frame": "good_world",
+    "body_frame": "good_body",
+    "diagnostic_period": 0.5,
+}
+PERIOD_NS = 50 * 10 ** 6  # 1 / publish_rate
+
+# IMU rates integrated by exp (exact for a constant rate), tf published reversed.
+KINEMATIC = {
+    "model": "kinematic",
+    "integrator": "exp",
+    "fixed_frame": "good_world_k",
+    "body_frame": "good_body_k",
+    "reverse_tf": True,
+    "max_dt": 0.25,
+    "angular_velocity_stddev": 0.02,
+    "diagnostic_period": 0.5,
+}
+IMU_RATE = (0.0, 0.3, -0.4)
+IMU_STEP_NS = 20 * 10 ** 6  # 50 Hz
+
+TOL = 1e-9  # closed forms; only round-off remains
+
 
 def run(command, timeout=30):
     return subprocess.run(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                           timeout=timeout, text=True)
+
+
+def default_parameters():
+    """config/default.yaml: every parameter with its default (checked against the struct by
+    the core tests)."""
+    path = os.path.join(rospkg.RosPack().get_path("attitude_propagator"), "config",
+                        "default.yaml")
+    with open(path) as f:
+        return yaml.safe_load(f)
+
+
+class RunningNode:
+    """The node binary in namespace ns with private parameters set on the master first;
+    terminated on leaving the `with` block. Its output goes to a file (a pipe nobody reads
+    could fill and block it)."""
+
+    def __init__(self, binary, ns, name, parameters):
+        self.private = "/%s/%s" % (ns, name)
+        for key, value in parameters.items():
+            rospy.set_param("%s/%s" % (self.private, key), value)
+        self.log = tempfile.TemporaryFile(mode="w+")
+        self.process = subprocess.Popen([binary, "__ns:=/" + ns, "__name:=" + name],
+                                        stdout=self.log, stderr=subprocess.STDOUT, text=True)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.process.terminate()
+        try:
+            self.process.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+            self.process.wait()
+        self.log.close()
+
+    def output(self):
+        self.log.flush()
+        self.log.seek(0)
+        return self.log.read()
+
+    def running(self):
+        return self.process.poll() is None
+
+
+class NodeDiagnostics:
+    """The latest diagnostic status of one node (level, message, values)."""
+
+    def __init__(self, private_name):
+        self.prefix = private_name.lstrip("/") + ":"
+        self.lock = threading.Lock()
+        self.latest = None
+        self.sub = rospy.Subscriber("/diagnostics", DiagnosticArray, self._cb, queue_size=100)
+
+    def _cb(self, msg):
+        with self.lock:
+            for status in msg.status:
+                if status.name.startswith(self.prefix):
+                    self.latest = (status.level, status.message,
+                                   {kv.key: kv.value for kv in status.values})
+
+    def get(self):
+        with self.lock:
+            return self.latest
 
 
 class BadParametersTest(unittest.TestCase):
@@ -38,18 +156,16 @@ class BadParametersTest(unittest.TestCase):
         cls.node = roslib.packages.find_node("attitude_propagator", "attitude_propagator_node")[0]
         cls.nodelet = roslib.packages.find_node("nodelet", "nodelet")[0]
 
-    def test_node_refuses_each_bad_parameter(self):
-        for i, (name, value, expected) in enumerate(CASES):
-            with self.subTest(name=name, value=value):
-                # Set on the master: roscpp reads "_name:=[1, 2]" arguments as strings.
-                rospy.set_param("/bad_node_%d/%s" % (i, name), value)
-                result = run([self.node, "__name:=bad_node_%d" % i])
-                self.assertNotEqual(result.returncode, 0, result.stderr)
-                self.assertIn(expected, result.stderr)
-                errors = [line for line in result.stderr.splitlines()
-                          if "[FATAL]" in line or "[ERROR]" in line]
-                self.assertEqual(len(errors), 1, result.stderr)
-                self.assertIn("accepted", errors[0])
+    def expect_refused(self, index, name, value, expected):
+        # Set on the master: roscpp reads "_name:=[1, 2]" arguments as strings.
+        rospy.set_param("/bad_node_%d/%s" % (index, name), value)
+        result = run([self.node, "__name:=bad_node_%d" % index])
+        self.assertNotEqual(result.returncode, 0, result.stderr)
+        self.assertIn(expected, result.stderr)
+        errors = [line for line in result.stderr.splitlines()
+                  if "[FATAL]" in line or "[ERROR]" in line]
+        self.assertEqual(len(errors), 1, result.stderr)
+        self.assertIn("accepted", errors[0])
 
     def test_nodelet_refuses_to_start(self):
         result = run([self.nodelet, "standalone", "attitude_propagator/AttitudePropagatorNodelet",
@@ -57,16 +173,136 @@ class BadParametersTest(unittest.TestCase):
         self.assertNotEqual(result.returncode, 0, result.stderr)
         self.assertIn("model: unknown value 'bogus'", result.stderr)
 
-    def test_good_parameters_start(self):
-        # The same binary with valid parameters keeps running (until we stop it).
-        process = subprocess.Popen([self.node, "__name:=good_node", "_model:=kinematic"],
-                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        try:
-            rospy.wait_for_service("/good_node/reset", timeout=20.0)
-            self.assertIsNone(process.poll())
-        finally:
-            process.terminate()
-            process.wait(timeout=20)
+    def assert_parameters_on_server(self, private, given):
+        """The node writes back every parameter in use: the given values unchanged, the rest
+        at config/default.yaml's defaults."""
+        expected = dict(default_parameters())
+        expected.update({k: v for k, v in given.items() if k != "diagnostic_period"})
+        for name, value in expected.items():
+            self.assertEqual(rospy.get_param("%s/%s" % (private, name), "<not set>"), value, name)
+
+    def assert_diagnostics_ok(self, diagnostics, model):
+        status = wait_for(lambda: (diagnostics.get() or (None,))[0] == DiagnosticStatus.OK
+                          and diagnostics.get(), 10.0, "diagnostics OK")
+        _, message, values = status
+        self.assertEqual(message, "propagating")
+        self.assertEqual(values["model"], model)
+        for counter in ("rejected_non_finite", "rejected_out_of_range", "failed_steps",
+                        "callback_errors", "gaps", "resets"):
+            self.assertEqual(values[counter], "0", counter)
+
+    def test_good_dynamic_parameters_give_a_working_node(self):
+        ns, name = "good_dyn", "node"
+        states = Recorder("/%s/attitude_state" % ns, AttitudeState)
+        tf = TfRecorder([DYNAMIC["fixed_frame"], DYNAMIC["body_frame"]])
+        diagnostics = NodeDiagnostics("/%s/%s" % (ns, name))
+        with RunningNode(self.node, ns, name, DYNAMIC) as node:
+            wait_for(lambda: states.count() >= 10, 20.0, "10 attitude states")
+            # The publish rate in wall time over 2 s: measured 20.0 Hz (one message is 0.5 Hz);
+            # bound 4 Hz, for a loaded machine. The stamps below are checked exactly.
+            first, start = states.count(), time.monotonic()
+            time.sleep(2.0)
+            rate = (states.count() - first) / (time.monotonic() - start)
+            self.assertLess(abs(rate - 20.0), 4.0, "published at %.1f Hz, configured 20" % rate)
+            self.assert_diagnostics_ok(diagnostics, "exact_sphere")
+            self.assert_parameters_on_server(node.private, DYNAMIC)
+            self.assertTrue(node.running(), node.output())
+            log = node.output()
+        self.assertNotIn("[ERROR]", log)
+        self.assertNotIn("[WARN]", log)
+
+        with states.lock:
+            messages = list(states.messages)
+        stamps = [m.header.stamp.to_nsec() for m in messages]
+        # On the grid of 1 / publish_rate, every grid stamp once.
+        self.assertTrue(all(s % PERIOD_NS == 0 for s in stamps), stamps[:10])
+        self.assertEqual([b - a for a, b in zip(stamps, stamps[1:])],
+                         [PERIOD_NS] * (len(stamps) - 1))
+        q0 = tuple(DYNAMIC["initial_orientation"])
+        w = DYNAMIC["initial_angular_velocity"]
+        step = axis_angle(w, math.sqrt(sum(c * c for c in w)) * PERIOD_NS / NS_PER_S)
+        for before, after in zip(messages, messages[1:]):
+            self.assertLess(rotation_angle(as_tuple(after.orientation),
+                                           qmul(as_tuple(before.orientation), step)), TOL)
+        for m in messages:
+            self.assertEqual(m.header.frame_id, DYNAMIC["fixed_frame"])
+            self.assertEqual(m.child_frame_id, DYNAMIC["body_frame"])
+            self.assertEqual(m.model, "exact_sphere")
+            self.assertEqual((m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z),
+                             tuple(w))
+            # E = 1/2 I |w|^2 with I = 1.5.
+            self.assertAlmostEqual(m.kinetic_energy, 0.5 * 1.5 * 0.25, delta=1e-15)
+            # q0^c q(t) turns about body z only: the initial orientation is the one given.
+            d = qmul(qconj(q0), as_tuple(m.orientation))
+            self.assertLess(math.hypot(d[0], d[1]), TOL, d)
+        # /tf: fixed_frame -> body_frame at the states' stamps, with their rotations.
+        for m in messages[:-1]:
+            transforms = tf.at(m.header.stamp)
+            self.assertEqual(len(transforms), 1, m.header.stamp)
+            t = transforms[0]
+            self.assertEqual((t.header.frame_id, t.child_frame_id),
+                             (DYNAMIC["fixed_frame"], DYNAMIC["body_frame"]))
+            self.assertLess(rotation_angle(as_tuple(t.transform.rotation),
+                                           as_tuple(m.orientation)), TOL)
+
+    def test_good_kinematic_parameters_give_a_working_node(self):
+        ns, name = "good_kin", "node"
+        states = Recorder("/%s/attitude_state" % ns, AttitudeState)
+        tf = TfRecorder([KINEMATIC["fixed_frame"], KINEMATIC["body_frame"]])
+        diagnostics = NodeDiagnostics("/%s/%s" % (ns, name))
+        imu = rospy.Publisher("/%s/imu/data_raw" % ns, Imu, queue_size=1000)
+        with RunningNode(self.node, ns, name, KINEMATIC) as node:
+            wait_connected(imu)
+            wait_for(lambda: states.sub.get_num_connections() > 0, 20.0, "attitude_state")
+            # 2 s of samples at 50 Hz, stamped on their own grid, sent in wall time.
+            start_ns = rospy.Time.now().to_nsec() // NS_PER_S * NS_PER_S
+            sent = []
+            for k in range(100):
+                sent.append(time_ns(start_ns + k * IMU_STEP_NS))
+                imu.publish(make_imu(sent[-1], IMU_RATE, frame_id=KINEMATIC["body_frame"]))
+                if k == 75:
+                    self.assert_diagnostics_ok(diagnostics, "kinematic")
+                time.sleep(IMU_STEP_NS / NS_PER_S)
+            last = states.wait_at(sent[-1])
+            self.assert_parameters_on_server(node.private, KINEMATIC)
+            self.assertTrue(node.running(), node.output())
+            log = node.output()
+        self.assertNotIn("[ERROR]", log)
+        self.assertNotIn("[WARN]", log)
+
+        first = states.wait_at(sent[0])
+        self.assertEqual(states.count(), len(sent))  # one state per sample
+        # exp is exact for a constant rate: q(t) = q(t0) (x) Exp((t - t0) w).
+        seconds = (sent[-1] - sent[0]).to_sec()
+        norm = math.sqrt(sum(c * c for c in IMU_RATE))
+        expected = qmul(as_tuple(first.orientation), axis_angle(IMU_RATE, norm * seconds))
+        self.assertLess(rotation_angle(as_tuple(last.orientation), expected), TOL)
+        for stamp in sent:
+            m = states.at(stamp)[0]
+            self.assertEqual((m.header.frame_id, m.child_frame_id),
+                             (KINEMATIC["fixed_frame"], KINEMATIC["body_frame"]))
+            self.assertEqual(m.integrator, "exp")
+            # reverse_tf: body_frame -> fixed_frame, the inverse rotation.
+            transforms = tf.at(stamp)
+            self.assertEqual(len(transforms), 1, stamp)
+            t = transforms[0]
+            self.assertEqual((t.header.frame_id, t.child_frame_id),
+                             (KINEMATIC["body_frame"], KINEMATIC["fixed_frame"]))
+            self.assertLess(rotation_angle(as_tuple(t.transform.rotation),
+                                           qconj(as_tuple(m.orientation))), TOL)
+
+
+def _refusal_test(index, name, value, expected):
+    def test(self):
+        self.expect_refused(index, name, value, expected)
+    test.__doc__ = "%s = %r stops the node with one error" % (name, value)
+    return test
+
+
+# One plain test method per bad value, so that each counts (and fails) on its own.
+for _index, (_name, _value, _expected) in enumerate(CASES):
+    setattr(BadParametersTest, "test_refuses_%02d_%s" % (_index, _name),
+            _refusal_test(_index, _name, _value, _expected))
 
 
 if __name__ == "__main__":
