@@ -8,6 +8,29 @@ import sys
 import xml.etree.ElementTree as ET
 
 
+def count_suite(suite, file_name):
+    """The test cases directly in one <testsuite>. A suite may report more failures than its
+    cases carry (rosunit marks a method whose unittest subTest failed as passed and counts the
+    failure on the suite only); each such failure is counted too."""
+    passed, failed, failures = 0, 0, []
+    for case in suite.findall("testcase"):
+        if case.find("skipped") is not None or case.get("status") == "notrun":
+            continue
+        bad = case.find("failure") is not None or case.find("error") is not None
+        if bad:
+            failed += 1
+            failures.append(f"{file_name}: {case.get('classname')}.{case.get('name')}")
+        else:
+            passed += 1
+    reported = int(suite.get("failures", 0) or 0) + int(suite.get("errors", 0) or 0)
+    if suite.findall("testcase") and reported > failed:
+        unattached = reported - failed
+        failed += unattached
+        failures.append(f"{file_name}: suite {suite.get('name')} reports {unattached} "
+                        "failure(s) on no test case")
+    return passed, failed, failures
+
+
 def count(results_dir):
     passed, failed, failures = 0, 0, []
     files = sorted(pathlib.Path(results_dir).glob("**/*.xml"))
@@ -20,15 +43,9 @@ def count(results_dir):
             failed += 1
             failures.append(f"{path.name}: unreadable ({err})")
             continue
-        for case in root.iter("testcase"):
-            if case.find("skipped") is not None or case.get("status") == "notrun":
-                continue
-            bad = case.find("failure") is not None or case.find("error") is not None
-            if bad:
-                failed += 1
-                failures.append(f"{path.name}: {case.get('classname')}.{case.get('name')}")
-            else:
-                passed += 1
+        for suite in root.iter("testsuite"):
+            p, f, lines = count_suite(suite, path.name)
+            passed, failed, failures = passed + p, failed + f, failures + lines
     return passed, failed, failures
 
 
