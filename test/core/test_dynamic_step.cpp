@@ -92,15 +92,18 @@ InvariantHistory runFreeBody(ap::Integrator method, double h, int n) {
 
 }  // namespace
 
-// HLW: step 0.1, 10^5 steps (t = 10^4).
+// HLW: step 0.1, 10^5 steps (t = 10^4). Bounds about twice the measured values.
 TEST(DynStep, FreeBodyInvariants) {
   constexpr double h = 0.1;
   constexpr int n = 100000;
 
-  // Quadratic invariants to round-off (a random walk of ~sqrt(n) ulps).
+  // Quadratic invariants to round-off (a random walk of ~sqrt(n) ulps, 3.5e-14): measured
+  // energy 7.8e-14, |M| 5.3e-14. m_W = Q M is not quadratic in (q, w): its error is the
+  // method's O(h^2) attitude error, measured 9.2e-4 (2.3e-4 at h = 0.05).
   const InvariantHistory midpoint = runFreeBody(ap::Integrator::ImplicitMidpoint, h, n);
-  EXPECT_LE(midpoint.energy_max, 1e-13);
+  EXPECT_LE(midpoint.energy_max, 2e-13);
   EXPECT_LE(midpoint.momentum_max, 1e-13);
+  EXPECT_LE(midpoint.space_momentum_max, 2e-3);
 
   // Splittings: |M| exact (each sub-flow is a rotation of M), and so is m_W = Q M (each
   // sub-flow turns the body and M in the body by opposite angles), up to round-off. The
@@ -110,26 +113,50 @@ TEST(DynStep, FreeBodyInvariants) {
   // |M| 4.1e-14 and 5.8e-14, m_W 1.1e-13 and 1.1e-13. A bias of even 1e-3 ulp per sub-flow
   // breaks the bound: rounding M through w = M / I every step drifted |M| by 2.4e-12 and
   // 7e-12, the double-angle c = c2^2 - s2^2 in the axis rotation by 1.7e-13 (splitting4).
-  // Energy bounded, no drift.
-  for (const ap::Integrator method : {ap::Integrator::Splitting, ap::Integrator::Splitting4}) {
-    SCOPED_TRACE(ap::integratorName(method));
-    const InvariantHistory s = runFreeBody(method, h, n);
-    const double subflows = (method == ap::Integrator::Splitting ? 5.0 : 15.0) * n;
-    EXPECT_LE(s.momentum_max, 1e-13);
-    EXPECT_LE(s.space_momentum_max, std::sqrt(subflows) * kEps);
-    EXPECT_LE(s.energy_last_tenth, 2.0 * s.energy_first_tenth);
-    EXPECT_GT(s.energy_max, 0.0);
+  // Energy: bounded, not drifting (symplectic): the largest error, 1.6e-4 and 1.4e-7 measured,
+  // is reached within the first body period (10.7 s) and the last tenth of the run shows the
+  // same (equal to 4 digits).
+  struct Splitting {
+    ap::Integrator method;
+    double subflows_per_step;
+    double energy_bound;
+  };
+  for (const Splitting& s : {Splitting{ap::Integrator::Splitting, 5.0, 3e-4},
+                             Splitting{ap::Integrator::Splitting4, 15.0, 3e-7}}) {
+    SCOPED_TRACE(ap::integratorName(s.method));
+    const InvariantHistory history = runFreeBody(s.method, h, n);
+    EXPECT_LE(history.momentum_max, 1e-13);
+    EXPECT_LE(history.space_momentum_max, std::sqrt(s.subflows_per_step * n) * kEps);
+    EXPECT_LE(history.energy_max, s.energy_bound);
+    EXPECT_LE(history.energy_last_tenth, 1.1 * history.energy_first_tenth);
   }
 
-  // rk4: the slow drift of a non-symplectic method, energy error ~ C t h^4 (docs/numerics.md §5:
-  // 1.4e-6 at t = 1000, so ~1e-5 at t = 10^4), growing from the first tenth to the last.
+  // rk4: the secular drift of a non-symplectic method, linear in t: the largest energy error in
+  // the last tenth is 10 times that in the first (measured 9.7), 1.4e-5 at the end (1.4e-6 at
+  // t = 1000, as docs/numerics.md §5 has it). |M| and m_W err alike (measured 1.0e-5).
   const InvariantHistory rk4 = runFreeBody(ap::Integrator::Rk4, h, n);
-  EXPECT_GT(rk4.energy_last_tenth, 5.0 * rk4.energy_first_tenth);
-  EXPECT_GT(rk4.energy_max, 1e-6);
-  EXPECT_LT(rk4.energy_max, 1e-4);
-  // m_W stays constant within each method's accuracy (|M| and E errors of the same size).
-  EXPECT_LE(rk4.space_momentum_max, 1e-4);
-  EXPECT_LE(midpoint.space_momentum_max, 1e-13 + 10.0 * h * h);
+  EXPECT_NEAR(rk4.energy_last_tenth / rk4.energy_first_tenth, 10.0, 2.0);
+  EXPECT_GT(rk4.energy_max, 5e-6);
+  EXPECT_LT(rk4.energy_max, 3e-5);
+  EXPECT_LE(rk4.momentum_max, 2e-5);
+  EXPECT_LE(rk4.space_momentum_max, 2e-5);
+}
+
+// The size of the invariants' errors follows each method's order (HLW body over 100 s, h = 0.1
+// and 0.05): halving h divides the splittings' bounded energy error by 2^p (measured 4.00 and
+// 16.0), rk4's energy error by more than 2^4 (measured 24.7) and the implicit midpoint's m_W
+// error by 2^2 (measured 4.0); at least minHalvingRatio(p) each.
+TEST(DynStep, FreeBodyInvariantErrorsScaleWithTheOrder) {
+  for (const ap::Integrator method : {ap::Integrator::Splitting, ap::Integrator::Splitting4,
+                                      ap::Integrator::Rk4, ap::Integrator::ImplicitMidpoint}) {
+    SCOPED_TRACE(ap::integratorName(method));
+    const InvariantHistory coarse = runFreeBody(method, 0.1, 1000);
+    const InvariantHistory fine = runFreeBody(method, 0.05, 2000);
+    const bool keeps_energy = method == ap::Integrator::ImplicitMidpoint;
+    const double ratio = keeps_energy ? coarse.space_momentum_max / fine.space_momentum_max
+                                      : coarse.energy_max / fine.energy_max;
+    EXPECT_GE(ratio, integrator_cases::minHalvingRatio(ap::declaredOrder(method, ap::Model::Dynamic)));
+  }
 }
 
 // Measured orders against the exact solution: halving h divides the largest attitude error
@@ -151,16 +178,25 @@ TEST(DynStep, ConvergenceOrdersMatchDeclared) {
   }
 }
 
+// The free body in steps of 0.1 s over 20 s, at tolerances tight enough to set the sub-steps
+// (above 1e-8 one sub-step of 0.1 s meets the tolerance: error 0.6 tolerance at 1e-8, less
+// above). Largest attitude error measured 2.3 and 2.5 times the tolerance, bound 5 (a tolerance
+// 100 times looser than asked gives 63 times at 1e-10). Torqued and over a sweep:
+// DynStepTorqued.Dopri5GlobalErrorFollowsItsTolerance.
 TEST(DynStep, Dopri5MeetsItsTolerance) {
   const ap::RigidBody body = hlwBody();
   const ap::DynamicState x0 = hlwState();
   const ap::TorqueFreeMotion exact(body, x0);
-  for (const double tolerance : {1e-6, 1e-10}) {
+  for (const double tolerance : {1e-9, 1e-10}) {
+    SCOPED_TRACE(tolerance);
     const ap::DynamicStepper stepper(ap::Integrator::Dopri5, body, tolerance);
     ap::DynamicState x = x0;
-    for (int i = 1; i <= 200; ++i) x = stepper.step(x, {}, 0.1);
-    // Global error ~ tolerance times the number of sub-steps (20 s, a few hundred at most).
-    EXPECT_ROTATION_NEAR(x.q_WB, exact.evaluate(20.0).q_WB, 1e3 * tolerance);
+    double worst = 0.0;
+    for (int i = 1; i <= 200; ++i) {
+      x = stepper.step(x, {}, 0.1);
+      worst = std::max(worst, ap::rotationAngle(x.q_WB, exact.evaluate(i * 0.1).q_WB));
+    }
+    EXPECT_LE(worst, 5.0 * tolerance);
   }
 }
 
