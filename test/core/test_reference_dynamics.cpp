@@ -39,13 +39,12 @@ TEST(ReferenceDynamics, MatchesPublishedFreeBody) {
   x0.w_B = Eigen::Vector3d(std::cos(1.1) / 2.0, 0.0, std::sin(1.1) * 1.5);
   ref::Trajectory trajectory(I_B, x0, 0.0);
   const Eigen::Vector3d M10 = I_B * trajectory.advanceTo(10.0).w_B;
-  EXPECT_LE((M10 - Eigen::Vector3d(0.407066136588041, 0.283007426812843, 0.868449167661562))
-                .norm(),
+  EXPECT_LE((M10 - Eigen::Vector3d(0.407066136588041, 0.283007426812843, 0.868449167661562)).norm(),
             1e-15);
   const Eigen::Vector3d M100 = I_B * trajectory.advanceTo(100.0).w_B;
-  EXPECT_LE((M100 - Eigen::Vector3d(-0.177348313874983, -0.590418524333421, 0.787371285791935))
-                .norm(),
-            1e-14);
+  EXPECT_LE(
+      (M100 - Eigen::Vector3d(-0.177348313874983, -0.590418524333421, 0.787371285791935)).norm(),
+      1e-14);
 }
 
 // Torque T along the principal axis a_B (here the tensor's eigenvector of moment I_a) from rest:
@@ -69,9 +68,8 @@ TEST(ReferenceDynamics, TorqueFromRestAlongAPrincipalAxis) {
     const ap::DynamicState x = ref::solve(I_B, x0, 0.0, t, torque);
     // Measured 6.5e-16 rad/s and 8.5e-16 rad: the rounding of a_B and I_a to doubles.
     EXPECT_LE((x.w_B - T * t / I_a * a_B).norm(), 2e-15);
-    EXPECT_ROTATION_NEAR(x.q_WB,
-                         x0.q_WB * Eigen::Quaterniond(Eigen::AngleAxisd(T * t * t / (2 * I_a), a_B)),
-                         2e-15);
+    EXPECT_ROTATION_NEAR(
+        x.q_WB, x0.q_WB * Eigen::Quaterniond(Eigen::AngleAxisd(T * t * t / (2 * I_a), a_B)), 2e-15);
   }
 }
 
