@@ -728,3 +728,39 @@ TEST(DynPropagatorDiagnostics, EnergyAndMomentumDriftAreTheStatesOwn) {
     EXPECT_NEAR(p.momentumDrift(), (momentum(p.state()) - momentum(x)) / momentum(x), 2e-15);
   }
 }
+
+// The step budget of a call: dopri5 crossing a grid step of 1 s of the torqued scene needs N
+// trial sub-steps (counted here on a stepper started the same way). With a budget of N the call
+// spends exactly N and reaches the stepper's state (to the rounding of the propagator's own
+// normalisation of the initial quaternion and the frame conversions: measured 6.7e-16); with
+// N - 1 it is a counted failure, OverBudget, within the budget, the state held (to the same
+// rounding: measured 2.2e-16) and finite.
+TEST(DynPropagatorDiagnostics, Dopri5StepBudgetExhaustedIsACountedFailure) {
+  ap::DynamicConfig config = torquedConfig(ap::Integrator::Dopri5, 1.0);
+  config.tolerance = 1e-10;
+  const ap::TorqueInput torque = torqued_body::torque(ap::TorqueFrame::Fixed);
+  const ap::DynamicStepper stepper(ap::Integrator::Dopri5, config.body, config.tolerance);
+  ap::PrincipalState x = stepper.toPrincipal(config.initial);
+  ap::StepInfo info;
+  stepper.stepPrincipal(x, stepper.toPrincipal(torque), 1.0, &info);
+  const std::uint64_t needed = info.attempts;
+  ASSERT_GT(needed, 10u);  // so that N - 1 still covers max_dt / max_step + 8
+
+  config.step_budget = needed;
+  ap::DynamicPropagator enough(config);
+  ASSERT_EQ(enough.setTorque(0.0, torque.tau, torque.frame), ap::StampOutcome::Anchored);
+  EXPECT_EQ(enough.advanceTo(1.0), ap::StampOutcome::Advanced);
+  EXPECT_EQ(enough.lastCallWork(), needed);
+  expectSameState(enough.state(), stepper.fromPrincipal(x), 2e-15);
+
+  config.step_budget = needed - 1;
+  ap::DynamicPropagator short_of(config);
+  ASSERT_EQ(short_of.setTorque(0.0, torque.tau, torque.frame), ap::StampOutcome::Anchored);
+  EXPECT_EQ(short_of.advanceTo(1.0), ap::StampOutcome::FailedStep);
+  EXPECT_EQ(short_of.failedSteps(), 1u);
+  EXPECT_EQ(short_of.lastFailure(), ap::StepStatus::OverBudget);
+  EXPECT_LE(short_of.lastCallWork(), needed - 1);
+  EXPECT_EQ(short_of.time(), 1.0);
+  expectSameState(short_of.state(), config.initial, 1e-15);
+  EXPECT_TRUE(short_of.state().q_WB.coeffs().allFinite() && short_of.state().w_B.allFinite());
+}
