@@ -20,6 +20,7 @@
 #include <Eigen/Geometry>
 
 #include "attitude_propagator/dynamic_state.h"
+#include "attitude_propagator/quaternion.h"
 
 namespace reference_dynamics {
 
@@ -147,6 +148,13 @@ inline Real difference(const State& a, const State& b) {
     worst = std::max(worst, std::abs(a[i] - (i < 4 ? sign : 1) * b[i]));
   }
   return worst;
+}
+
+/// How far (q_WB, w_B) is from a reference state: the larger of the attitude angle (rad) and
+/// |w_B - w_ref| (rad/s).
+inline double stateError(const Eigen::Quaterniond& q_WB, const Eigen::Vector3d& w_B,
+                         const ap::DynamicState& truth) {
+  return std::max(ap::rotationAngle(q_WB, truth.q_WB), (w_B - truth.w_B).norm());
 }
 
 }  // namespace reference_dynamics

@@ -12,6 +12,7 @@
 #include "attitude_propagator/torque_free_motion.h"
 #include "integrator_cases.h"
 #include "reference_dynamics.h"
+#include "rk4_sphere.h"
 #include "rotation_matchers.h"
 #include "torqued_body.h"
 
@@ -484,9 +485,8 @@ ap::DynamicConfig torquedConfig(ap::Integrator integrator, double max_step) {
   return config;
 }
 
-/// Largest of the attitude (rad) and rate (rad/s) errors.
 double stateError(const ap::DynamicState& x, const ap::DynamicState& truth) {
-  return std::max(ap::rotationAngle(x.q_WB, truth.q_WB), (x.w_B - truth.w_B).norm());
+  return ref::stateError(x.q_WB, x.w_B, truth);
 }
 
 /// A torque held from `from` on, in either frame.
@@ -598,22 +598,11 @@ TEST(DynPropagatorTorqued, ALateTorqueActsFromItsStampOrTheLastGridPoint) {
 
 // ---- Diagnostics: what the propagator reports about its own steps, against values computed
 // here from first principles.
-namespace {
-
-/// |q| - 1 after one rk4 step of h at the constant rate w (a sphere): rk4 on q' = q (x) (0, w)/2
-/// is the exponential's Taylor polynomial to 4th order, of squared norm 1 + d with
-/// d = -a^6/72 + a^8/576, a = h |w| / 2 (derived in DynStep.Rk4NormErrorMatchesTheClosedForm...).
-double rk4SphereNormError(double h, const Eigen::Vector3d& w) {
-  const double a = 0.5 * h * w.norm();
-  const double d = -std::pow(a, 6) / 72.0 + std::pow(a, 8) / 576.0;
-  return d / (1.0 + std::sqrt(1.0 + d));
-}
-
-}  // namespace
 
 // normError() is |q| - 1 of the last step taken before it was renormalised, whole grid step or
-// partial step to the stamp: for rk4 on a sphere the closed form above (to one ulp, measured
-// 6.5e-17 at most on the stepper); for the splittings |q| stays 1 to round-off (measured 1.1e-16).
+// partial step to the stamp: for rk4 on a sphere the closed form of rk4_sphere.h (to one ulp,
+// measured 6.5e-17 at most on the stepper); for the splittings |q| stays 1 to round-off
+// (measured 1.1e-16).
 TEST(DynPropagatorDiagnostics, NormErrorIsTheLastStepsBeforeRenormalising) {
   ap::DynamicConfig config = freeBodyConfig(ap::Integrator::Rk4);
   config.body = ap::RigidBody::fromPrincipalMoments(Eigen::Vector3d::Constant(2.0));
@@ -624,11 +613,11 @@ TEST(DynPropagatorDiagnostics, NormErrorIsTheLastStepsBeforeRenormalising) {
   EXPECT_EQ(p.normError(), 0.0);
   const Eigen::Vector3d w = config.initial.w_B;
   p.advanceTo(0.1);  // one grid step
-  EXPECT_NEAR(p.normError(), rk4SphereNormError(0.1, w), kEps);
+  EXPECT_NEAR(p.normError(), rk4_sphere::normError(0.1, w), kEps);
   p.advanceTo(0.15);  // a partial step of 0.05 from the grid point
-  EXPECT_NEAR(p.normError(), rk4SphereNormError(0.05, w), kEps);
+  EXPECT_NEAR(p.normError(), rk4_sphere::normError(0.05, w), kEps);
   p.advanceTo(0.2);  // the grid step 0.1 -> 0.2
-  EXPECT_NEAR(p.normError(), rk4SphereNormError(0.1, w), kEps);
+  EXPECT_NEAR(p.normError(), rk4_sphere::normError(0.1, w), kEps);
 
   config.integrator = ap::Integrator::Splitting;
   ap::DynamicPropagator splitting(config);

@@ -6,13 +6,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include "attitude_propagator/dynamic_step.h"
 #include "attitude_propagator/torque_free_motion.h"
 #include "integrator_cases.h"
 #include "reference_dynamics.h"
+#include "rk4_sphere.h"
 #include "rotation_matchers.h"
 #include "torqued_body.h"
 
@@ -44,6 +47,18 @@ const std::vector<ap::Integrator> kNumerical = integrator_cases::methodsWhere(
 // The methods a torque may drive.
 const std::vector<ap::Integrator> kTorqued = integrator_cases::methodsWhere(
     ap::Model::Dynamic, [](const ap::IntegratorInfo& row) { return row.takes_torque; });
+
+/// Error bounds per method, each about twice the error measured for that method.
+using MethodBounds = std::vector<std::pair<ap::Integrator, double>>;
+
+/// The bound for `method`; a method without one (a new row in the table) fails until measured.
+double boundFor(const MethodBounds& bounds, ap::Integrator method) {
+  for (const auto& [m, bound] : bounds) {
+    if (m == method) return bound;
+  }
+  ADD_FAILURE() << "no measured bound for " << ap::integratorName(method);
+  return std::numeric_limits<double>::quiet_NaN();  // fails every comparison
+}
 
 /// Largest attitude error against the exact motion along n steps of h.
 double maxAttitudeError(ap::Integrator method, const ap::RigidBody& body,
@@ -206,11 +221,7 @@ TEST(DynStep, Dopri5MeetsItsTolerance) {
 // method at a small step reproduces the flips (largest attitude error along 1.5 periods, within
 // about twice the error measured for each method).
 TEST(DynStep, DzhanibekovFlipReproducedByEveryMethod) {
-  struct Bound {
-    ap::Integrator method;
-    double bound;
-  };
-  const std::vector<Bound> bounds{
+  const MethodBounds bounds{
       {ap::Integrator::Rk4, 2e-9},                 // measured 9.0e-10
       {ap::Integrator::ImplicitMidpoint, 1.2e-4},  // measured 6.0e-5
       {ap::Integrator::Splitting, 2e-4},           // measured 1.0e-4
@@ -226,9 +237,6 @@ TEST(DynStep, DzhanibekovFlipReproducedByEveryMethod) {
   const int n = static_cast<int>(1.5 * period / h);
   for (const ap::Integrator method : kNumerical) {
     SCOPED_TRACE(ap::integratorName(method));
-    const auto row = std::find_if(bounds.begin(), bounds.end(),
-                                  [method](const Bound& b) { return b.method == method; });
-    ASSERT_NE(row, bounds.end()) << "no measured bound for this method";
     const ap::DynamicStepper stepper(method, body, 1e-10);
     ap::DynamicState x = x0;
     double worst = 0.0;
@@ -239,7 +247,7 @@ TEST(DynStep, DzhanibekovFlipReproducedByEveryMethod) {
       if (i == static_cast<int>(std::round(0.5 * period / h))) w2_at_half_period = x.w_B.y();
     }
     EXPECT_LT(w2_at_half_period, -0.49);  // flipped: w2 = -0.5 (1 - O(1e-5))
-    EXPECT_LE(worst, row->bound);
+    EXPECT_LE(worst, boundFor(bounds, method));
   }
 }
 
@@ -260,11 +268,7 @@ TEST(DynStep, ConstantTorqueFromRestAlongPrincipalAxis) {
   double cayley_angle = 0.0;
   for (int k = 0; k < n; ++k) cayley_angle += 4.0 * std::atan(h * T * (k + 0.5) * h / 2.0 / 4.0);
   const Eigen::Quaterniond midpoint_turn(Eigen::AngleAxisd(cayley_angle, Eigen::Vector3d::UnitY()));
-  struct Bound {
-    ap::Integrator method;
-    double bound;
-  };
-  const std::vector<Bound> bounds{
+  const MethodBounds bounds{
       {ap::Integrator::Rk4, 1e-11},               // measured 3.3e-12
       {ap::Integrator::ImplicitMidpoint, 5e-15},  // its Cayley angles: measured 2.3e-15
       {ap::Integrator::Splitting, 1e-14},         // measured 2.6e-15
@@ -290,15 +294,12 @@ TEST(DynStep, ConstantTorqueFromRestAlongPrincipalAxis) {
       // Splittings: the kicks and the axis rotation integrate the quadratic angle exactly
       // (measured 2.6e-15 and 1.2e-14, round-off). rk4 to its accuracy on this smooth problem
       // (measured 3.3e-12), dopri5 to its tolerance 1e-12 (measured 1.3e-14).
-      const auto bound = std::find_if(bounds.begin(), bounds.end(),
-                                      [method](const Bound& b) { return b.method == method; });
-      ASSERT_NE(bound, bounds.end()) << "no measured bound for this method";
       // The midpoint's rate is exact (w' is constant) and its Cayley map turns by
       // 4 atan(h w_k / 4) in step k instead of h w_k, w_k = T (k + 1/2) h / I_y: its attitude
       // is the sum of those angles (h^2 (T / I_y)^3 t^4 / 192 = 1.8e-6 short of the truth).
       const Eigen::Quaterniond truth =
           method == ap::Integrator::ImplicitMidpoint ? q0 * midpoint_turn : expected;
-      EXPECT_ROTATION_NEAR(x.q_WB, truth, bound->bound);
+      EXPECT_ROTATION_NEAR(x.q_WB, truth, boundFor(bounds, method));
     }
   }
 }
@@ -330,10 +331,8 @@ TEST(DynStep, Rk4ReportsNormErrorBeforeRenormalising) {
   EXPECT_LE(midpoint_info.iterations, 30);
 }
 
-// On a sphere w is constant and rk4 on q' = q (x) (0, w)/2 is the Taylor polynomial of the
-// exponential to 4th order: q1 = q0 (x) ((1 - a^2/2 + a^4/24), (1 - a^2/6) a w/|w|) with
-// a = h |w| / 2, whose squared norm is 1 + d, d = -a^6/72 + a^8/576. So the reported |q| - 1
-// is d / (1 + sqrt(1 + d)), to the rounding of |q| (measured 6.5e-17 at most, bound one ulp).
+// On a sphere the reported |q| - 1 of an rk4 step is the closed form of rk4_sphere.h, to the
+// rounding of |q| (measured 6.5e-17 at most, bound one ulp).
 TEST(DynStep, Rk4NormErrorMatchesTheClosedFormOnASphere) {
   const ap::RigidBody body = ap::RigidBody::fromPrincipalMoments(Eigen::Vector3d::Constant(2.0));
   std::uint64_t seed = 17;
@@ -345,9 +344,7 @@ TEST(DynStep, Rk4NormErrorMatchesTheClosedFormOnASphere) {
     x.w_B = w;
     ap::StepInfo info;
     ap::dynamicStep(ap::Integrator::Rk4, body, x, {}, h, &info);
-    const double a = 0.5 * h * w.norm();
-    const double d = -std::pow(a, 6) / 72.0 + std::pow(a, 8) / 576.0;
-    EXPECT_NEAR(info.norm_error, d / (1.0 + std::sqrt(1.0 + d)), kEps);
+    EXPECT_NEAR(info.norm_error, rk4_sphere::normError(h, w), kEps);
   }
 }
 
@@ -454,35 +451,32 @@ Eigen::Vector3d spaceMomentum(const ap::DynamicState& x) {
 // Every method a torque may drive, at h = 0.01 over 4 s, within a bound per method of about
 // twice the error measured. A method without a row here fails until it is measured.
 TEST(DynStepTorqued, AsymmetricSpinningBodyMatchesReference) {
-  struct Bound {
-    ap::Integrator method;
-    double body;   // largest of the angle and rate errors under the body torque
-    double fixed;  // ... under the fixed-frame torque
+  // Largest of the angle and rate errors, under the body torque and the fixed-frame torque.
+  // dopri5 (tolerance 1e-9) takes one sub-step of 0.01 s of a 5th-order method here; where its
+  // tolerance binds: Dopri5GlobalErrorFollowsItsTolerance.
+  const MethodBounds body_torque{
+      {ap::Integrator::Rk4, 1e-9},                 // measured 5.6e-10 (order 4)
+      {ap::Integrator::ImplicitMidpoint, 1.5e-4},  // measured 7.7e-5 (order 2)
+      {ap::Integrator::Splitting, 6e-5},           // measured 2.8e-5 (order 2)
+      {ap::Integrator::Splitting4, 2.5e-9},        // measured 1.3e-9 (order 4)
+      {ap::Integrator::Dopri5, 2e-13},             // measured 8.2e-14
   };
-  const std::vector<Bound> bounds{
-      // Measured 5.6e-10 and 2.2e-10 (order 4: 1.4e-7 at h = 0.04).
-      {ap::Integrator::Rk4, 1e-9, 5e-10},
-      // Measured 7.7e-5 and 4.7e-5 (order 2).
-      {ap::Integrator::ImplicitMidpoint, 1.5e-4, 1e-4},
-      // Measured 2.8e-5 and 8.6e-5 (order 2).
-      {ap::Integrator::Splitting, 6e-5, 2e-4},
-      // Measured 1.3e-9 and 8.9e-9 (order 4).
-      {ap::Integrator::Splitting4, 2.5e-9, 2e-8},
-      // Tolerance 1e-9, met by one sub-step of 0.01 s of a 5th-order method: measured 8.2e-14
-      // and 8.7e-14. (Where the tolerance binds: Dopri5GlobalErrorFollowsItsTolerance.)
-      {ap::Integrator::Dopri5, 2e-13, 2e-13},
+  const MethodBounds fixed_torque{
+      {ap::Integrator::Rk4, 5e-10},              // measured 2.2e-10
+      {ap::Integrator::ImplicitMidpoint, 1e-4},  // measured 4.7e-5
+      {ap::Integrator::Splitting, 2e-4},         // measured 8.6e-5
+      {ap::Integrator::Splitting4, 2e-8},        // measured 8.9e-9
+      {ap::Integrator::Dopri5, 2e-13},           // measured 8.7e-14
   };
   const ap::RigidBody body = torqued_body::body();
   for (const ap::Integrator method : kTorqued) {
     SCOPED_TRACE(ap::integratorName(method));
-    const auto row = std::find_if(bounds.begin(), bounds.end(),
-                                  [method](const Bound& b) { return b.method == method; });
-    ASSERT_NE(row, bounds.end()) << "no measured bound for this method";
     const ap::DynamicStepper stepper(method, body);
     for (const ap::TorqueFrame frame : {ap::TorqueFrame::Body, ap::TorqueFrame::Fixed}) {
       SCOPED_TRACE(torqued_body::frameName(frame));
       const TrajectoryError error = torquedError(stepper, frame, 0.01);
-      const double bound = frame == ap::TorqueFrame::Body ? row->body : row->fixed;
+      const double bound =
+          boundFor(frame == ap::TorqueFrame::Body ? body_torque : fixed_torque, method);
       EXPECT_LE(error.angle, bound);
       EXPECT_LE(error.rate, bound);
     }
@@ -495,11 +489,7 @@ TEST(DynStepTorqued, AsymmetricSpinningBodyMatchesReference) {
 // their accuracy. Taking T_B = Q t_W instead of Q^T t_W breaks it at order one. Largest error
 // over 400 steps of 0.01 s (|m_W| grows from 2.8 to 4.2), bounds about twice the measured.
 TEST(DynStepTorqued, FixedFrameTorqueMovesTheSpaceMomentumLinearly) {
-  struct Bound {
-    ap::Integrator method;
-    double bound;
-  };
-  const std::vector<Bound> bounds{
+  const MethodBounds bounds{
       {ap::Integrator::Rk4, 7e-10},                // measured 3.5e-10
       {ap::Integrator::ImplicitMidpoint, 1.2e-4},  // measured 6.1e-5
       {ap::Integrator::Splitting, 4e-14},          // measured 1.6e-14, ~40 ulps of |m_W|
@@ -513,9 +503,6 @@ TEST(DynStepTorqued, FixedFrameTorqueMovesTheSpaceMomentumLinearly) {
   constexpr int n = 400;
   for (const ap::Integrator method : kTorqued) {
     SCOPED_TRACE(ap::integratorName(method));
-    const auto row = std::find_if(bounds.begin(), bounds.end(),
-                                  [method](const Bound& b) { return b.method == method; });
-    ASSERT_NE(row, bounds.end()) << "no measured bound for this method";
     const ap::DynamicStepper stepper(method, body);
     ap::PrincipalState x = stepper.toPrincipal(torqued_body::initial());
     const ap::PrincipalTorque t = stepper.toPrincipal(torque);
@@ -525,7 +512,7 @@ TEST(DynStepTorqued, FixedFrameTorqueMovesTheSpaceMomentumLinearly) {
       const Eigen::Vector3d expected = m0 + (i * h) * torque.tau;
       worst = std::max(worst, (spaceMomentum(stepper.fromPrincipal(x)) - expected).norm());
     }
-    EXPECT_LE(worst, row->bound);
+    EXPECT_LE(worst, boundFor(bounds, method));
   }
 }
 

@@ -117,9 +117,8 @@ ap::EngineConfig spinningTorquedConfig(double max_step) {
   return c;
 }
 
-/// Largest of the attitude (rad) and rate (rad/s) errors of a published state.
 double stateError(const ap::EngineState& s, const ap::DynamicState& truth) {
-  return std::max(ap::rotationAngle(s.q_WB, truth.q_WB), (s.w_B - truth.w_B).norm());
+  return ref::stateError(s.q_WB, s.w_B, truth);
 }
 
 /// The reference state at `t` under the body torque of torqued_body.h from 0 and the
