@@ -448,9 +448,9 @@ TEST(DynPropagatorExact, StateAtStampIsIndependentOfIntermediateStamps) {
 
 // Hairer-Lubich-Wanner's free body through the propagator (docs/numerics.md §8): anchored at 2 s
 // and walked through irregular stamps, M in the body at anchor + 10 s and + 100 s is the
-// published M(10) and M(100) (measured 7.1e-16 and 2.1e-15: the published digits, and at 100 s
-// the phase the doubles' rounding of the input shifts), and the attitude is the long-double
-// reference's (measured 3.2e-15 and 3.6e-14 rad: round-off over 10 and 100 s).
+// published M(10) and M(100) (measured 7.1e-16 and 2.1e-15, the published digits' size), and
+// the attitude is the long-double reference's (measured 3.2e-15 and 3.6e-14 rad, round-off over
+// 10 and 100 s).
 TEST(DynPropagatorExact, TriaxialMatchesPublishedValues) {
   ap::DynamicPropagator p(freeBodyConfig(ap::Integrator::Auto));
   EXPECT_EQ(p.modelName(), "exact_triaxial");

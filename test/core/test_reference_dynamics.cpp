@@ -75,7 +75,7 @@ TEST(ReferenceDynamics, TorqueFromRestAlongAPrincipalAxis) {
 
 // A fixed-frame torque on the spinning asymmetric body: dm_W/dt = tau_W exactly (the Euler
 // equations in the world), so m_W(t) = m_W(0) + tau_W t. Measured 4.5e-17 over 10 s (|m_W| up
-// to 7), far below the doubles' resolution; a torque taken as Q tau_W instead of Q^T tau_W
+// to 7.4), far below the doubles' resolution; a torque taken as Q tau_W instead of Q^T tau_W
 // breaks it at order one.
 TEST(ReferenceDynamics, FixedFrameTorqueChangesTheSpaceMomentumLinearly) {
   const Eigen::Matrix3d I_B = torqued_body::tensor_B();
@@ -92,9 +92,9 @@ TEST(ReferenceDynamics, FixedFrameTorqueChangesTheSpaceMomentumLinearly) {
 
 // Halving the step of the 8th-order reference changes it by what remains of its error (2^8 - 1
 // times the error of the finer). Over 10 s of the torqued scene, between h = 2e-3 and 1e-3:
-// measured 1.2e-17 (body torque) and 1.2e-16 (fixed-frame torque, which spins the body up to
-// ~5 rad/s), so the reference at 1e-3 is exact to ~1e-18, far below the doubles' resolution
-// (1.1e-16) on which the integrators are judged.
+// measured 1.2e-17 (body torque) and 1.2e-16 (fixed-frame torque), so the reference at 1e-3 is
+// exact to ~1e-18, far below the doubles' resolution (1.1e-16) on which the integrators are
+// judged.
 TEST(ReferenceDynamics, HalvingTheStepChangesNothingAtDoublePrecision) {
   for (const ap::TorqueFrame frame : {ap::TorqueFrame::Body, ap::TorqueFrame::Fixed}) {
     SCOPED_TRACE(torqued_body::frameName(frame));

@@ -14,7 +14,7 @@ namespace torqued_body {
 
 namespace ap = attitude_propagator;
 
-/// Principal moments about 1.11, 2.0 and 2.89 kg m^2, principal axes off the body axes.
+/// Principal moments 1.07, 2.10 and 2.83 kg m^2, principal axes off the body axes.
 inline Eigen::Matrix3d tensor_B() {
   Eigen::Matrix3d I_B;
   I_B << 1.2, 0.3, -0.2,  //
