@@ -520,8 +520,9 @@ double switchedTorqueError(ap::Integrator method, double h) {
       p.setTorque(s.from, s.torque.tau, s.torque.frame);
     }
     p.advanceTo(t);
-    if (k > 0 && k % 10 == 0)
+    if (k > 0 && k % 10 == 0) {
       worst = std::max(worst, stateError(p.state(), reference.advanceTo(t)));
+    }
   }
   return worst;
 }
