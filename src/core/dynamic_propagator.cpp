@@ -97,9 +97,13 @@ struct DynamicPropagator::Impl {
   DynamicState current_B;
 
   bool torque_set = false;
+  // Where the torque took effect, max(stamp, knot): the timeout runs from there.
   double torque_stamp = -std::numeric_limits<double>::infinity();
   PrincipalTorque torque;
-  double rate_stamp = -std::numeric_limits<double>::infinity();
+  // The stamps of the last accepted samples, for the out-of-order check: a late sample that
+  // took effect at a later knot must not make a newer late sample look stale.
+  double torque_sample_stamp = -std::numeric_limits<double>::infinity();
+  double rate_sample_stamp = -std::numeric_limits<double>::infinity();
 
   std::uint64_t steps = 0;
   std::uint64_t failed_steps = 0;
@@ -343,7 +347,8 @@ struct DynamicPropagator::Impl {
     torque_set = false;
     torque = PrincipalTorque{};
     torque_stamp = -std::numeric_limits<double>::infinity();
-    rate_stamp = -std::numeric_limits<double>::infinity();
+    torque_sample_stamp = -std::numeric_limits<double>::infinity();
+    rate_sample_stamp = -std::numeric_limits<double>::infinity();
   }
 };
 
@@ -380,7 +385,7 @@ StampOutcome DynamicPropagator::setTorque(double t, const Eigen::Vector3d& tau, 
     throw std::logic_error("DynamicPropagator::setTorque: integrator '" +
                            integratorName(d.integrator) + "' cannot take a torque");
   }
-  const StampOutcome outcome = d.placeInput(t, d.torque_stamp);
+  const StampOutcome outcome = d.placeInput(t, d.torque_sample_stamp);
   if (!stateHoldsAtStamp(outcome)) return outcome;
   TorqueInput input;
   input.tau = tau;
@@ -389,6 +394,7 @@ StampOutcome DynamicPropagator::setTorque(double t, const Eigen::Vector3d& tau, 
     d.torque = d.stepper.toPrincipal(input);
     d.torque_set = true;
     d.torque_stamp = std::max(t, d.knot_time);
+    d.torque_sample_stamp = t;
   });
   return ok ? outcome : StampOutcome::FailedStep;
 }
@@ -398,11 +404,11 @@ StampOutcome DynamicPropagator::setRate(double t, const Eigen::Vector3d& w_B) {
   d.beginCall();
   if (!std::isfinite(t) || !w_B.allFinite()) return StampOutcome::RejectedNonFinite;
   if (!(w_B.norm() <= kMaxBodyRate)) return StampOutcome::RejectedOutOfRange;
-  const StampOutcome outcome = d.placeInput(t, d.rate_stamp);
+  const StampOutcome outcome = d.placeInput(t, d.rate_sample_stamp);
   if (!stateHoldsAtStamp(outcome)) return outcome;
   const bool ok = d.insertKnot(t, [&d, &w_B, t]() {
     d.knot.w_P = d.config.body.q_BP().conjugate() * w_B;
-    d.rate_stamp = std::max(t, d.knot_time);
+    d.rate_sample_stamp = t;
     const DynamicState x = d.stepper.fromPrincipal(d.knot);
     d.energy0 = d.config.body.kineticEnergy(x.w_B);
     d.momentum0 = d.config.body.angularMomentum_B(x.w_B).norm();

@@ -597,6 +597,31 @@ TEST(DynPropagatorTorqued, ALateTorqueActsFromItsStampOrTheLastGridPoint) {
   }
 }
 
+// Two late samples after the clock committed the grid point 1.31: the first (stamped 1.3031)
+// took effect at 1.31, the second is newer (1.309), so it is not out of order; it too acts
+// from 1.31 and replaces the first there. The state at 2 s is the reference's with the second
+// torque from 1.31 and the first never acting (rk4 at 0.01: measured 2.2e-10, bound 5e-10);
+// a second sample dropped as stale would leave the first torque acting (>= 1e-3 away).
+TEST(DynPropagatorTorqued, ANewerLateTorqueAfterALateOneIsNotStale) {
+  const ap::TorqueInput first = torqued_body::torque(ap::TorqueFrame::Body);
+  const ap::TorqueInput late = torqued_body::torque(ap::TorqueFrame::Fixed);
+  const ap::TorqueInput later{Eigen::Vector3d(0.0, 0.0, 0.0), ap::TorqueFrame::Body};
+  ap::DynamicPropagator p(torquedConfig(ap::Integrator::Rk4, 0.01));
+  ASSERT_EQ(p.setTorque(0.0, first.tau, first.frame), ap::StampOutcome::Anchored);
+  walkTo(p, 1.315, 0.05);
+  EXPECT_EQ(p.setTorque(1.3031, late.tau, late.frame), ap::StampOutcome::Advanced);
+  EXPECT_EQ(p.setTorque(1.309, later.tau, later.frame), ap::StampOutcome::Advanced);
+  EXPECT_EQ(p.setTorque(1.309, late.tau, late.frame), ap::StampOutcome::DroppedStale);
+  walkTo(p, 2.0, 0.05);
+  auto referenceAt2 = [&first](double switch_time, const ap::TorqueInput& then) {
+    return ref::Trajectory(torqued_body::tensor_B(), torqued_body::initial(), 0.0,
+                           {{0.0, first}, {switch_time, then}})
+        .advanceTo(2.0);
+  };
+  EXPECT_LE(stateError(p.state(), referenceAt2(1.31, later)), 5e-10);
+  EXPECT_GE(stateError(p.state(), referenceAt2(1.31, late)), 1e-3);
+}
+
 // ---- Diagnostics: what the propagator reports about its own steps, against values computed
 // here from first principles.
 
