@@ -62,6 +62,7 @@ class KinematicPropagator {
   }
   /// |q| - 1 of the last step before renormalisation.
   double normError() const { return norm_error_; }
+  /// Integration steps since the last anchor (first sample, gap, jump back, set_state, reset).
   std::uint64_t steps() const { return steps_; }
   Integrator integrator() const { return integrator_; }
   RateSamples rateSamples() const { return rate_samples_; }
