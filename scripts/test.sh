@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # Builds the package and runs every test: the core's gtest suite, the rostest integration
 # tests, the repository checks, the core suite again under ASan + UBSan (scripts/sanitize.sh),
-# and, when clang with libFuzzer is present, the fuzz regression inputs and each fuzz target
-# for FUZZ_SECONDS (default 60; 0 skips the fuzzing, not the regressions; scripts/fuzz.sh).
-# Ends with a line "N passed, M failed" (every gtest case, sanitized ones too, and every fuzz
-# target run or regression input counts as one); exits non-zero if anything failed.
+# the mutation check of the core (scripts/mutants.sh), and, when clang with libFuzzer is
+# present, the fuzz regression inputs and each fuzz target for FUZZ_SECONDS (default 60; 0
+# skips the fuzzing, not the regressions; scripts/fuzz.sh).
+# Ends with a line "N passed, M failed" (every gtest case, sanitized ones too, every mutant,
+# and every fuzz target run or regression input counts as one); exits non-zero if anything
+# failed.
 set -uo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 
@@ -19,11 +21,15 @@ catkin_make -j1 run_tests 2>&1 | tail -n 80
 
 # The repository checks (test/checks) run inside run_tests and are counted with the rest.
 
-# Robustness: the core suite under sanitizers, then the fuzz targets (see scripts/fuzz.sh).
+# Robustness: the core suite under sanitizers, the mutation check, then the fuzz targets (see
+# scripts/fuzz.sh).
 robustness="${WORKSPACE}/build/test_results_robustness"
 rm -rf "$robustness"
-result_dirs=("$results" "$robustness/sanitize")
+result_dirs=("$results" "$robustness/sanitize" "$robustness/mutants")
 bash "$REPO_DIR/scripts/sanitize.sh" "$robustness/sanitize"
+# Mutation check: each plausible bug of test/mutants/mutants.txt must fail the core suite (a
+# surviving mutant counts as a failed test; see scripts/mutants.sh).
+bash "$REPO_DIR/scripts/mutants.sh" "$robustness/mutants"
 if have_libfuzzer; then
   result_dirs+=("$robustness/fuzz")
   bash "$REPO_DIR/scripts/fuzz.sh" --regressions --junit "$robustness/fuzz"
