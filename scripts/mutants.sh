@@ -33,7 +33,7 @@ while [ $# -gt 0 ]; do
       shift
       ;;
     -h | --help)
-      sed -n '2,15p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'
+      awk 'NR > 1 && !/^#/ { exit } NR > 1 { sub(/^# ?/, ""); print }' "${BASH_SOURCE[0]}"
       exit 0
       ;;
     -*) echo "mutants: unknown option $1"; exit 2 ;;
@@ -42,6 +42,7 @@ while [ $# -gt 0 ]; do
   shift
 done
 
+[[ "$jobs" =~ ^[1-9][0-9]*$ ]] || { echo "mutants: --jobs: a positive whole number"; exit 2; }
 if $listing; then
   exec /usr/bin/python3 "$driver" list --root "$REPO_DIR" "${options[@]}"
 fi
