@@ -327,7 +327,8 @@ def command_run(args):
         finally:
             with lock:
                 free.append(slot)
-        print(report_line(outcome), flush=True)
+        with lock:  # one line at a time from the workers
+            print(report_line(outcome), flush=True)
         return outcome
 
     with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
