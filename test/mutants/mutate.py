@@ -57,7 +57,8 @@ class Mutant:
             count = text.count(original)
             if count != 1:
                 raise ListError(
-                    f"{self.id}: the original text occurs {count} times in {self.file} "
+                    f"{LIST_NAME}:{self.line}: {self.id}: the original text occurs {count} "
+                    f"times in {self.file} "
                     f"(must be exactly once): {original!r}")
             text = text.replace(original, replacement)
         return text
@@ -194,9 +195,12 @@ class Slot:
         self.source = build / f"mutant_slot{index}.cpp"
         self.binary = build / f"core_tests_slot{index}"
         commands = json.loads((build / "compile_commands.json").read_text())
-        entry = next(c for c in commands if pathlib.Path(c["file"]) == self.source)
-        self.compile = (entry["command"], entry["directory"])
+        entry = next((c for c in commands if pathlib.Path(c["file"]) == self.source), None)
         link = build / "CMakeFiles" / f"core_tests_slot{index}.dir" / "link.txt"
+        if entry is None or not link.is_file():
+            raise ListError(f"{build} has no slot {index}: configure it with MUTANT_SLOTS "
+                            "at least --jobs (the Unix Makefiles generator)")
+        self.compile = (entry["command"], entry["directory"])
         self.link = (link.read_text().strip(), str(build))
 
     def build_mutant(self, text):
@@ -206,8 +210,8 @@ class Slot:
             done = subprocess.run(command, shell=True, cwd=directory, stdout=subprocess.PIPE,
                                   stderr=subprocess.STDOUT, text=True)
             if done.returncode != 0:
-                errors = [l for l in done.stdout.splitlines() if "error" in l] or \
-                    done.stdout.splitlines()
+                lines = done.stdout.splitlines()
+                errors = [line for line in lines if "error" in line] or lines
                 return "\n".join(errors[:10])
         return None
 
@@ -280,7 +284,8 @@ def write_junit(path, outcomes, seconds):
             ET.SubElement(case, "failure", message="survived: " + o.mutant.bug).text = (
                 f"{o.mutant.file}: {o.mutant.bug}\nThe core suite passes with this bug planted.")
         elif o.verdict == "error":
-            ET.SubElement(case, "error", message="the mutant does not apply or build").text = o.detail
+            error = ET.SubElement(case, "error", message="the mutant does not apply or build")
+            error.text = o.detail
         else:
             ET.SubElement(case, "system-out").text = f"{o.mutant.bug}\nkilled: {o.detail}"
     root = ET.Element("testsuites")
