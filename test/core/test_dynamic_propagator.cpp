@@ -622,6 +622,28 @@ TEST(DynPropagatorTorqued, ANewerLateTorqueAfterALateOneIsNotStale) {
   EXPECT_GE(stateError(p.state(), referenceAt2(1.31, late)), 1e-3);
 }
 
+// dopri5 at a loose tolerance over a long run keeps |q| = 1 (every accepted sub-step is
+// renormalised) and never fails a step: body (1, 2, 3) tumbling, tolerance 1e-3, 1000 calls of
+// 0.1 s. Measured: no failed step, |q| - 1 at most 2.2e-16; bound 1e-15 (without the
+// renormalisation 978 of the 1000 calls fail).
+TEST(DynPropagatorDiagnostics, Dopri5AtALooseToleranceKeepsAUnitQuaternionOverALongRun) {
+  ap::DynamicConfig config;
+  config.body = ap::RigidBody::fromPrincipalMoments(Eigen::Vector3d(1.0, 2.0, 3.0));
+  config.integrator = ap::Integrator::Dopri5;
+  config.tolerance = 1e-3;
+  config.max_step = 0.1;
+  config.initial.w_B = Eigen::Vector3d(0.1, 2.0, 0.3);
+  ap::DynamicPropagator p(config);
+  ASSERT_EQ(p.advanceTo(0.0), ap::StampOutcome::Anchored);
+  double worst = 0.0;
+  for (int k = 1; k <= 1000; ++k) {
+    p.advanceTo(0.1 * k);
+    worst = std::max(worst, std::abs(p.state().q_WB.norm() - 1.0));
+  }
+  EXPECT_EQ(p.failedSteps(), 0u);
+  EXPECT_LE(worst, 1e-15);
+}
+
 // ---- Diagnostics: what the propagator reports about its own steps, against values computed
 // here from first principles.
 

@@ -206,6 +206,31 @@ TEST(SensorClockFilter, ChangesNothingOnAnExactClock) {
 // only the error of its line, about 2 sigma / sqrt(n) after n samples: once the line has
 // seen its memory (1000 samples, 5 s), the target of ten times less error is met. Before,
 // no causal filter knows the clock much better than the first samples tell it.
+// The kinematics are left-invariant: the run started from q0 is q0 times the run started from
+// the identity. The filter's correction for moved stamps (RestampCorrection) turns the world side
+// of the state, so the filtered run keeps that to round-off: measured 7.9e-15 rad over 2 s of a
+// varying rate with 2e-4 s of jitter; bound 5e-14 (the turn on the body side: 3.7e-6 rad).
+TEST(SensorClockFilter, KeepsThePropagationLeftInvariant) {
+  const ap::ConingMotion cone;
+  const Eigen::Quaterniond q0(Eigen::AngleAxisd(2.0, Eigen::Vector3d(1.0, -2.0, 0.5).normalized()));
+  ap::KinematicConfig config;
+  config.stamp_filter = ap::StampFilter::SensorClock;
+  ap::KinematicPropagator from_identity(config);
+  config.initial_q_WB = q0;
+  ap::KinematicPropagator from_q0(config);
+  std::uint64_t state = 7;
+  double worst = 0.0;
+  for (int k = 0; k <= 400; ++k) {
+    const double stamp = k * kPeriod + (k > 0 ? 2e-4 * normalRandom(state) : 0.0);
+    const Eigen::Vector3d w = cone.bodyRate(k * kPeriod);
+    from_identity.addSample(stamp, w);
+    from_q0.addSample(stamp, w);
+    worst =
+        std::max(worst, ap::rotationAngle(from_q0.orientation(), q0 * from_identity.orientation()));
+  }
+  EXPECT_LE(worst, 5e-14);
+}
+
 TEST(SensorClockFilter, LowersTheJitterErrorOfCf4TenTimesOnceSettled) {
   const ap::ConingMotion cone;
   const int seeds = 6, settled = 1000;
