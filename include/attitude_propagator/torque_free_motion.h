@@ -21,10 +21,16 @@
 // Precision near the separatrix (k -> 1) hangs on the complementary parameter m_c = 1 - k^2,
 // which is computed from the state without cancellation and used directly: K, F and Pi in
 // Carlson's form (Boost.Math's ellint_rf and ellint_rj, without promotion to long double,
-// 8x faster, docs/numerics.md §6), and sn, cn, dn by the descending Landen / AGM recursion started
-// from sqrt(m_c). Boost's jacobi_elliptic, ellint_1 and ellint_3 take k, whose 1 - k^2 keeps
-// only the absolute round-off 1e-16 of m_c: measured 5e-10 rad after 100 s at m_c = 5e-7,
-// 1e-6 rad at m_c = 5e-11.
+// 8x faster, docs/numerics.md §6), and sn, cn, dn by the descending Landen transformation in
+// its algebraic (Gauss) form with the moduli of the AGM started from sqrt(m_c). Boost's
+// jacobi_elliptic, ellint_1 and ellint_3 take k, whose 1 - k^2 keeps only the absolute
+// round-off 1e-16 of m_c: measured 5e-10 rad after 100 s at m_c = 5e-7, 1e-6 rad at
+// m_c = 5e-11.
+//
+// Precision near the middle axis (cn or dn tiny) hangs on never forming the Jacobi amplitude
+// as an angle: the algebraic Landen steps keep cn and dn relative, where cos(am) would keep an
+// absolute error that the psi term divides by dn (measured 4.4e-5 rad over 20 s at 1e-12 rad/s
+// off the middle axis before, 4e-14 now).
 #pragma once
 
 #include <cmath>
@@ -76,7 +82,8 @@ class TorqueFreeMotion {
   void triaxialAt(double tau, Eigen::Vector3d& M_F, Eigen::Quaterniond& q_WF) const;
   /// The non-secular part of psi at u (cases i and ii).
   double ellipticPsi(double u) const;
-  /// Caches the arithmetic-geometric mean of 1 and sqrt(m_c) for reduced().
+  /// Caches the moduli of the descending Landen transformation (the arithmetic-geometric mean
+  /// of 1 and sqrt(m_c)) for reduced().
   void initJacobi();
   /// sn, cn, dn of r = u - 2 K j.
   void reduced(double u, double j, double& sn, double& cn, double& dn) const;
@@ -120,9 +127,9 @@ class TorqueFreeMotion {
   double psi_half_period_ = 0.0;           // growth of psi's non-secular part per 2K of u
   static constexpr int kMaxAgmSteps = 16;  // the AGM converges quadratically: ~6 for m_c = 1e-30
   int agm_steps_ = 0;
-  double agm_a_[kMaxAgmSteps] = {};
-  double agm_c_[kMaxAgmSteps] = {};
-  double agm_scale_ = 0.0;
+  double landen_k_[kMaxAgmSteps] = {};            // the moduli k_1, k_2, ... of the Landen steps
+  double landen_one_minus_k_[kMaxAgmSteps] = {};  // 1 - k_n, without cancellation
+  double landen_scale_ = 0.0;                     // a_N, with K = pi / (2 a_N)
   double psi_offset_ = 0.0;  // the psi terms at t0, subtracted so that psi(t0) = 0
   // Triaxial: the constants above describe the motion from w0 / 2^rate_exponent_ (rates
   // whose binary exponent exceeds kUnscaledRateExponent are brought to order one).

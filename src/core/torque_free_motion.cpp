@@ -110,6 +110,24 @@ double ellipticPi(double s, double c, double n, double m_c) {
              boost::math::ellint_rj(c2, d2, 1.0, 1.0 - n * s * s, NoPromotion());
 }
 
+/// nu = F(phi0 | k) for phi0 = atan2(y, x), from sin phi0 = y/h and cos phi0 = x/h (h =
+/// hypot(x, y)) without the angle itself: near the middle axis phi0 is close to +-pi/2, and
+/// cos(phi0) would keep only the absolute round-off of the angle, which F multiplies by
+/// 1/dn ~ 1/k'. With phi0 = j pi + phi_r, |phi_r| <= pi/2: F = 2 j K + F(phi_r), where
+/// (sin phi_r, cos phi_r) = (-1)^j (sin phi0, cos phi0).
+double startArgument(double y, double x, double K, double m_c) {
+  const double h = std::hypot(x, y);
+  double s = y / h;
+  double c = x / h;
+  double j = 0.0;
+  if (c < 0.0) {
+    j = std::copysign(1.0, s);
+    s = -s;
+    c = -c;
+  }
+  return 2.0 * j * K + ellipticF(s, c, m_c);
+}
+
 /// Rotation by pi about principal axis i.
 Eigen::Quaterniond halfTurn(int i) {
   Eigen::Quaterniond q(0.0, 0.0, 0.0, 0.0);
@@ -204,7 +222,7 @@ void TorqueFreeMotion::initTriaxial(const RigidBody& body, const Eigen::Vector3d
     psi0 = -2.0 * std::atan(atan_a_ * std::tanh(-0.5 * nu_));
   } else {
     const bool about_smallest = regime_ == Regime::AboutSmallest;
-    double phi0;
+    double phase_y, phase_x;  // the start phase phi0 = atan2(phase_y, phase_x)
     if (about_smallest) {
       // Case (i): M = (B13 dn, -B21 sn, B31 cn), e = e1.
       const double B21 = std::sqrt(I2 * D1 / I21);
@@ -213,7 +231,8 @@ void TorqueFreeMotion::initTriaxial(const RigidBody& body, const Eigen::Vector3d
       B_[2] = B31;
       lambda_ = -std::sqrt(D3 * (I1 - I2) / (I1 * I2 * I3));
       k_ = std::sqrt((-I32 * D1) / (D3 * I21));  // k^2 = 1 - m_c = I23 D1 / (D3 I21)
-      phi0 = std::atan2(M[1] * B31, M[2] * B21);
+      phase_y = M[1] * B31;
+      phase_x = M[2] * B21;
       psi_rate_ = G_ / I1;
       C_Pi_ = -G_ * I31 / (lambda_ * I1 * I3);
       n_ = I1 * I32 / (I3 * (I1 - I2));
@@ -228,7 +247,8 @@ void TorqueFreeMotion::initTriaxial(const RigidBody& body, const Eigen::Vector3d
       B_[2] = B31;
       lambda_ = -std::sqrt(D1 * I32 / (I1 * I2 * I3));
       k_ = std::sqrt(((I1 - I2) * D3) / (D1 * I32));  // k^2 = 1 - m_c = I12 D3 / (D1 I32)
-      phi0 = std::atan2(M[1] * B13, M[0] * B23);
+      phase_y = M[1] * B13;
+      phase_x = M[0] * B23;
       psi_rate_ = G_ / I3;
       C_Pi_ = G_ * I31 / (lambda_ * I1 * I3);
       n_ = I3 * I21 / (I1 * (I2 - I3));
@@ -245,10 +265,7 @@ void TorqueFreeMotion::initTriaxial(const RigidBody& body, const Eigen::Vector3d
     K_ = boost::math::ellint_rf(0.0, m_c, 1.0, NoPromotion());
     initJacobi();
     Pi_complete_ = K_ + (n_ / 3.0) * boost::math::ellint_rj(0.0, m_c, 1.0, 1.0 - n_, NoPromotion());
-    // nu = F(phi0 | k) with phi0 = j pi + phi_r, |phi_r| <= pi/2: F = 2 j K + F(phi_r).
-    const double j0 = std::nearbyint(phi0 / kPi);
-    const double phi_r = phi0 - j0 * kPi;
-    nu_ = 2.0 * j0 * K_ + ellipticF(std::sin(phi_r), std::cos(phi_r), m_c);
+    nu_ = startArgument(phase_y, phase_x, K_, m_c);
     psi_half_period_ = 2.0 * C_Pi_ * Pi_complete_ + sigma_ * kPi;
     psi0 = ellipticPsi(-nu_);
   }
@@ -266,37 +283,56 @@ double TorqueFreeMotion::ellipticPsi(double u) const {
 }
 
 void TorqueFreeMotion::initJacobi() {
-  // Arithmetic-geometric mean from a0 = 1, b0 = sqrt(m_c), c0 = k (A&S 16.4, DLMF 22.20(ii)),
-  // kept for every evaluation. Starting from sqrt(m_c) rather than from k keeps m_c's digits.
+  // Arithmetic-geometric mean from a0 = 1, b0 = k' = sqrt(m_c) (A&S 17.6, DLMF 19.8(i)):
+  // a_{n+1} = (a_n + b_n)/2, b_{n+1} = sqrt(a_n b_n), c_{n+1} = (a_n - b_n)/2. The moduli of
+  // the descending Landen transformation are k_{n+1} = c_{n+1}/a_{n+1} = (1 - k'_n)/(1 + k'_n),
+  // k'_n = b_n/a_n, and 1 - k_{n+1} = b_n/a_{n+1} keeps the digits of a tiny k' (near the
+  // separatrix k' may be 1e-20, and 1 - k_1 from k_1 would be lost). Starting from sqrt(m_c)
+  // rather than from k keeps m_c's digits.
   double a = 1.0;
   double b = std::sqrt(m_c_);
   agm_steps_ = 0;
   while (agm_steps_ < kMaxAgmSteps) {
     const double a_next = 0.5 * (a + b);
     const double c_next = 0.5 * (a - b);
+    landen_k_[agm_steps_] = c_next / a_next;
+    landen_one_minus_k_[agm_steps_] = b / a_next;
     b = std::sqrt(a * b);
     a = a_next;
-    agm_a_[agm_steps_] = a;
-    agm_c_[agm_steps_] = c_next;
     ++agm_steps_;
     if (std::abs(c_next) <= kEpsilon * a) break;
   }
-  agm_scale_ = std::ldexp(a, agm_steps_);  // 2^N a_N
+  landen_scale_ = a;  // a_N: the argument at the last modulus (~0) is a_N r, and K = pi/(2 a_N)
 }
 
 void TorqueFreeMotion::reduced(double u, double j, double& sn, double& cn, double& dn) const {
   const double r = u - 2.0 * K_ * j;
-  // Descending Landen transformation: phi_N = 2^N a_N r, phi_{n-1} = (phi_n +
-  // asin((c_n / a_n) sin phi_n)) / 2, am(r) = phi_0. Boost's jacobi_elliptic runs the same
-  // recursion but from k, whose 1 - k^2 has lost m_c's digits near the separatrix.
-  double phi = agm_scale_ * r;
+  // Descending Landen (Gauss) transformation in algebraic form (DLMF 22.7.1-3): with
+  // k1 = (1 - k')/(1 + k') and v = r/(1 + k1), writing s, c, d for sn, cn, dn(v, k1),
+  //   sn(r, k) = (1 + k1) s / (1 + k1 s^2),  cn(r, k) = c d / (1 + k1 s^2),
+  //   dn(r, k) = ((1 - k1) + k1 c^2) / (1 + k1 s^2),
+  // from sin, cos and 1 at the last modulus (below the round-off), where the argument is
+  // a_N r (|a_N r| <= pi/2). Every step multiplies, divides or adds terms of one sign, so cn
+  // and dn keep their relative precision where they are small (r near +-K, close to the
+  // middle axis). The angular form, am = phi_0 from phi_{n-1} = (phi_n + asin((c_n/a_n)
+  // sin phi_n))/2, gives cn = cos(am) with an absolute error only, and its asin near 1 there
+  // loses half the digits (measured 1e-8 rad of am at m_c = 1e-39); the psi term multiplies
+  // the error of am by 1/dn.
+  double s = std::sin(landen_scale_ * r);
+  double c = std::cos(landen_scale_ * r);
+  double d = 1.0;
   for (int i = agm_steps_ - 1; i >= 0; --i) {
-    phi = 0.5 * (phi + std::asin(agm_c_[i] / agm_a_[i] * std::sin(phi)));
+    const double k1 = landen_k_[i];
+    const double inverse = 1.0 / (1.0 + k1 * s * s);
+    const double sn_up = (1.0 + k1) * s * inverse;
+    const double cn_up = c * d * inverse;
+    d = (landen_one_minus_k_[i] + k1 * c * c) * inverse;  // 1 - k1 s^2 with s^2 = 1 - c^2
+    s = sn_up;
+    c = cn_up;
   }
-  sn = std::sin(phi);
-  cn = std::cos(phi);
-  // dn^2 = 1 - k^2 sn^2 = cn^2 + m_c sn^2: no cancellation when k -> 1.
-  dn = std::sqrt(cn * cn + m_c_ * sn * sn);
+  sn = s;
+  cn = c;
+  dn = d;
 }
 
 double TorqueFreeMotion::psiFromReduced(double j, double sn_r, double cn_r) const {
