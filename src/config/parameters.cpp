@@ -143,7 +143,7 @@ void checkScalars(const Parameters& p) {
   // Beyond pi the angle is no more unknown than at pi (the covariance is capped at pi^2).
   requireFinite("initial_orientation_stddev", p.initial_orientation_stddev, 0.0, true, M_PI,
                 "a finite number in [0, pi] (rad)");
-  requireOneOf("tf_conflict", p.tf_conflict, {"warn", "stop"});
+  requireOneOf("tf_conflict", p.tf_conflict, {"warn", "stop", "ignore"});
   const std::string rate_range = "[x, y, z], finite, |w| <= 1e5 (rad/s)";
   const auto& w = p.initial_angular_velocity;
   requireVector("initial_angular_velocity", w, 3, rate_range);

@@ -116,7 +116,7 @@ void AttitudePropagatorRos::subscribe() {
   if (config_.rate_input != RateInput::None) {
     bias_sub_ = nh_.subscribe("gyro_bias", 100, &AttitudePropagatorRos::onGyroBias, this, hints);
   }
-  if (config_.parameters.publish_tf) {
+  if (config_.parameters.publish_tf && config_.parameters.tf_conflict != "ignore") {
     tf_watch_sub_ = nh_.subscribe("/tf", kQueueSize, &AttitudePropagatorRos::onTfSeen, this);
     tf_static_watch_sub_ = nh_.subscribe("/tf_static", 100, &AttitudePropagatorRos::onTfSeen, this);
   }
