@@ -22,6 +22,7 @@
 #include <sensor_msgs/Imu.h>
 #include <tf2_msgs/TFMessage.h>
 
+#include "../core/sampling.h"
 #include "attitude_propagator/coning_motion.h"
 #include "attitude_propagator/quaternion.h"
 #include "attitude_propagator/rigid_body.h"
@@ -32,31 +33,6 @@ namespace ap = attitude_propagator;
 namespace bagtest {
 
 namespace {
-
-// Reproducible uniform numbers in [0, 1) (Knuth's MMIX LCG, top 53 bits) and normal ones
-// (Box-Muller).
-double uniformRandom(std::uint64_t& state) {
-  state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-  return static_cast<double>(state >> 11) * 0x1.0p-53;
-}
-
-double normalRandom(std::uint64_t& state) {
-  const double u1 = 1.0 - uniformRandom(state), u2 = uniformRandom(state);
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
-}
-
-// Mean of f over [a, b] by 5-point Gauss-Legendre: exact for polynomials of degree 9; on the
-// scenes' rates (frequencies below 10 rad/s, b - a = 5 ms) the error is below 1e-20.
-template <class F>
-Eigen::Vector3d intervalMean(F f, double a, double b) {
-  static const double x[5] = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831,
-                              0.9061798459386640};
-  static const double w[5] = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889,
-                              0.4786286704993665, 0.2369268850561891};
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  for (int i = 0; i < 5; ++i) sum += w[i] * f(0.5 * (a + b) + 0.5 * (b - a) * x[i]);
-  return 0.5 * sum;
-}
 
 ros::Time rosTime(Stamp stamp) {
   ros::Time t;

@@ -6,19 +6,13 @@
 #include <Eigen/Geometry>
 
 #include "attitude_propagator/quaternion.h"
+#include "sampling.h"
 
 /// Compares two rotations by the angle of a^c b, so that q and -q are equal.
 #define EXPECT_ROTATION_NEAR(a, b, tol_rad)                            \
   EXPECT_LE(::attitude_propagator::rotationAngle((a), (b)), (tol_rad)) \
       << "rotations differ: a = " << (a).coeffs().transpose()          \
       << " (x y z w), b = " << (b).coeffs().transpose() << " (x y z w)"
-
-/// Reproducible uniform numbers in [0, 1): a 64-bit linear congruential generator (Knuth's
-/// MMIX constants), the top 53 bits.
-inline double uniformRandom(std::uint64_t& state) {
-  state = state * 6364136223846793005ULL + 1442695040888963407ULL;
-  return static_cast<double>(state >> 11) * 0x1.0p-53;
-}
 
 /// Reproducible random unit quaternions, uniform on SO(3) (Shoemake's method).
 inline Eigen::Quaterniond randomUnitQuaternion(std::uint64_t& state) {

@@ -14,6 +14,7 @@
 #include "attitude_propagator/orientation_covariance.h"
 #include "attitude_propagator/quaternion.h"
 #include "rotation_matchers.h"
+#include "sampling.h"
 
 namespace ap = attitude_propagator;
 
@@ -80,15 +81,10 @@ struct NoisyTurn {
   }
 };
 
-// Reproducible standard normal numbers (Box-Muller on the generator of rotation_matchers.h),
-// the same on every standard library.
+// Three reproducible standard normal numbers (sampling.h).
 Eigen::Vector3d standardNormal(std::uint64_t& state) {
   Eigen::Vector3d z;
-  for (int i = 0; i < 3; ++i) {
-    const double u1 = 1.0 - uniformRandom(state);  // in (0, 1]
-    const double u2 = uniformRandom(state);
-    z[i] = std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
-  }
+  for (int i = 0; i < 3; ++i) z[i] = normalRandom(state);
   return z;
 }
 

@@ -18,6 +18,7 @@
 #include "attitude_propagator/stamp_filter.h"
 #include "integrator_cases.h"
 #include "rotation_matchers.h"
+#include "sampling.h"
 
 namespace ap = attitude_propagator;
 using ap::ConingMotion;
@@ -25,25 +26,6 @@ using ap::Integrator;
 using ap::RateSamples;
 
 namespace {
-
-// Mean of f over [a, b] by 5-point Gauss-Legendre: exact for polynomials of degree 9; on the
-// coning rate (frequency omega) the error is about (omega (b - a))^10 / 10^9, below 1e-20 here.
-template <class F>
-Eigen::Vector3d intervalMean(F f, double a, double b) {
-  static const double x[5] = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831,
-                              0.9061798459386640};
-  static const double w[5] = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889,
-                              0.4786286704993665, 0.2369268850561891};
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  for (int i = 0; i < 5; ++i) sum += w[i] * f(0.5 * (a + b) + 0.5 * (b - a) * x[i]);
-  return 0.5 * sum;
-}
-
-// Reproducible standard normal numbers (Box-Muller on the tests' LCG).
-double normalRandom(std::uint64_t& state) {
-  const double u1 = 1.0 - uniformRandom(state), u2 = uniformRandom(state);
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
-}
 
 // One stream: what the gyro delivers, sample by sample.
 struct StreamOptions {

@@ -12,16 +12,12 @@
 #include "attitude_propagator/quaternion.h"
 #include "attitude_propagator/stamp_filter.h"
 #include "rotation_matchers.h"
+#include "sampling.h"
 
 namespace ap = attitude_propagator;
 using Verdict = ap::SensorClockFilter::Verdict;
 
 namespace {
-
-double normalRandom(std::uint64_t& state) {
-  const double u1 = 1.0 - uniformRandom(state), u2 = uniformRandom(state);
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
-}
 
 constexpr double kT0 = 1.7e9;  // epoch-sized stamps
 constexpr double kPeriod = 0.005;
