@@ -133,14 +133,23 @@ TEST(DynTorqueFree, BothSidesOfTheSeparatrixMatchReference) {
   expectMatchesReference(body, about_largest, 100.0, 1e-13);
 }
 
+namespace {
+
+// On body (1, 2, 3), M = (M1, 1, M3) with Delta2 = M3^2/3 - M1^2 = side * 1e-6 relative: just
+// inside (side -1) or outside (+1) the separatrix, at a random attitude.
+ap::DynamicState nearTheSeparatrix(const ap::RigidBody& body, double side, std::uint64_t& seed) {
+  const double M1 = 0.5;
+  const double M3 = std::sqrt(3.0) * M1 * std::sqrt(1.0 + side * 1e-6);
+  return stateWithMomentum(body, {M1, 1.0, M3}, randomUnitQuaternion(seed));
+}
+
+}  // namespace
+
 TEST(DynTorqueFree, NearTheSeparatrixMatchesReference) {
   const ap::RigidBody body = ap::RigidBody::fromPrincipalMoments({1.0, 2.0, 3.0});
   std::uint64_t seed = 11;
   for (const double side : {-1.0, 1.0}) {
-    // Delta2 = M3^2/3 - M1^2 = side * 1e-6 relative.
-    const double M1 = 0.5;
-    const double M3 = std::sqrt(3.0) * M1 * std::sqrt(1.0 + side * 1e-6);
-    const ap::DynamicState x0 = stateWithMomentum(body, {M1, 1.0, M3}, randomUnitQuaternion(seed));
+    const ap::DynamicState x0 = nearTheSeparatrix(body, side, seed);
     SCOPED_TRACE(side);
     // Measured: 1.2e-11 rad forward, 7.9e-11 rad backward (rates 6e-11); bound 3e-10. Both
     // peak at the flips and are the reference's: run at tolerances 1e-16, 1e-17, 1e-18 its
@@ -157,9 +166,7 @@ TEST(DynTorqueFree, ExactTimeReversalNearTheSeparatrix) {
   const ap::RigidBody body = ap::RigidBody::fromPrincipalMoments({1.0, 2.0, 3.0});
   std::uint64_t seed = 11;
   for (const double side : {-1.0, 1.0}) {
-    const double M1 = 0.5;
-    const double M3 = std::sqrt(3.0) * M1 * std::sqrt(1.0 + side * 1e-6);
-    const ap::DynamicState x0 = stateWithMomentum(body, {M1, 1.0, M3}, randomUnitQuaternion(seed));
+    const ap::DynamicState x0 = nearTheSeparatrix(body, side, seed);
     const ap::TorqueFreeMotion motion(body, x0);
     const ap::TorqueFreeMotion reversed_motion(body, free_body_reference::reversed(x0));
     SCOPED_TRACE(side);
