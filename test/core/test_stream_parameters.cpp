@@ -7,23 +7,11 @@
 #include <gtest/gtest.h>
 
 #include "attitude_propagator/config/parameters.h"
+#include "refused_parameters.h"
 
 namespace ap = attitude_propagator;
 
-namespace {
-
-void expectRefused(const ap::Parameters& p, const std::string& name, const std::string& list) {
-  try {
-    ap::validateParameters(p);
-    ADD_FAILURE() << "accepted a bad " << name;
-  } catch (const std::invalid_argument& e) {
-    const std::string message = e.what();
-    EXPECT_EQ(message.rfind(name + ": ", 0), 0u) << message;
-    EXPECT_NE(message.find("accepted: " + list), std::string::npos) << message;
-  }
-}
-
-}  // namespace
+namespace {}  // namespace
 
 TEST(StreamParameters, DefaultsArePointSamplesUnfilteredWithoutBias) {
   const ap::KinematicConfig k = ap::validateParameters(ap::Parameters{}).kinematic;
