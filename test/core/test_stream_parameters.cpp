@@ -11,8 +11,6 @@
 
 namespace ap = attitude_propagator;
 
-namespace {}  // namespace
-
 TEST(StreamParameters, DefaultsArePointSamplesUnfilteredWithoutBias) {
   const ap::KinematicConfig k = ap::validateParameters(ap::Parameters{}).kinematic;
   EXPECT_EQ(k.rate_samples, ap::RateSamples::Instantaneous);
