@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Counts the JUnit XML results in one or more folders (catkin's run_tests, the sanitized core
-suite, the fuzz runs) and prints the closing line "N passed, M failed" (a folder without
+suite, the mutation check, the fuzz runs) and prints the closing line "N passed, M failed" (a folder without
 results, or an unreadable result file, counts as a failure)."""
 import argparse
 import pathlib
