@@ -62,8 +62,8 @@ class DynamicPropagator {
   std::string modelName() const;
 
   /// Advances the state to time t under docs/design.md §6: the first call anchors (the state at t
-  /// is the initial one), stale stamps do nothing, gaps over max_dt hold the state, a jump back by
-  /// more than the threshold resets to the initial state and anchors at t. Never throws: if the
+  /// is the initial one), stamps at or before time() do nothing (DroppedStale; going back in time
+  /// is the engine's decision: reset()), gaps over max_dt hold the state. Never throws: if the
   /// integrator cannot complete the interval (see StampOutcome::FailedStep and lastFailure()) the
   /// state at time() is held and re-anchored at t.
   StampOutcome advanceTo(double t);
@@ -74,7 +74,7 @@ class DynamicPropagator {
   /// unchanged); FailedStep as for advanceTo (the torque then acts from the new anchor). A sample
   /// stamped at or before time() (it arrived after the clock passed its stamp) acts from its stamp
   /// if no grid point was committed since, else from the last grid point, and returns Advanced; a
-  /// sample not newer than the previous torque sample is DroppedStale. With the exact model a
+  /// sample not newer than the previous torque sample is DroppedStale, however far back. With the exact model a
   /// non-zero torque throws std::logic_error.
   StampOutcome setTorque(double t, const Eigen::Vector3d& tau, TorqueFrame frame);
 
@@ -90,6 +90,11 @@ class DynamicPropagator {
 
   /// Back to the initial state, waiting for an anchoring stamp.
   void reset();
+
+  /// The inputs' stamps start again from an earlier time (their source jumped back, and the
+  /// engine recognised it): the next rate and torque samples are not compared with the previous
+  /// ones, and act as late samples do. The state and the held torque stay.
+  void restartInputOrder();
 
   bool anchored() const;
   double time() const;

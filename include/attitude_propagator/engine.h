@@ -1,12 +1,15 @@
 // The propagation engine: everything between a decoded input and a state to publish, with no
 // ROS in it. It owns the choice of propagator (kinematic or dynamic), the time origin, the
 // dynamic model's queue of inputs stamped ahead of the clock and its publish grid, the
-// orientation covariance, the policy for ROS time (a clock that jumps back resets, a clock that
-// jumps ahead is a gap) and the counters shown in diagnostics. The node decodes messages,
+// orientation covariance, the time policy (each source's stamps judged against its own: a
+// straggler is dropped, a backward jump is recognised when it persists; an input too far ahead
+// of the clock is refused; a clock that jumps back resets, one that jumps ahead is a gap) and
+// the counters shown in diagnostics. The node decodes messages,
 // submits them here, tells the engine what time it is, and publishes what the engine hands to
 // its sink. See docs/design.md for the data flow.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -20,12 +23,9 @@
 #include "attitude_propagator/dynamic_propagator.h"
 #include "attitude_propagator/integrator.h"
 #include "attitude_propagator/kinematic_propagator.h"
+#include "attitude_propagator/source_timeline.h"
 
 namespace attitude_propagator {
-
-/// A point in time: nanoseconds since the epoch, as ROS time. 64 bits hold every ros::Time
-/// and every difference of two, so stamp arithmetic cannot overflow.
-using Stamp = std::int64_t;
 
 /// Where an input came from; chooses what it means and how it is logged.
 enum class Source { Imu, Twist, Torque };
@@ -69,12 +69,17 @@ struct EngineCounters {
   std::uint64_t rejected_no_rate = 0;     ///< REP-145: angular_velocity_covariance[0] == -1
   std::uint64_t rejected_type = 0;        ///< a message type the topic does not take
   std::uint64_t rejected_covariance = 0;  ///< not symmetric, negative or huge
+  /// At or before the newest input of its source (a straggler, by any amount; the first
+  /// inputs of a backward jump before it is recognised; a rate older than a set_state).
   std::uint64_t dropped_stale = 0;
   std::uint64_t dropped_no_tf = 0;
   std::uint64_t dropped_no_time = 0;
   std::uint64_t late = 0;              ///< dynamic: arrived after the clock passed its stamp
   std::uint64_t gaps = 0;              ///< longer than max_dt: state held
-  std::uint64_t resets = 0;            ///< backward jumps and reset()
+  std::uint64_t resets = 0;  ///< the state back to the initial one: time went back, reset()
+  std::uint64_t jumps_back = 0;        ///< a source's stamps went back, and persisted
+  std::uint64_t rejected_future = 0;   ///< stamped more than max_future ahead of the clock
+  std::uint64_t dropped_on_reset = 0;  ///< dynamic: queued inputs that reset() dropped
   std::uint64_t failed_steps = 0;      ///< the integrator could not complete an interval
   std::uint64_t pending_overflow = 0;  ///< dynamic: queue full, the furthest ahead dropped
   std::uint64_t deferred_ticks = 0;    ///< dynamic: grid stamps left for the next call (budget)
@@ -85,7 +90,8 @@ struct EngineCounters {
 struct EngineNote {
   enum Kind {
     Gap,               ///< an input or the clock moved on by more than max_dt: state held
-    StampsJumpedBack,  ///< an input's stamp went back by more than the threshold: reset
+    StampsJumpedBack,  ///< a source's stamps went back by more than the threshold, and persisted
+    Future,            ///< an input stamped more than max_future ahead of the clock: refused
     ClockJumpedBack,   ///< ROS time went back by more than the threshold: reset
     Stale,
     NonFinite,
@@ -119,6 +125,9 @@ struct EngineConfig {
   /// Orientation uncertainty (rad) at an anchor of the initial state: P_B = stddev² I.
   double initial_orientation_stddev = 0.0;
   Eigen::Vector3d gyro_bias_B = Eigen::Vector3d::Zero();  ///< rad/s, until a bias sample
+  /// Seconds an input (or set_state) may be stamped ahead of the clock; further is refused, so
+  /// tf never receives a stamp beyond it. Checked once a clock is known.
+  double max_future = 1.0;
   /// Dynamic model: inputs stamped ahead of the clock wait, at most this many; past it the
   /// one stamped furthest ahead is dropped (counted).
   std::size_t max_pending = 4096;
@@ -131,6 +140,12 @@ struct EngineConfig {
   std::uint64_t work_budget = std::uint64_t{1} << 18;
 };
 
+/// Inputs arriving on average more than this many seconds away from the clock (behind, or
+/// ahead) deserve a warning: tf listeners looking up "now" will not find the transforms, and in
+/// the dynamic model each input acts late. A sensor clock skewed from the node's, or a
+/// transport that queues.
+constexpr double kInputLagWarning = 0.5;
+
 class AttitudeEngine {
  public:
   /// Throws std::invalid_argument (from the propagators) for an invalid configuration.
@@ -139,9 +154,13 @@ class AttitudeEngine {
   AttitudeEngine(const AttitudeEngine&) = delete;
   AttitudeEngine& operator=(const AttitudeEngine&) = delete;
 
-  /// An input. Kinematic model: integrated now, and the state at its stamp published.
-  /// Dynamic model: applied when the clock reaches its stamp (at once when the propagator has
-  /// already passed it). Never throws.
+  /// An input. Judged first against its own source (SourceTimeline): a straggler is dropped,
+  /// a persistent backward jump starts the source's time again (kinematic model: the initial
+  /// state, and the outputs' stamps start again; dynamic model: the source's inputs go on, late),
+  /// and one stamped more than max_future ahead of a known clock is refused. Kinematic model:
+  /// integrated now, and the state at its stamp published. Dynamic model: applied when the
+  /// clock reaches its stamp (at once, where the model can still change, when the propagator
+  /// has already passed it). Never throws.
   void submit(const Input& input);
 
   /// An input the node turned away (counted).
@@ -175,12 +194,17 @@ class AttitudeEngine {
   /// Returns an empty string, or why `next` was refused (then nothing changes).
   std::string reconfigure(const EngineConfig& next);
 
-  /// Back to the initial state; the next input (or clock tick) anchors again.
+  /// Back to the initial state; the next input (or clock tick) anchors again. Queued inputs are
+  /// dropped (counted); each source's order is kept, so a straggler stays a straggler.
   void reset();
-  /// Pins the state at `stamp`. Returns an empty string, or why it was refused.
+  /// Pins the state at `stamp`. Returns an empty string, or why it was refused (a stamp more
+  /// than max_future ahead of the clock, a state the propagator refuses).
   std::string setState(Stamp stamp, const Eigen::Quaterniond& q_WB, const Eigen::Vector3d& w_B);
 
   const EngineCounters& counters() const { return counters_; }
+  /// Mean seconds by which the inputs of `source` arrive behind the clock (negative: ahead);
+  /// empty before one arrived with a clock known.
+  std::optional<double> inputLag(Source source) const;
   std::size_t pending() const { return pending_.size(); }
   bool dynamicModel() const { return dynamic_.has_value(); }
   /// "kinematic" or the dynamic propagator's model name.
@@ -203,6 +227,11 @@ class AttitudeEngine {
   /// Counts and notes a propagator outcome; true when the state holds at the stamp.
   bool handleOutcome(StampOutcome outcome, std::optional<Source> source, Stamp stamp);
   bool clockWentBack(Stamp now);
+  bool tooFarAhead(Stamp stamp) const;
+  /// Judges an input against its source's timeline; false when it is dropped.
+  bool inOrder(Source source, Stamp stamp);
+  void restartTimeline(Source source, Stamp stamp);
+  SourceTimeline& timeline(Source source) { return timelines_[static_cast<std::size_t>(source)]; }
   void advanceClock(Stamp now, bool went_back);
   void resetState(bool forget_time);
   Eigen::Matrix3d initialCovariance() const;
@@ -233,6 +262,7 @@ class AttitudeEngine {
   std::optional<Stamp> origin_;          // core time 0, whole seconds; set by the first stamp
   std::optional<Stamp> last_published_;  // one state per stamp, increasing
   std::optional<Stamp> clock_;           // the latest ROS time seen
+  std::array<SourceTimeline, 3> timelines_;  // per Source: Imu, Twist, Torque
   EngineCounters counters_;
 };
 

@@ -43,6 +43,9 @@ constexpr double kMaxTolerance = 1e-2;
 
 /// Largest `torque_timeout` (s): an hour. Keeps stamp + timeout an ordinary, exact sum.
 constexpr double kMaxTorqueTimeout = 3600.0;
+/// Largest `max_future` (s): how far ahead of the clock an input may be stamped. An hour covers
+/// any clock a system would still call synchronised.
+constexpr double kMaxFuture = 3600.0;
 
 /// Largest `angular_velocity_stddev` (rad/s), and the root of the largest per-axis variance a
 /// rate covariance may carry (checkRateCovariance). A MEMS gyro's noise is about 1e-2 rad/s

@@ -8,9 +8,11 @@ namespace attitude_propagator {
 enum class StampOutcome {
   Anchored,           // first input (or first after a reset): the state holds at this stamp
   Advanced,           // integrated up to the stamp
-  DroppedStale,       // stamp at or before the last one (within the backward-jump threshold)
+  /// Stamp at or before the last one, by any amount: a propagator never goes back in time. A
+  /// backward jump that persists (a looped bag, a restarted driver) is the engine's to
+  /// recognise (SourceTimeline); it then resets the propagator and anchors again.
+  DroppedStale,
   HeldGap,            // gap longer than max_dt: not integrated across, state held, re-anchored
-  ResetBackwardJump,  // time went back by more than the threshold: initial state, re-anchored
   RejectedNonFinite,  // NaN or infinite value or stamp: ignored, state unchanged
   /// A finite input beyond the door bounds of limits.h (a rate above kMaxBodyRate, a torque
   /// above kMaxTorque), whose energy, momentum or step would overflow: ignored, state unchanged.
@@ -24,11 +26,13 @@ enum class StampOutcome {
 
 /// Thresholds of the policy, in seconds.
 struct TimePolicy {
-  double max_dt = 1.0;         ///< largest gap integrated across
-  double backward_jump = 1.0;  ///< a step back by more than this resets (looped bag)
+  double max_dt = 1.0;  ///< largest gap integrated across
+  /// The engine's: a step back by more than this, when it persists (SourceTimeline) or when
+  /// the clock itself steps back, starts time again (looped bag); less is a straggler or jitter.
+  double backward_jump = 1.0;
 };
 
-enum class StampClass { Forward, Stale, Gap, BackwardJump };
+enum class StampClass { Forward, Stale, Gap };
 
 /// Classifies stamp t against the last accepted stamp.
 StampClass classifyStamp(double last, double t, const TimePolicy& policy);

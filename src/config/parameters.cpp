@@ -136,6 +136,8 @@ void checkScalars(const Parameters& p) {
   }
   requireFinite("max_dt", p.max_dt, 0.0, false, kMaxMaxDt,
                 "a finite number > 0 and at most 60 (s)");
+  requireFinite("max_future", p.max_future, 0.0, true, kMaxFuture,
+                "a finite number >= 0 and at most 3600 (s)");
   requireFinite("tolerance", p.tolerance, kMinTolerance, true, kMaxTolerance,
                 "a number in [1e-12, 1e-2]");
   requireFinite("angular_velocity_stddev", p.angular_velocity_stddev, 0.0, true, kMaxRateStddev,
@@ -317,6 +319,7 @@ EngineConfig engineConfig(const NodeConfig& node) {
   config.kinematic = node.kinematic;
   config.dynamic = node.dynamic;
   config.publish_rate = node.parameters.publish_rate;
+  config.max_future = node.parameters.max_future;
   config.rate_stddev = node.parameters.angular_velocity_stddev;
   config.initial_orientation_stddev = node.parameters.initial_orientation_stddev;
   // The engine subtracts the bias (the parameter, then the bias topic) for both models.

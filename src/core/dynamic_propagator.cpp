@@ -287,10 +287,6 @@ struct DynamicPropagator::Impl {
     switch (classifyStamp(time, t, config.time_policy)) {
       case StampClass::Stale:
         return StampOutcome::DroppedStale;
-      case StampClass::BackwardJump:
-        clearInputs();
-        pin(t, initial);
-        return StampOutcome::ResetBackwardJump;
       case StampClass::Gap:
         // Not integrated across: the state at the last stamp holds at t, a new anchor.
         pin(t, current_B);
@@ -308,14 +304,12 @@ struct DynamicPropagator::Impl {
   }
 
   /// Where an input stamped t takes effect: advances to t when t is ahead, and for a stamp
-  /// a little behind time() (an input that arrived after the clock passed its stamp) inserts
-  /// a knot at t, or at the last knot if t is older, and recomputes the current state.
+  /// behind time() by any amount (an input that arrived after the clock passed its stamp: a
+  /// transport delay, a starved process, a sensor clock behind the node's) inserts a knot at t,
+  /// or at the last knot if t is older, and recomputes the current state.
   /// `last_stamp` is the previous input of the same kind: older stamps are out of order.
   StampOutcome placeInput(double t, double last_stamp) {
     if (!anchored || t > time) return advanceTo(t);
-    if (classifyStamp(time, t, config.time_policy) == StampClass::BackwardJump) {
-      return advanceTo(t);
-    }
     if (t <= last_stamp) return StampOutcome::DroppedStale;
     return StampOutcome::Advanced;
   }
@@ -430,6 +424,11 @@ void DynamicPropagator::reset() {
   impl_->clearInputs();
   impl_->pin(0.0, impl_->initial);
   impl_->anchored = false;
+}
+
+void DynamicPropagator::restartInputOrder() {
+  impl_->torque_sample_stamp = -std::numeric_limits<double>::infinity();
+  impl_->rate_sample_stamp = -std::numeric_limits<double>::infinity();
 }
 
 bool DynamicPropagator::anchored() const { return impl_->anchored; }

@@ -18,6 +18,13 @@ constexpr Stamp kNsPerSecond = 1000000000;
 // 1e6 s of it. A gap that lands further away moves the origin to it (see rebaseIfFar).
 constexpr double kFarFromOrigin = 1e6;
 
+void checkMaxFuture(double max_future) {
+  if (!(max_future >= 0.0 && max_future <= kMaxFuture)) {
+    throw std::invalid_argument("max_future: accepted: 0 to " + std::to_string(kMaxFuture) +
+                                " s, got " + std::to_string(max_future));
+  }
+}
+
 const TimePolicy& policyOf(const EngineConfig& c) {
   return c.dynamic ? c.dynamic->time_policy : c.kinematic.time_policy;
 }
@@ -49,6 +56,7 @@ AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink)
   if (!(config_.publish_rate > 0.0) || !std::isfinite(config_.publish_rate)) {
     throw std::invalid_argument("publish_rate: must be positive and finite");
   }
+  checkMaxFuture(config_.max_future);
   if (!config_.gyro_bias_B.allFinite() || config_.gyro_bias_B.norm() > kMaxBodyRate) {
     throw std::invalid_argument(
         "gyro_bias: must be finite, each magnitude at most the largest "
@@ -146,6 +154,10 @@ void AttitudeEngine::drain() {
   if (dynamic_) publishDue(false);
 }
 
+bool AttitudeEngine::tooFarAhead(Stamp stamp) const {
+  return clock_ && static_cast<double>(stamp - *clock_) * 1e-9 > config_.max_future;
+}
+
 void AttitudeEngine::advanceClock(Stamp now, bool went_back) {
   // A step back within the threshold is jitter of the time source: the clock stays put.
   clock_ = went_back || !clock_ ? now : std::max(*clock_, now);
@@ -182,6 +194,14 @@ void AttitudeEngine::submit(const Input& raw) {
     handleOutcome(StampOutcome::RejectedNonFinite, raw.source, raw.stamp);
     return;
   }
+  if (tooFarAhead(raw.stamp)) {
+    // Published, it would hold every tf listener's transform ahead of its clock, and the
+    // inputs that follow would look stale behind it.
+    ++counters_.rejected_future;
+    sink_.note({EngineNote::Future, raw.source, raw.stamp});
+    return;
+  }
+  if (!inOrder(raw.source, raw.stamp)) return;
   Input input = raw;
   if (input.source != Source::Torque) input.value -= biasAt(input.stamp);
   if (kinematic_) {
@@ -189,6 +209,47 @@ void AttitudeEngine::submit(const Input& raw) {
   } else {
     submitDynamic(input);
   }
+}
+
+bool AttitudeEngine::inOrder(Source source, Stamp stamp) {
+  SourceTimeline& line = timeline(source);
+  switch (line.judge(stamp, policyOf(config_))) {
+    case SourceTimeline::Verdict::InOrder:
+      break;
+    case SourceTimeline::Verdict::Straggler:
+      ++counters_.dropped_stale;
+      sink_.note({EngineNote::Stale, source, stamp});
+      return false;
+    case SourceTimeline::Verdict::JumpedBack:
+      restartTimeline(source, stamp);
+      break;
+  }
+  if (clock_) timeline(source).observeLag(*clock_, stamp);
+  return true;
+}
+
+void AttitudeEngine::restartTimeline(Source source, Stamp stamp) {
+  ++counters_.jumps_back;
+  sink_.note({EngineNote::StampsJumpedBack, source, stamp});
+  if (kinematic_) {
+    // The rates stamp the kinematic model's states: its time starts again with them (a looped
+    // bag), from the initial state, and the outputs' stamps start again too.
+    ++counters_.resets;
+    resetState(true);
+    timeline(source).judge(stamp, policyOf(config_));  // forgotten with the rest: the first
+    return;
+  }
+  // The dynamic model's time is the clock's, which did not go back: the source's inputs go on
+  // as late inputs. Its queued inputs from the old timeline would come after them: dropped.
+  const auto old = std::remove_if(pending_.begin(), pending_.end(),
+                                  [source](const Input& i) { return i.source == source; });
+  counters_.dropped_stale += static_cast<std::uint64_t>(pending_.end() - old);
+  pending_.erase(old, pending_.end());
+  dynamic_->restartInputOrder();
+}
+
+std::optional<double> AttitudeEngine::inputLag(Source source) const {
+  return timelines_[static_cast<std::size_t>(source)].lag();
 }
 
 bool AttitudeEngine::submitBias(Stamp stamp, const Eigen::Vector3d& gyro_bias_B) {
@@ -232,17 +293,6 @@ bool AttitudeEngine::handleOutcome(StampOutcome outcome, std::optional<Source> s
       sink_.note({EngineNote::Gap, source, stamp});
       rebaseIfFar(stamp);
       return true;
-    case StampOutcome::ResetBackwardJump:
-      if (input) ++counters_.accepted;
-      ++counters_.resets;
-      sink_.note({EngineNote::StampsJumpedBack, source, stamp});
-      // A new timeline: inputs queued under the old one and its held torque are gone.
-      pending_.clear();
-      held_torque_.reset();
-      P_B_ = initialCovariance();
-      last_published_.reset();
-      rebaseIfFar(stamp);  // back from a far-future stamp: the origin follows
-      return true;
     case StampOutcome::DroppedStale:
       if (input) ++counters_.dropped_stale;
       if (input) sink_.note({EngineNote::Stale, source, stamp});
@@ -277,7 +327,7 @@ void AttitudeEngine::submitKinematic(const Input& input) {
     const Eigen::Matrix3d& R_B =
         input.rate_covariance_B.isZero(0.0) ? default_R_B_ : input.rate_covariance_B;
     P_B_ = propagateOrientationCovariance(P_B_, h, w_step, R_B);
-  } else if (outcome == StampOutcome::Anchored || outcome == StampOutcome::ResetBackwardJump) {
+  } else if (outcome == StampOutcome::Anchored) {
     P_B_ = initialCovariance();  // the initial state again, as uncertain as configured
   }
   // With the stamp filter on, the state holds at the filtered stamp, not the receipt stamp.
@@ -440,12 +490,14 @@ void AttitudeEngine::resetState(bool forget_time) {
   if (forget_time) {
     origin_.reset();
     last_published_.reset();
+    for (SourceTimeline& line : timelines_) line.forget();
   }
 }
 
 std::string AttitudeEngine::reconfigure(const EngineConfig& next) {
   if (next.model != config_.model) return "model: cannot change while running";
   try {
+    checkMaxFuture(next.max_future);
     if (kinematic_) {
       KinematicPropagator k(next.kinematic);
       if (kinematic_->anchored()) {
@@ -459,7 +511,9 @@ std::string AttitudeEngine::reconfigure(const EngineConfig& next) {
         d.setState(t, dynamic_->state());
         const double timeout = next.dynamic->torque_timeout;
         if (held_torque_ && !(timeout > 0.0 && t - coreTime(held_torque_->stamp) >= timeout)) {
-          d.setTorque(t, held_torque_->value, held_torque_->frame);
+          // At its own stamp, behind the new anchor: it acts from the anchor, and a torque in
+          // transit stamped after it is still newer, not stale.
+          d.setTorque(coreTime(held_torque_->stamp), held_torque_->value, held_torque_->frame);
         }
       }
       dynamic_ = std::move(d);
@@ -477,12 +531,18 @@ std::string AttitudeEngine::reconfigure(const EngineConfig& next) {
 
 void AttitudeEngine::reset() {
   ++counters_.resets;
+  counters_.dropped_on_reset += pending_.size();
   resetState(false);
 }
 
 std::string AttitudeEngine::setState(Stamp stamp, const Eigen::Quaterniond& q_WB,
                                      const Eigen::Vector3d& w_B) {
   if (stamp <= 0) return "no time to pin the state at: give header.stamp";
+  if (tooFarAhead(stamp)) {
+    return "stamp " + std::to_string(static_cast<double>(stamp - *clock_) * 1e-9) +
+           " s ahead of the clock; accepted: at most max_future = " +
+           std::to_string(config_.max_future) + " s";
+  }
   try {
     const double t = coreTime(stamp);
     if (kinematic_) {

@@ -118,8 +118,7 @@ StampOutcome KinematicPropagator::addSample(double t, const Eigen::Vector3d& w_B
 // the world side commutes with every body-side step that follows.
 void KinematicPropagator::restamp(const SensorClockFilter::Result& clock,
                                   const Eigen::Vector3d& w_B, StampOutcome outcome) {
-  const bool anchored = outcome == StampOutcome::Anchored || outcome == StampOutcome::HeldGap ||
-                        outcome == StampOutcome::ResetBackwardJump;
+  const bool anchored = outcome == StampOutcome::Anchored || outcome == StampOutcome::HeldGap;
   if (!anchored && outcome != StampOutcome::Advanced) {  // not integrated
     if (clock.verdict == SensorClockFilter::Verdict::Restarted) restamp_.reset();
     return;
@@ -141,10 +140,6 @@ StampOutcome KinematicPropagator::addStamped(double t, const Eigen::Vector3d& w_
   switch (classifyStamp(time(), t, policy_)) {
     case StampClass::Stale:
       return StampOutcome::DroppedStale;
-    case StampClass::BackwardJump:
-      q_WB_ = initial_q_WB_;
-      anchor(t, w);
-      return StampOutcome::ResetBackwardJump;
     case StampClass::Gap:
       anchor(t, w);  // the orientation is held across the gap
       return StampOutcome::HeldGap;

@@ -3,9 +3,7 @@
 namespace attitude_propagator {
 
 StampClass classifyStamp(double last, double t, const TimePolicy& policy) {
-  if (t <= last) {
-    return last - t > policy.backward_jump ? StampClass::BackwardJump : StampClass::Stale;
-  }
+  if (t <= last) return StampClass::Stale;
   return t - last > policy.max_dt ? StampClass::Gap : StampClass::Forward;
 }
 
@@ -14,7 +12,6 @@ bool stateHoldsAtStamp(StampOutcome outcome) {
     case StampOutcome::Anchored:
     case StampOutcome::Advanced:
     case StampOutcome::HeldGap:
-    case StampOutcome::ResetBackwardJump:
     case StampOutcome::FailedStep:
       return true;
     case StampOutcome::DroppedStale:
@@ -35,8 +32,6 @@ const char* outcomeName(StampOutcome outcome) {
       return "dropped_stale";
     case StampOutcome::HeldGap:
       return "held_gap";
-    case StampOutcome::ResetBackwardJump:
-      return "reset_backward_jump";
     case StampOutcome::RejectedNonFinite:
       return "rejected_non_finite";
     case StampOutcome::RejectedOutOfRange:

@@ -141,10 +141,12 @@ TEST(DynPropagator, TimePolicy) {
   EXPECT_EQ(p.time(), 11.2);
   EXPECT_TRUE(p.state().q_WB.coeffs().allFinite() && p.state().w_B.allFinite());
 
-  // Time going back by more than the threshold resets to the initial state at the new stamp.
-  EXPECT_EQ(p.advanceTo(5.0), ap::StampOutcome::ResetBackwardJump);
-  EXPECT_EQ(p.time(), 5.0);
-  expectSameState(p.state(), config.initial, 0.0);
+  // Time never goes back inside the propagator, by any amount: going back (a looped bag) is
+  // the engine's decision, through reset().
+  const ap::DynamicState before = p.state();
+  EXPECT_EQ(p.advanceTo(5.0), ap::StampOutcome::DroppedStale);
+  EXPECT_EQ(p.time(), 11.2);
+  expectSameState(p.state(), before, 0.0);
 
   p.reset();
   EXPECT_FALSE(p.anchored());
@@ -363,8 +365,12 @@ TEST(DynPropagatorExact, TimePolicyAndClosedForms) {
     walkTo(p, 26.2, 0.29);
     expectState(p.state(), c.truth(at_23_7, 1.2));
 
-    // Back by more than the threshold: the initial state at the new stamp, and on from there.
-    EXPECT_EQ(p.advanceTo(3.0), ap::StampOutcome::ResetBackwardJump);
+    // Back in time: dropped however far; after reset() the earlier stamp anchors the initial
+    // state, and the motion goes on from there.
+    EXPECT_EQ(p.advanceTo(3.0), ap::StampOutcome::DroppedStale);
+    EXPECT_EQ(p.time(), 26.2);
+    p.reset();
+    EXPECT_EQ(p.advanceTo(3.0), ap::StampOutcome::Anchored);
     EXPECT_EQ(p.time(), 3.0);
     expectSameState(p.state(), c.initial, 0.0);
     walkTo(p, 5.5, 0.45);

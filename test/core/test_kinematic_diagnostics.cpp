@@ -60,7 +60,10 @@ TEST_P(EveryKinematicMethod, StepsCountTheIntervalsIntegratedSinceTheAnchor) {
   EXPECT_EQ(p.steps(), 0u);
   for (int k = 1; k <= 3; ++k) EXPECT_EQ(p.addSample(2.0 + 0.1 * k, kSpin), StampOutcome::Advanced);
   EXPECT_EQ(p.steps(), 3u);
-  EXPECT_EQ(p.addSample(0.5, kSpin), StampOutcome::ResetBackwardJump);
+  EXPECT_EQ(p.addSample(0.5, kSpin), StampOutcome::DroppedStale);
+  EXPECT_EQ(p.steps(), 3u);
+  p.reset();
+  EXPECT_EQ(p.addSample(0.5, kSpin), StampOutcome::Anchored);
   EXPECT_EQ(p.steps(), 0u);
   for (int k = 1; k <= 4; ++k) p.addSample(0.5 + 0.1 * k, kSpin);
   EXPECT_EQ(p.steps(), 4u);

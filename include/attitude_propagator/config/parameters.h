@@ -37,6 +37,7 @@ struct Parameters {
   double publish_rate = 100.0;
   double max_step = 0.0;  // 0: 1 / publish_rate
   double max_dt = 1.0;
+  double max_future = 1.0;
   double tolerance = 1e-9;
   double angular_velocity_stddev = 0.01;
   double initial_orientation_stddev = 3.141592653589793;  // pi: unknown until pinned
@@ -86,6 +87,9 @@ void forEachParameter(P& p, F&& f) {
     "dynamic model: largest integration step, in [1e-5, 60] and at least max_dt / 1e5; "
     "0: 1/publish_rate");
   f("max_dt", p.max_dt, "s", "largest gap between stamps integrated across; at most 60");
+  f("max_future", p.max_future, "s",
+    "an input or `~set_state` stamped further ahead of ROS time is refused (counted); at most "
+    "3600");
   f("tolerance", p.tolerance, "", "relative and absolute tolerance of `dopri5`, in [1e-12, 1e-2]");
   f("angular_velocity_stddev", p.angular_velocity_stddev, "rad/s",
     "rate noise used when an input carries no covariance (drives the growth of the orientation "

@@ -1,0 +1,56 @@
+// What the engine knows of one input source's timeline (docs/design.md §6.5): the newest stamp it
+// accepted, a run of stamps from an earlier time that may become a backward jump, and how far
+// behind the clock its inputs arrive. An input is judged against the inputs of its own source,
+// never against the clock: lateness is not a jump.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+
+#include "attitude_propagator/time_policy.h"
+
+namespace attitude_propagator {
+
+/// A point in time: nanoseconds since the epoch, as ROS time. 64 bits hold every ros::Time
+/// and every difference of two, so stamp arithmetic cannot overflow.
+using Stamp = std::int64_t;
+
+/// Inputs in a row, each further back than backward_jump from the newest and each going on from
+/// the one before (later, by at most max_dt), that make a backward jump. One straggler is noise;
+/// two can be a driver resending its last pair after a reconnect; three in order are a timeline
+/// (a looped bag, a restarted driver). At 100 Hz the two dropped before it cost 20 ms.
+constexpr int kJumpConfirmation = 3;
+
+/// Weight of a new input in the mean lag (an exponential mean over about this many inputs'
+/// reciprocal: 1/32 settles in about a hundred inputs and smooths transport jitter).
+constexpr double kLagWeight = 1.0 / 32.0;
+
+class SourceTimeline {
+ public:
+  enum class Verdict {
+    InOrder,    ///< newer than the newest accepted: use it
+    Straggler,  ///< at or before the newest (or a jump not yet confirmed): drop and count
+    JumpedBack  ///< the kJumpConfirmation-th in a row from an earlier time: a new timeline
+  };
+
+  /// Judges `stamp` and remembers it when it is used (InOrder or JumpedBack).
+  Verdict judge(Stamp stamp, const TimePolicy& policy);
+
+  /// Records how far behind `clock` an input stamped `stamp` arrived (negative: ahead).
+  void observeLag(Stamp clock, Stamp stamp);
+  /// Mean clock - stamp of the inputs seen with a clock, in seconds; empty before the first.
+  std::optional<double> lag() const { return lag_; }
+
+  /// The newest stamp used, empty before the first.
+  std::optional<Stamp> newest() const { return newest_; }
+  /// Forgets everything: time itself went back (the clock), so every stamp starts afresh.
+  void forget() { *this = SourceTimeline(); }
+
+ private:
+  std::optional<Stamp> newest_;
+  std::optional<Stamp> run_last_;  // the last stamp of the run from an earlier time
+  int run_ = 0;
+  std::optional<double> lag_;
+};
+
+}  // namespace attitude_propagator

@@ -1,0 +1,495 @@
+// The time policy of docs/design.md §6: each input judged against its own source, never against
+// the clock. Truths are the documented rules (a straggler is dropped, three stamps in a row from
+// an earlier time are a jump, a stamp more than max_future ahead of the clock is refused, every
+// published stamp once and in order) and closed forms (a constant rate about one axis turns the
+// body by |w| t whatever the stamps' offset from the clock).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "attitude_propagator/engine.h"
+#include "attitude_propagator/source_timeline.h"
+#include "engine_fixtures.h"
+#include "rotation_matchers.h"
+
+namespace ap = attitude_propagator;
+using namespace engine_fixtures;  // NOLINT: the fixtures are the tests' vocabulary
+using Verdict = ap::SourceTimeline::Verdict;
+
+namespace {
+
+ap::Stamp ns(double seconds) { return static_cast<ap::Stamp>(std::llround(seconds * 1e9)); }
+
+ap::TimePolicy policy() {
+  ap::TimePolicy p;
+  p.max_dt = 0.5;
+  p.backward_jump = 1.0;
+  return p;
+}
+
+/// A kinematic engine or a torque-free sphere turning at 0.2 rad/s about z that takes rates.
+ap::EngineConfig rateConfig(bool dynamic) {
+  if (!dynamic) return kinematicConfig();
+  ap::EngineConfig c = spinningSphereConfig();
+  c.dynamic->integrator = ap::Integrator::Rk4;
+  return c;
+}
+
+const Eigen::Vector3d kSpin(0.0, 0.0, 0.2);
+
+/// The watcher's rules for a published stream: within an epoch every stamp once and in order,
+/// unit quaternion, finite. An epoch starts where time itself went back: the clock, or (the
+/// kinematic model, whose stamps are the rates') a source's recognised jump.
+struct Watcher : Recorder {
+  bool kinematic = true;
+  std::optional<ap::Stamp> last;
+  std::size_t repeated_or_older = 0;
+  std::size_t not_unit = 0;
+
+  void publishState(const ap::EngineState& s) override {
+    Recorder::publishState(s);
+    if (last && s.stamp <= *last) ++repeated_or_older;
+    if (!s.q_WB.coeffs().allFinite() || std::abs(s.q_WB.norm() - 1.0) > 1e-12 ||
+        !s.w_B.allFinite()) {
+      ++not_unit;
+    }
+    last = s.stamp;
+  }
+  void note(const ap::EngineNote& n) override {
+    Recorder::note(n);
+    const bool new_epoch = n.kind == ap::EngineNote::ClockJumpedBack ||
+                           (kinematic && n.kind == ap::EngineNote::StampsJumpedBack);
+    if (new_epoch) last.reset();
+  }
+};
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// SourceTimeline: one source's order
+// ---------------------------------------------------------------------------------------------
+
+TEST(SourceTimeline, NewerStampsAreInOrderAndOlderOnesStragglersByAnyAmount) {
+  ap::SourceTimeline line;
+  EXPECT_EQ(line.judge(ns(10.0), policy()), Verdict::InOrder);
+  EXPECT_EQ(line.judge(ns(10.01), policy()), Verdict::InOrder);
+  EXPECT_EQ(line.judge(ns(10.01), policy()), Verdict::Straggler);  // repeated
+  EXPECT_EQ(line.judge(ns(9.0), policy()), Verdict::Straggler);    // exactly the threshold back
+  EXPECT_EQ(line.judge(ns(2.0), policy()), Verdict::Straggler);    // seconds back, once
+  EXPECT_EQ(line.judge(ns(10.02), policy()), Verdict::InOrder);
+  EXPECT_EQ(*line.newest(), ns(10.02));
+}
+
+TEST(SourceTimeline, ThreeInARowFromAnEarlierTimeAreAJump) {
+  ap::SourceTimeline line;
+  line.judge(ns(10.0), policy());
+  ASSERT_EQ(ap::kJumpConfirmation, 3);
+  EXPECT_EQ(line.judge(ns(2.0), policy()), Verdict::Straggler);
+  EXPECT_EQ(line.judge(ns(2.1), policy()), Verdict::Straggler);
+  EXPECT_EQ(line.judge(ns(2.2), policy()), Verdict::JumpedBack);
+  EXPECT_EQ(*line.newest(), ns(2.2));
+  EXPECT_EQ(line.judge(ns(2.3), policy()), Verdict::InOrder);
+}
+
+TEST(SourceTimeline, JustBeyondTheThresholdARunGoesOnAndAtItNot) {
+  // Newest 10 s, threshold 1 s: 8.6 and 8.8 start a run; a third just beyond the threshold
+  // completes it, a third exactly at it is a plain straggler that breaks it.
+  ap::SourceTimeline beyond;
+  beyond.judge(ns(10.0), policy());
+  EXPECT_EQ(beyond.judge(ns(8.6), policy()), Verdict::Straggler);
+  EXPECT_EQ(beyond.judge(ns(8.8), policy()), Verdict::Straggler);
+  EXPECT_EQ(beyond.judge(ns(9.0) - 1, policy()), Verdict::JumpedBack);
+
+  ap::SourceTimeline at_threshold;
+  at_threshold.judge(ns(10.0), policy());
+  at_threshold.judge(ns(8.6), policy());
+  at_threshold.judge(ns(8.8), policy());
+  EXPECT_EQ(at_threshold.judge(ns(9.0), policy()), Verdict::Straggler);
+  EXPECT_EQ(at_threshold.judge(ns(8.85), policy()), Verdict::Straggler);  // a run of one again
+  EXPECT_EQ(*at_threshold.newest(), ns(10.0));
+}
+
+TEST(SourceTimeline, ARunMustGoOnWithinMaxDt) {
+  ap::SourceTimeline line;
+  line.judge(ns(100.0), policy());
+  EXPECT_EQ(line.judge(ns(1.0), policy()), Verdict::Straggler);
+  EXPECT_EQ(line.judge(ns(1.5), policy()), Verdict::Straggler);  // exactly max_dt on: goes on
+  EXPECT_EQ(line.judge(ns(2.0) + 1, policy()), Verdict::Straggler);  // beyond max_dt: run of one
+  EXPECT_EQ(line.judge(ns(2.1), policy()), Verdict::Straggler);
+  EXPECT_EQ(line.judge(ns(2.1), policy()), Verdict::Straggler);  // repeated: not on, run of one
+  EXPECT_EQ(line.judge(ns(2.2), policy()), Verdict::Straggler);
+  EXPECT_EQ(line.judge(ns(2.3), policy()), Verdict::JumpedBack);
+
+  ap::SourceTimeline exact;
+  exact.judge(ns(100.0), policy());
+  exact.judge(ns(1.0), policy());
+  exact.judge(ns(1.5), policy());
+  EXPECT_EQ(exact.judge(ns(2.0), policy()), Verdict::JumpedBack);  // each step exactly max_dt
+}
+
+TEST(SourceTimeline, AnInOrderStampBreaksARun) {
+  ap::SourceTimeline line;
+  line.judge(ns(10.0), policy());
+  line.judge(ns(2.0), policy());
+  line.judge(ns(2.1), policy());
+  EXPECT_EQ(line.judge(ns(10.1), policy()), Verdict::InOrder);
+  EXPECT_EQ(line.judge(ns(2.2), policy()), Verdict::Straggler);
+  EXPECT_EQ(line.judge(ns(2.3), policy()), Verdict::Straggler);
+  EXPECT_EQ(line.judge(ns(2.4), policy()), Verdict::JumpedBack);
+}
+
+TEST(SourceTimeline, LagIsTheMeanOfClockMinusStamp) {
+  ap::SourceTimeline line;
+  EXPECT_FALSE(line.lag());
+  line.observeLag(ns(101.5), ns(100.0));
+  EXPECT_DOUBLE_EQ(*line.lag(), 1.5);  // the first observation is the mean
+  // A constant skew stays the mean whatever the number of inputs; noise averages out.
+  for (int k = 0; k < 1000; ++k) line.observeLag(ns(101.5 + k), ns(100.0 + k));
+  EXPECT_NEAR(*line.lag(), 1.5, 1e-9);
+  for (int k = 0; k < 1000; ++k) line.observeLag(ns(100.0 + k), ns(102.0 + k));
+  EXPECT_NEAR(*line.lag(), -2.0, 1e-9);  // ahead of the clock: negative
+}
+
+// ---------------------------------------------------------------------------------------------
+// Stragglers, skew, starved processes: the state never pays
+// ---------------------------------------------------------------------------------------------
+
+namespace {
+
+/// Feeds 200 Hz rates about z for `seconds` with the sensor's clock `skew` seconds ahead of the
+/// node's (negative: behind); each input arrives when the node's clock reads its stamp - skew.
+void feedSkewed(ap::AttitudeEngine& engine, double skew, double seconds) {
+  const int n = static_cast<int>(std::llround(seconds * 200));
+  for (int k = 0; k <= n; ++k) {
+    const double node_time = 0.005 * k;
+    engine.poll(at(node_time));
+    engine.submit(rate(at(node_time + skew), kSpin));
+  }
+}
+
+}  // namespace
+
+class SkewedSensorClock : public ::testing::TestWithParam<std::tuple<bool, double>> {};
+
+TEST_P(SkewedSensorClock, NeverResetsNorRepeatsAStamp) {
+  const auto [dynamic, skew] = GetParam();
+  Watcher sink;
+  sink.kinematic = !dynamic;
+  ap::AttitudeEngine engine(rateConfig(dynamic), sink);
+  feedSkewed(engine, skew, 5.0);
+  const ap::EngineCounters& c = engine.counters();
+  EXPECT_EQ(c.resets, 0u);
+  EXPECT_EQ(sink.repeated_or_older, 0u);
+  EXPECT_EQ(sink.not_unit, 0u);
+  EXPECT_EQ(c.dropped_stale, 0u);
+  if (skew > 1.0) {  // beyond max_future (1 s): every input refused, nothing published ahead
+    EXPECT_EQ(c.rejected_future, 1001u);
+    EXPECT_EQ(c.accepted, 0u);
+    for (const auto& s : sink.states) EXPECT_LE(s.stamp, at(5.0 + 1.0));
+    return;
+  }
+  for (int i = 0; i < 3; ++i) engine.poll(at(5.0 + std::max(skew, 0.0)));  // the queue's turn
+  EXPECT_EQ(c.accepted, 1001u);
+  EXPECT_NEAR(*engine.inputLag(ap::Source::Imu), -skew, 1e-9);
+  // A constant rate (the sphere's own): the body turns by |w| t, t from the first stamp
+  // (kinematic: 5 s of inputs) or from the clock's first grid stamp (dynamic).
+  const ap::EngineState& s = sink.states.back();
+  const double t = dynamic ? static_cast<double>(s.stamp - at(0.0)) * 1e-9 : 5.0;
+  EXPECT_ROTATION_NEAR(s.q_WB, aboutAxis(kSpin, 0.2 * t), 1e-9);
+  if (dynamic) EXPECT_EQ(c.late, skew < 0.0 ? 1001u : 0u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Skews, SkewedSensorClock,
+                         ::testing::Combine(::testing::Bool(),
+                                            ::testing::Values(-100.0, -1.5, -0.5, 0.5, 1.5,
+                                                              100.0)));
+
+class StarvedProcess : public ::testing::TestWithParam<bool> {};
+
+TEST_P(StarvedProcess, InputsQueuedDuringAFiveSecondStopAreAllUsed) {
+  // SIGSTOP for 5 s under a 1 kHz stream: no callback runs; then the clock reads 5 s later
+  // and the 5000 queued inputs arrive, in order, all behind it.
+  const bool dynamic = GetParam();
+  Watcher sink;
+  sink.kinematic = !dynamic;
+  ap::AttitudeEngine engine(rateConfig(dynamic), sink);
+  int k = 0;
+  for (; k <= 1000; ++k) {
+    engine.poll(at(0.001 * k));
+    engine.submit(rate(at(0.001 * k), kSpin));
+  }
+  const int resume = 6000;
+  for (; k <= resume; ++k) {  // stopped from 1 s to 6 s: the clock is read only after
+    engine.poll(at(0.001 * resume));
+    engine.submit(rate(at(0.001 * k), kSpin));
+  }
+  for (; k <= 8000; ++k) {
+    engine.poll(at(0.001 * k));
+    engine.submit(rate(at(0.001 * k), kSpin));
+  }
+  for (int i = 0; i < 10; ++i) engine.poll(at(8.0));  // the grid catches up within its budget
+  const ap::EngineCounters& c = engine.counters();
+  EXPECT_EQ(c.resets, 0u);
+  EXPECT_EQ(c.dropped_stale, 0u);
+  EXPECT_EQ(c.accepted, 8001u);
+  EXPECT_EQ(sink.repeated_or_older, 0u);
+  EXPECT_EQ(sink.not_unit, 0u);
+  EXPECT_EQ(sink.states.back().stamp, at(8.0));
+  EXPECT_ROTATION_NEAR(sink.states.back().q_WB, aboutAxis(kSpin, 0.2 * 8.0), 1e-9);
+}
+
+INSTANTIATE_TEST_SUITE_P(Models, StarvedProcess, ::testing::Bool());
+
+TEST(TimePolicyKinematic, OneStragglerSecondsOldIsDroppedAndTheStateDoesNotPay) {
+  Watcher sink;
+  ap::AttitudeEngine engine(kinematicConfig(), sink);
+  for (int k = 0; k <= 200; ++k) {
+    engine.submit(rate(at(0.01 * k), kSpin));
+    if (k == 100) engine.submit(rate(at(0.01 * k - 10.0), kSpin));  // 10 s old, once
+  }
+  EXPECT_EQ(engine.counters().dropped_stale, 1u);
+  EXPECT_EQ(engine.counters().resets, 0u);
+  EXPECT_EQ(sink.repeated_or_older, 0u);
+  EXPECT_ROTATION_NEAR(sink.states.back().q_WB, aboutAxis(kSpin, 0.2 * 2.0), 1e-12);
+}
+
+TEST(TimePolicyDynamic, OneLateTorqueSecondsBehindTheClockActsNowAndNeverResets) {
+  // A torque stamped 3 s before the clock (in order within its source): it acts from the last
+  // knot, where the model can still change; the state is not reset and no stamp repeats.
+  Watcher sink;
+  sink.kinematic = false;
+  ap::AttitudeEngine engine(torqueConfig(), sink);
+  runClock(engine, 0.0, 5.0, 0.01);
+  engine.submit(torque(at(2.0), Eigen::Vector3d(0.0, 0.0, 0.4)));
+  runClock(engine, 5.0, 6.0, 0.01);
+  const ap::EngineCounters& c = engine.counters();
+  EXPECT_EQ(c.resets, 0u);
+  EXPECT_EQ(c.late, 1u);
+  EXPECT_EQ(sink.repeated_or_older, 0u);
+  // From rest, I = 2: w = tau / I (t - t0), angle (tau / I) (t - t0)^2 / 2 from the knot 5.0.
+  const ap::EngineState& s = sink.states.back();
+  EXPECT_EQ(s.stamp, at(6.0));
+  EXPECT_NEAR(s.w_B.z(), 0.2 * 1.0, 1e-12);
+  EXPECT_ROTATION_NEAR(s.q_WB, aboutAxis(Eigen::Vector3d::UnitZ(), 0.1), 1e-9);
+}
+
+TEST(TimePolicyDynamic, APersistentJumpOfASourceGoesOnLateWithoutAReset) {
+  Watcher sink;
+  sink.kinematic = false;
+  ap::AttitudeEngine engine(rateConfig(true), sink);
+  for (int k = 0; k <= 200; ++k) {
+    engine.poll(at(0.01 * k));
+    engine.submit(rate(at(0.01 * k), kSpin));
+  }
+  // The driver restarts with its clock 10 s behind and stays there.
+  for (int k = 201; k <= 400; ++k) {
+    engine.poll(at(0.01 * k));
+    engine.submit(rate(at(0.01 * k - 10.0), kSpin));
+  }
+  const ap::EngineCounters& c = engine.counters();
+  EXPECT_EQ(c.jumps_back, 1u);
+  EXPECT_EQ(c.resets, 0u);
+  EXPECT_EQ(c.dropped_stale, static_cast<std::uint64_t>(ap::kJumpConfirmation - 1));
+  EXPECT_EQ(sink.repeated_or_older, 0u);
+  EXPECT_ROTATION_NEAR(sink.states.back().q_WB, aboutAxis(kSpin, 0.2 * 4.0), 1e-9);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The future
+// ---------------------------------------------------------------------------------------------
+
+class FutureStamps : public ::testing::TestWithParam<bool> {};
+
+TEST_P(FutureStamps, MoreThanMaxFutureAheadOfTheClockIsRefusedAtItAccepted) {
+  const bool dynamic = GetParam();
+  Watcher sink;
+  sink.kinematic = !dynamic;
+  ap::EngineConfig config = rateConfig(dynamic);
+  config.max_future = 0.25;
+  ap::AttitudeEngine engine(config, sink);
+  engine.poll(at(1.0));
+  engine.submit(rate(at(1.0), kSpin));
+  engine.submit(rate(at(1.25) + 1, kSpin));  // 1 ns beyond
+  EXPECT_EQ(engine.counters().rejected_future, 1u);
+  engine.submit(rate(at(1.25), kSpin));  // exactly max_future ahead
+  EXPECT_EQ(engine.counters().rejected_future, 1u);
+  EXPECT_EQ(engine.counters().accepted + engine.pending(), 2u);  // dynamic: it waits
+  engine.submit(rate(at(3601.0), kSpin));  // an hour ahead
+  EXPECT_EQ(engine.counters().rejected_future, 2u);
+  for (const auto& s : sink.states) EXPECT_LE(s.stamp, at(1.25));
+  // The next normal inputs go on as if the far one had never come.
+  for (int k = 1; k <= 100; ++k) {
+    engine.poll(at(1.25 + 0.01 * k));
+    engine.submit(rate(at(1.25 + 0.01 * k), kSpin));
+  }
+  EXPECT_EQ(engine.counters().dropped_stale, 0u);
+  EXPECT_EQ(engine.counters().resets, 0u);
+  EXPECT_EQ(sink.repeated_or_older, 0u);
+  if (!dynamic) EXPECT_ROTATION_NEAR(sink.states.back().q_WB, aboutAxis(kSpin, 0.2 * 1.25), 1e-12);
+}
+
+TEST_P(FutureStamps, SetStateBeyondMaxFutureIsRefusedWithTheReason) {
+  const bool dynamic = GetParam();
+  Recorder sink;
+  ap::AttitudeEngine engine(rateConfig(dynamic), sink);
+  const Eigen::Quaterniond q = aboutAxis(Eigen::Vector3d::UnitX(), 0.3);
+  // No clock yet: nothing to compare with.
+  EXPECT_EQ(engine.setState(at(100.0), q, kSpin), "");
+  engine.poll(at(100.0));
+  const std::string error = engine.setState(at(130.0), q, kSpin);
+  EXPECT_NE(error.find("max_future"), std::string::npos) << error;
+  EXPECT_EQ(engine.setState(at(101.0), q, kSpin), "");  // exactly max_future (1 s) ahead
+  EXPECT_NE(engine.setState(at(101.0) + 1, q, kSpin), "");
+}
+
+TEST_P(FutureStamps, WithoutAClockNothingIsRefused) {
+  Recorder sink;
+  ap::AttitudeEngine engine(rateConfig(GetParam()), sink);
+  engine.submit(rate(at(1e6), kSpin));
+  EXPECT_EQ(engine.counters().rejected_future, 0u);
+  EXPECT_EQ(engine.counters().accepted, 1u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Models, FutureStamps, ::testing::Bool());
+
+TEST(TimePolicy, MaxFutureOutsideItsRangeIsRefused) {
+  Recorder sink;
+  for (double bad : {-1e-9, ap::kMaxFuture * (1 + 1e-12), double(NAN), double(INFINITY)}) {
+    ap::EngineConfig config = kinematicConfig();
+    config.max_future = bad;
+    EXPECT_THROW(ap::AttitudeEngine(config, sink), std::invalid_argument) << bad;
+  }
+  for (double good : {0.0, ap::kMaxFuture}) {
+    ap::EngineConfig config = kinematicConfig();
+    config.max_future = good;
+    EXPECT_NO_THROW(ap::AttitudeEngine(config, sink)) << good;
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reconfigure, set_state and reset keep the input history
+// ---------------------------------------------------------------------------------------------
+
+TEST(TimePolicyDynamic, ATorqueInTransitDuringAReconfigureIsStillNewer) {
+  Recorder sink;
+  ap::AttitudeEngine engine(torqueConfig(), sink);
+  runClock(engine, 0.0, 1.0, 0.01);
+  engine.submit(torque(at(1.0), Eigen::Vector3d(0.0, 0.0, 0.2)));
+  runClock(engine, 1.0, 1.5, 0.01);
+  ap::EngineConfig next = torqueConfig();
+  next.dynamic->integrator = ap::Integrator::Dopri5;
+  ASSERT_EQ(engine.reconfigure(next), "");
+  engine.submit(torque(at(1.2), Eigen::Vector3d(0.0, 0.0, 0.4)));  // stamped before, arrives now
+  EXPECT_EQ(engine.counters().dropped_stale, 0u);
+  EXPECT_EQ(engine.counters().late, 1u);
+  // From 1.5 on the new torque acts: w = 0.1 (1.0..1.5) + 0.2 (1.5..2.0) over I = 2.
+  runClock(engine, 1.5, 2.0, 0.01);
+  EXPECT_NEAR(sink.states.back().w_B.z(), 0.1 * 0.5 + 0.2 * 0.5, 1e-9);
+}
+
+TEST(TimePolicyKinematic, AfterSetStateAndAReconfigureOlderRatesAreNeverAppliedAfterNewerOnes) {
+  Recorder sink;
+  ap::AttitudeEngine engine(kinematicConfig(), sink);
+  for (int k = 0; k <= 100; ++k) engine.submit(rate(at(0.01 * k), kSpin));
+  ASSERT_EQ(engine.setState(at(0.5), Eigen::Quaterniond::Identity(), kSpin), "");
+  ap::EngineConfig next = kinematicConfig();
+  next.kinematic.integrator = ap::Integrator::Rk4;
+  ASSERT_EQ(engine.reconfigure(next), "");
+  for (int k = 60; k <= 120; ++k) engine.submit(rate(at(0.01 * k + 0.001), kSpin));  // queued
+  for (std::size_t i = 1; i < sink.applied.size(); ++i) {
+    EXPECT_GT(sink.applied[i].stamp, sink.applied[i - 1].stamp) << i;
+  }
+  EXPECT_TRUE(sink.stampsIncrease());
+}
+
+TEST(TimePolicyDynamic, ResetCountsTheQueuedInputsItDrops) {
+  Recorder sink;
+  ap::AttitudeEngine engine(torqueConfig(), sink);
+  runClock(engine, 0.0, 1.0, 0.01);
+  for (int k = 1; k <= 7; ++k) engine.submit(torque(at(1.0 + 0.1 * k), Eigen::Vector3d::UnitX()));
+  ASSERT_EQ(engine.pending(), 7u);
+  engine.reset();
+  EXPECT_EQ(engine.pending(), 0u);
+  EXPECT_EQ(engine.counters().dropped_on_reset, 7u);
+  EXPECT_EQ(engine.counters().received,
+            engine.counters().accepted + engine.counters().dropped_on_reset);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Every stamp once, in order: random inputs, clocks, reconfigures, set_state and reset
+// ---------------------------------------------------------------------------------------------
+
+class RandomTimelines : public ::testing::TestWithParam<bool> {};
+
+TEST_P(RandomTimelines, EveryPublishedStampOnceInOrderUnitAndNeverBeyondMaxFuture) {
+  const bool dynamic = GetParam();
+  std::mt19937_64 random(20261202);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  Watcher sink;
+  sink.kinematic = !dynamic;
+  const ap::EngineConfig config = dynamic ? torqueConfig() : kinematicConfig();
+  ap::AttitudeEngine engine(config, sink);
+  double clock = 100.0;
+  double engine_clock = clock;  // the engine's: jitter back within the threshold is ignored
+  double offset = 0.0;          // the sensor clock's, changed by a driver restart
+  engine.clockTick(at(clock));
+  std::size_t checked = 0;
+  for (int step = 0; step < 20000; ++step) {
+    const double u = unit(random);
+    if (u < 0.45) {  // the stream: latency, stragglers, stamps far ahead, a restarted driver
+      const double v = unit(random);
+      if (v > 0.997) offset -= 20.0;
+      double stamp = clock + offset - 0.02 * unit(random);
+      if (v < 0.03) stamp -= 5.0 * unit(random);
+      if (v > 0.98 && v <= 0.997) stamp += 10.0 * unit(random);
+      const Eigen::Vector3d value(unit(random) - 0.5, unit(random) - 0.5, unit(random) - 0.5);
+      engine.submit(dynamic && unit(random) < 0.5 ? torque(at(stamp), value)
+                                                  : rate(at(stamp), value));
+    } else if (u < 0.9) {  // the clock: forward, jitter back, rarely a loop back or a jump
+      const double v = unit(random);
+      clock += v < 0.02 ? -0.5 * unit(random) : 0.01 * unit(random);
+      if (v > 0.999) clock -= 30.0;
+      if (v > 0.997 && v <= 0.999) clock += 3.0;
+      engine_clock = clock < engine_clock - 1.0 ? clock : std::max(engine_clock, clock);
+      if (v < 0.5) {
+        engine.clockTick(at(clock));
+      } else {
+        engine.poll(at(clock));
+      }
+    } else if (u < 0.93) {
+      ap::EngineConfig next = config;
+      const bool second = unit(random) < 0.5;
+      if (dynamic) {
+        next.dynamic->integrator = second ? ap::Integrator::Dopri5 : ap::Integrator::Rk4;
+      } else {
+        next.kinematic.integrator = second ? ap::Integrator::Rk4 : ap::Integrator::Cf4;
+      }
+      EXPECT_EQ(engine.reconfigure(next), "");
+    } else if (u < 0.96) {
+      engine.setState(at(clock + 2.0 * (unit(random) - 0.8)),
+                      aboutAxis(Eigen::Vector3d(unit(random), 1.0, unit(random)), unit(random)),
+                      Eigen::Vector3d::Zero());
+    } else if (u < 0.97) {
+      engine.reset();
+    } else {
+      engine.drain();
+    }
+    for (; checked < sink.states.size(); ++checked) {
+      EXPECT_LE(sink.states[checked].stamp, at(engine_clock + config.max_future)) << step;
+    }
+  }
+  EXPECT_EQ(sink.repeated_or_older, 0u);
+  EXPECT_EQ(sink.not_unit, 0u);
+  EXPECT_EQ(engine.counters().received,
+            engine.counters().accepted + engine.counters().dropped_stale +
+                engine.counters().rejected_future + engine.counters().dropped_on_reset +
+                engine.pending() + engine.counters().rejected_out_of_range +
+                engine.counters().rejected_non_finite + engine.counters().pending_overflow);
+  EXPECT_GT(sink.states.size(), 1000u);
+}
+
+INSTANTIATE_TEST_SUITE_P(Models, RandomTimelines, ::testing::Bool());
