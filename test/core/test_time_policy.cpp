@@ -298,6 +298,23 @@ TEST(TimePolicyDynamic, APersistentJumpOfASourceGoesOnLateWithoutAReset) {
   EXPECT_ROTATION_NEAR(sink.states.back().q_WB, aboutAxis(kSpin, 0.2 * 4.0), 1e-9);
 }
 
+TEST(TimePolicyDynamic, AJumpDropsTheSourcesQueuedInputsFromTheOldTimeline) {
+  Recorder sink;
+  ap::AttitudeEngine engine(rateConfig(true), sink);
+  engine.poll(at(1.0));
+  for (int k = 1; k <= 5; ++k) engine.submit(rate(at(1.0 + 0.1 * k), kSpin));  // ahead: queued
+  ASSERT_EQ(engine.pending(), 5u);
+  for (int k = 0; k < ap::kJumpConfirmation; ++k) engine.submit(rate(at(-9.0 + 0.01 * k), kSpin));
+  EXPECT_EQ(engine.counters().jumps_back, 1u);
+  EXPECT_EQ(engine.pending(), 0u);
+  EXPECT_EQ(engine.counters().dropped_stale,
+            static_cast<std::uint64_t>(ap::kJumpConfirmation - 1 + 5));
+  runClock(engine, 1.0, 2.0, 0.01);
+  // Only the new timeline's input was applied, none of the old queue after it.
+  ASSERT_EQ(sink.applied.size(), 1u);
+  EXPECT_EQ(sink.applied.back().stamp, at(-9.0 + 0.01 * (ap::kJumpConfirmation - 1)));
+}
+
 // ---------------------------------------------------------------------------------------------
 // The future
 // ---------------------------------------------------------------------------------------------
