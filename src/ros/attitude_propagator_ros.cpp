@@ -464,9 +464,18 @@ void AttitudePropagatorRos::note(const EngineNote& note) {
       break;
     case EngineNote::StampsJumpedBack:
       ROS_WARN_THROTTLE(kWarnPeriod,
-                        "%s: stamps jumped back to %.3f (looped bag?): reset to the initial "
-                        "state (%lu resets so far)",
-                        what, t, c.resets);
+                        "%s: stamps jumped back to %.3f and went on from there (looped bag, "
+                        "restarted driver?): %s (%lu jumps so far)",
+                        what, t,
+                        engine_->dynamicModel() ? "its inputs now act late, on ROS time"
+                                                : "reset to the initial state",
+                        c.jumps_back);
+      break;
+    case EngineNote::Future:
+      ROS_WARN_THROTTLE(kWarnPeriod,
+                        "%s: stamp %.6f more than max_future = %g s ahead of ROS time: rejected "
+                        "(%lu so far; unsynchronised clocks?)",
+                        what, t, config_.parameters.max_future, c.rejected_future);
       break;
     case EngineNote::ClockJumpedBack:
       ROS_WARN_THROTTLE(kWarnPeriod,
@@ -639,6 +648,14 @@ void AttitudePropagatorRos::onReconfigure(AttitudePropagatorConfig& live, std::u
   live.integrator = in_force.integrator;
 }
 
+std::optional<double> AttitudePropagatorRos::inputLagBeyondWarning() const {
+  for (Source source : {Source::Imu, Source::Twist, Source::Torque}) {
+    const std::optional<double> lag = engine_->inputLag(source);
+    if (lag && std::abs(*lag) > kInputLagWarning) return lag;
+  }
+  return std::nullopt;
+}
+
 void AttitudePropagatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   const EngineCounters& c = engine_->counters();
   const ros::WallTime now = ros::WallTime::now();
@@ -651,6 +668,11 @@ void AttitudePropagatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   const double silence = last_input_.isZero() ? -1.0 : (now - last_input_).toSec();
   if (expects_input && (silence < 0.0 || silence > 1.0)) {
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no rate input in the last second");
+  } else if (const std::optional<double> lag = inputLagBeyondWarning()) {
+    status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                    "inputs arrive %.3f s %s ROS time (sensor clock skewed, or a queue): tf "
+                    "lookups at now will miss",
+                    std::abs(*lag), *lag > 0.0 ? "behind" : "ahead of");
   } else {
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "propagating");
   }
@@ -672,6 +694,16 @@ void AttitudePropagatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   status.add("late", c.late);
   status.add("gaps", c.gaps);
   status.add("resets", c.resets);
+  status.add("jumps_back", c.jumps_back);
+  status.add("rejected_future", c.rejected_future);
+  status.add("dropped_on_reset", c.dropped_on_reset);
+  // Mean ROS time minus stamp on arrival: a constant skew between the sensor's clock and
+  // this machine's shows here (WARN above kInputLagWarning).
+  for (Source source : {Source::Imu, Source::Twist, Source::Torque}) {
+    if (const std::optional<double> lag = engine_->inputLag(source)) {
+      status.add(source == Source::Torque ? "torque_lag_s" : "rate_lag_s", *lag);
+    }
+  }
   status.add("failed_steps", c.failed_steps);
   status.add("pending_overflow", c.pending_overflow);
   status.add("deferred_ticks", c.deferred_ticks);

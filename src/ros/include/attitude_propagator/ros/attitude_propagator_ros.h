@@ -131,6 +131,9 @@ class AttitudePropagatorRos : public EngineSink {
   // Services and diagnostics.
   bool onReset(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
   bool onSetState(SetState::Request& request, SetState::Response& response);
+  /// The mean lag of a source whose inputs arrive further from ROS time than
+  /// kInputLagWarning, if any.
+  std::optional<double> inputLagBeyondWarning() const;
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
   /// dynamic_reconfigure: validated like the start-up parameters; a refused change is
   /// logged and the values shown in rqt_reconfigure go back to those in force.
