@@ -125,6 +125,10 @@ struct EngineConfig {
   /// Orientation uncertainty (rad) at an anchor of the initial state: P_B = stddev² I.
   double initial_orientation_stddev = 0.0;
   Eigen::Vector3d gyro_bias_B = Eigen::Vector3d::Zero();  ///< rad/s, until a bias sample
+  /// Seconds by which a rate is older than its stamp (an on-chip filter's group delay, a fixed
+  /// transport latency): rate stamps are moved back by it before anything else, so the states
+  /// (and imu/data) carry the instant the rate describes. At least 0, at most max_dt.
+  double rate_delay = 0.0;
   /// Seconds an input (or set_state) may be stamped ahead of the clock; further is refused, so
   /// tf never receives a stamp beyond it. Checked once a clock is known.
   double max_future = 1.0;
@@ -262,6 +266,7 @@ class AttitudeEngine {
   std::optional<Stamp> origin_;          // core time 0, whole seconds; set by the first stamp
   std::optional<Stamp> last_published_;  // one state per stamp, increasing
   std::optional<Stamp> clock_;           // the latest ROS time seen
+  Stamp rate_delay_ns_ = 0;              // config_.rate_delay
   std::array<SourceTimeline, 3> timelines_;  // per Source: Imu, Twist, Torque
   EngineCounters counters_;
 };

@@ -138,6 +138,8 @@ void checkScalars(const Parameters& p) {
                 "a finite number > 0 and at most 60 (s)");
   requireFinite("max_future", p.max_future, 0.0, true, kMaxFuture,
                 "a finite number >= 0 and at most 3600 (s)");
+  requireFinite("rate_delay", p.rate_delay, 0.0, true, p.max_dt,
+                "a finite number >= 0 and at most max_dt (s)");
   requireFinite("tolerance", p.tolerance, kMinTolerance, true, kMaxTolerance,
                 "a number in [1e-12, 1e-2]");
   requireFinite("angular_velocity_stddev", p.angular_velocity_stddev, 0.0, true, kMaxRateStddev,
@@ -320,6 +322,7 @@ EngineConfig engineConfig(const NodeConfig& node) {
   config.dynamic = node.dynamic;
   config.publish_rate = node.parameters.publish_rate;
   config.max_future = node.parameters.max_future;
+  config.rate_delay = node.parameters.rate_delay;
   config.rate_stddev = node.parameters.angular_velocity_stddev;
   config.initial_orientation_stddev = node.parameters.initial_orientation_stddev;
   // The engine subtracts the bias (the parameter, then the bias topic) for both models.

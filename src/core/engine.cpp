@@ -29,6 +29,17 @@ const TimePolicy& policyOf(const EngineConfig& c) {
   return c.dynamic ? c.dynamic->time_policy : c.kinematic.time_policy;
 }
 
+/// rate_delay in nanoseconds, or std::invalid_argument: a delay longer than the longest gap
+/// integrated across would put every sample behind the one before a gap.
+Stamp checkedRateDelay(const EngineConfig& c) {
+  const double max_dt = policyOf(c).max_dt;
+  if (!(c.rate_delay >= 0.0 && c.rate_delay <= max_dt)) {
+    throw std::invalid_argument("rate_delay: accepted: 0 to max_dt = " + std::to_string(max_dt) +
+                                " s, got " + std::to_string(c.rate_delay));
+  }
+  return static_cast<Stamp>(std::llround(c.rate_delay * 1e9));
+}
+
 }  // namespace
 
 const char* sourceName(Source source) {
@@ -57,6 +68,7 @@ AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink)
     throw std::invalid_argument("publish_rate: must be positive and finite");
   }
   checkMaxFuture(config_.max_future);
+  rate_delay_ns_ = checkedRateDelay(config_);
   if (!config_.gyro_bias_B.allFinite() || config_.gyro_bias_B.norm() > kMaxBodyRate) {
     throw std::invalid_argument(
         "gyro_bias: must be finite, each magnitude at most the largest "
@@ -190,20 +202,22 @@ void AttitudeEngine::reject(Rejection why) {
 
 void AttitudeEngine::submit(const Input& raw) {
   ++counters_.received;
-  if (!raw.value.allFinite() || !raw.rate_covariance_B.allFinite()) {
-    handleOutcome(StampOutcome::RejectedNonFinite, raw.source, raw.stamp);
+  Input input = raw;
+  if (input.source != Source::Torque) input.stamp -= rate_delay_ns_;  // the rate's own instant
+  if (!input.value.allFinite() || !input.rate_covariance_B.allFinite()) {
+    handleOutcome(StampOutcome::RejectedNonFinite, input.source, input.stamp);
     return;
   }
-  if (tooFarAhead(raw.stamp)) {
+  if (tooFarAhead(input.stamp)) {
     // Published, it would hold every tf listener's transform ahead of its clock, and the
     // inputs that follow would look stale behind it.
     ++counters_.rejected_future;
-    sink_.note({EngineNote::Future, raw.source, raw.stamp});
+    sink_.note({EngineNote::Future, input.source, input.stamp});
     return;
   }
-  if (!inOrder(raw.source, raw.stamp)) return;
-  Input input = raw;
-  if (input.source != Source::Torque) input.value -= biasAt(input.stamp);
+  if (!inOrder(input.source, input.stamp)) return;
+  // A bias stamped at or before the message's own stamp applies to it.
+  if (input.source != Source::Torque) input.value -= biasAt(raw.stamp);
   if (kinematic_) {
     submitKinematic(input);
   } else {
@@ -496,8 +510,10 @@ void AttitudeEngine::resetState(bool forget_time) {
 
 std::string AttitudeEngine::reconfigure(const EngineConfig& next) {
   if (next.model != config_.model) return "model: cannot change while running";
+  Stamp rate_delay_ns = 0;
   try {
     checkMaxFuture(next.max_future);
+    rate_delay_ns = checkedRateDelay(next);
     if (kinematic_) {
       KinematicPropagator k(next.kinematic);
       if (kinematic_->anchored()) {
@@ -525,6 +541,7 @@ std::string AttitudeEngine::reconfigure(const EngineConfig& next) {
   const Eigen::Vector3d bias_B = config_.gyro_bias_B;  // the topic's bias stays in force
   config_ = next;
   config_.gyro_bias_B = bias_B;
+  rate_delay_ns_ = rate_delay_ns;
   default_R_B_ = config_.rate_stddev * config_.rate_stddev * Eigen::Matrix3d::Identity();
   return {};  // P_B carries on: the new propagator starts from the current state
 }

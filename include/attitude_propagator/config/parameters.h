@@ -38,6 +38,7 @@ struct Parameters {
   double max_step = 0.0;  // 0: 1 / publish_rate
   double max_dt = 1.0;
   double max_future = 1.0;
+  double rate_delay = 0.0;
   double tolerance = 1e-9;
   double angular_velocity_stddev = 0.01;
   double initial_orientation_stddev = 3.141592653589793;  // pi: unknown until pinned
@@ -90,6 +91,9 @@ void forEachParameter(P& p, F&& f) {
   f("max_future", p.max_future, "s",
     "an input or `~set_state` stamped further ahead of ROS time is refused (counted); at most "
     "3600");
+  f("rate_delay", p.rate_delay, "s",
+    "how much older the rate is than its stamp (an on-chip filter's group delay, a fixed "
+    "latency): stamps are moved back by it first; in [0, max_dt]");
   f("tolerance", p.tolerance, "", "relative and absolute tolerance of `dopri5`, in [1e-12, 1e-2]");
   f("angular_velocity_stddev", p.angular_velocity_stddev, "rad/s",
     "rate noise used when an input carries no covariance (drives the growth of the orientation "
