@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 
+#include "attitude_propagator/average_stamp.h"
 #include "attitude_propagator/integrator.h"
 #include "attitude_propagator/kinematic_step.h"
 #include "attitude_propagator/stamp_filter.h"
@@ -21,6 +22,9 @@ struct KinematicConfig {
   Eigen::Quaterniond initial_q_WB = Eigen::Quaterniond::Identity();
   /// What a sample's rate means (point value, or mean over the interval it closes).
   RateSamples rate_samples = RateSamples::Instantaneous;
+  /// Interval averages: where in its interval a sample is stamped (Mid, Start: each waits for
+  /// the next sample, IntervalEnds). Point samples: End only.
+  AverageStamp average_stamp = AverageStamp::End;
   /// Interval-averaged samples: up to this many lost samples in a row are filled from the
   /// polynomial fitted to the neighbouring means (0: never). Longer gaps follow max_dt.
   int max_gap_fill = 4;
@@ -75,12 +79,18 @@ class KinematicPropagator {
 
   /// Samples filled in for lost ones (interval-averaged samples only), since construction.
   std::uint64_t filledSamples() const { return filled_samples_; }
+  /// True when the state holds at stamps other than the samples' own (the stamp filter, or
+  /// averages stamped at their start or midpoint): then time() says where.
+  bool movesStamps() const {
+    return stamp_filter_ != StampFilter::None || average_stamp_ != AverageStamp::End;
+  }
   /// The stamp filter, or nullptr when `stamp_filter` is none.
   const SensorClockFilter* stampFilter() const {
     return stamp_filter_ == StampFilter::SensorClock ? &clock_ : nullptr;
   }
 
  private:
+  StampOutcome addFiltered(double t, const Eigen::Vector3d& w_B);
   StampOutcome addStamped(double t, const Eigen::Vector3d& w_B);
   void restamp(const SensorClockFilter::Result& clock, const Eigen::Vector3d& w_B,
                StampOutcome outcome);
@@ -106,6 +116,8 @@ class KinematicPropagator {
   StampFilter stamp_filter_;
   SensorClockFilter clock_;
   RestampCorrection restamp_;  // after clock_, whose memory it shares
+  AverageStamp average_stamp_;
+  IntervalEnds interval_ends_;
   Eigen::Vector3d gyro_bias_B_;
   std::uint64_t filled_samples_ = 0;
   std::array<double, 5> intervals_{};  // the last intervals integrated, for the nominal period

@@ -13,6 +13,9 @@ enum class StampOutcome {
   /// recognise (SourceTimeline); it then resets the propagator and anchors again.
   DroppedStale,
   HeldGap,            // gap longer than max_dt: not integrated across, state held, re-anchored
+  /// Accepted, not integrated yet: a mean stamped at its interval's start or midpoint waits
+  /// for the next sample to show where the interval ends (average_stamp). State unchanged.
+  Waiting,
   RejectedNonFinite,  // NaN or infinite value or stamp: ignored, state unchanged
   /// A finite input beyond the door bounds of limits.h (a rate above kMaxBodyRate, a torque
   /// above kMaxTorque), whose energy, momentum or step would overflow: ignored, state unchanged.

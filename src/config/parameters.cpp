@@ -167,9 +167,15 @@ void checkScalars(const Parameters& p) {
 // the gyro bias. Checked whatever the model, so a misspelt value always refuses start.
 void applyStreamParameters(const Parameters& p, KinematicConfig& kinematic) {
   requireOneOf("rate_samples", p.rate_samples, {"instantaneous", "interval_average"});
+  requireOneOf("average_stamp", p.average_stamp, {"end", "mid", "start"});
+  if (p.average_stamp != "end" && p.rate_samples != "interval_average") {
+    fail("average_stamp", "'" + p.average_stamp + "' with rate_samples '" + p.rate_samples +
+                              "'; accepted: end, or mid and start with interval_average");
+  }
   requireOneOf("stamp_filter", p.stamp_filter, {"none", "sensor_clock"});
   requireVector("gyro_bias", p.gyro_bias, 3, "[x, y, z], finite (rad/s, body frame)");
   kinematic.rate_samples = rateSamplesFromName(p.rate_samples);
+  kinematic.average_stamp = averageStampFromName(p.average_stamp);
   kinematic.stamp_filter = stampFilterFromName(p.stamp_filter);
   kinematic.gyro_bias_B = Eigen::Vector3d(p.gyro_bias[0], p.gyro_bias[1], p.gyro_bias[2]);
 }

@@ -307,6 +307,9 @@ bool AttitudeEngine::handleOutcome(StampOutcome outcome, std::optional<Source> s
       sink_.note({EngineNote::Gap, source, stamp});
       rebaseIfFar(stamp);
       return true;
+    case StampOutcome::Waiting:
+      if (input) ++counters_.accepted;
+      return false;  // nothing integrated yet: nothing to publish
     case StampOutcome::DroppedStale:
       if (input) ++counters_.dropped_stale;
       if (input) sink_.note({EngineNote::Stale, source, stamp});
@@ -344,8 +347,9 @@ void AttitudeEngine::submitKinematic(const Input& input) {
   } else if (outcome == StampOutcome::Anchored) {
     P_B_ = initialCovariance();  // the initial state again, as uncertain as configured
   }
-  // With the stamp filter on, the state holds at the filtered stamp, not the receipt stamp.
-  const Stamp stamp = kinematic_->stampFilter() && origin_
+  // With the stamp filter on, or averages stamped at their start or midpoint, the state holds
+  // where the propagator put it, not at the input's stamp.
+  const Stamp stamp = kinematic_->movesStamps() && origin_
                           ? *origin_ + static_cast<Stamp>(std::llround(kinematic_->time() * 1e9))
                           : input.stamp;
   emitState(stamp);

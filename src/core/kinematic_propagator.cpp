@@ -98,11 +98,28 @@ KinematicPropagator::KinematicPropagator(const KinematicConfig& config)
       max_gap_fill_(std::clamp(config.max_gap_fill, 0, 8)),
       stamp_filter_(config.stamp_filter),
       restamp_(clock_.memory()),
+      average_stamp_(config.average_stamp),
+      interval_ends_(config.average_stamp),
       gyro_bias_B_(checkedBias(config.gyro_bias_B)) {
   checkPolicy(policy_);
+  if (average_stamp_ != AverageStamp::End && rate_samples_ != RateSamples::IntervalAverage) {
+    throw std::invalid_argument("average_stamp: '" + averageStampName(average_stamp_) +
+                                "' needs rate_samples: interval_average (a point sample has no "
+                                "interval)");
+  }
 }
 
 StampOutcome KinematicPropagator::addSample(double t, const Eigen::Vector3d& w_B) {
+  const bool valid = std::isfinite(t) && w_B.allFinite() && w_B.norm() <= kMaxBodyRate;
+  if (average_stamp_ == AverageStamp::End || !valid) return addFiltered(t, w_B);
+  // A start- or mid-stamped mean waits for the next sample, which shows where it ends.
+  const std::optional<double> waiting = interval_ends_.waiting();
+  if (waiting && t <= *waiting) return StampOutcome::DroppedStale;
+  const std::optional<RateSample> ended = interval_ends_.push({t, w_B});
+  return ended ? addFiltered(ended->t, ended->w_B) : StampOutcome::Waiting;
+}
+
+StampOutcome KinematicPropagator::addFiltered(double t, const Eigen::Vector3d& w_B) {
   if (stamp_filter_ == StampFilter::None || !std::isfinite(t) || !w_B.allFinite() ||
       !(w_B.norm() <= kMaxBodyRate)) {
     return addStamped(t, w_B);
@@ -157,6 +174,7 @@ void KinematicPropagator::setGyroBias(const Eigen::Vector3d& bias_B) {
 }
 
 void KinematicPropagator::reset() {
+  interval_ends_.clear();
   q_WB_ = initial_q_WB_;
   anchor_q_WB_ = initial_q_WB_;
   window_.clear();
@@ -177,6 +195,7 @@ void KinematicPropagator::setState(double t, const Eigen::Quaterniond& q_WB,
     throw std::invalid_argument("set_state: angular velocity above kMaxBodyRate = 1e5 rad/s");
   }
   q_WB_ = checkedUnit(q_WB, "set_state orientation");
+  interval_ends_.clear();  // a mean waiting from before the pinned state is not applied after it
   anchor(t, w_B);
 }
 

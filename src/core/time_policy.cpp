@@ -15,6 +15,7 @@ bool stateHoldsAtStamp(StampOutcome outcome) {
     case StampOutcome::FailedStep:
       return true;
     case StampOutcome::DroppedStale:
+    case StampOutcome::Waiting:
     case StampOutcome::RejectedNonFinite:
     case StampOutcome::RejectedOutOfRange:
       return false;
@@ -32,6 +33,8 @@ const char* outcomeName(StampOutcome outcome) {
       return "dropped_stale";
     case StampOutcome::HeldGap:
       return "held_gap";
+    case StampOutcome::Waiting:
+      return "waiting";
     case StampOutcome::RejectedNonFinite:
       return "rejected_non_finite";
     case StampOutcome::RejectedOutOfRange:

@@ -44,6 +44,7 @@ struct Parameters {
   double initial_orientation_stddev = 3.141592653589793;  // pi: unknown until pinned
   std::string tf_conflict = "warn";
   std::string rate_samples = "instantaneous";
+  std::string average_stamp = "end";
   std::string stamp_filter = "none";
   std::vector<double> gyro_bias{0.0, 0.0, 0.0};
 };
@@ -104,6 +105,10 @@ void forEachParameter(P& p, F&& f) {
   f("rate_samples", p.rate_samples, "",
     "`instantaneous` (rate at the stamp) or `interval_average` (mean over the interval the "
     "sample closes: delta-angle / dt)");
+  f("average_stamp", p.average_stamp, "",
+    "`interval_average` only: where in its interval a mean is stamped, `end`, `mid` or `start` "
+    "(mid and start: each state one sample later, when the next stamp shows where the "
+    "interval ends)");
   f("stamp_filter", p.stamp_filter, "",
     "`none` or `sensor_clock`: replace receipt stamps by a fitted sensor clock");
   f("gyro_bias", p.gyro_bias, "rad/s", "subtracted from every rate, [x, y, z] in the body frame");
