@@ -118,6 +118,22 @@ TEST(RateDelay, AButterworthFilteredGyroAtItsGroupDelayIsAccurate) {
   EXPECT_GT(ignored, 1e-3);      // measured 4.9e-3 rad
 }
 
+TEST(RateDelay, ABiasStampedAtAMessagesStampAppliesToIt) {
+  // The bias and the rate message carry stamps of the same clock: the delay moves the instant
+  // the rate describes, not which bias was in force when it was stamped.
+  ap::EngineConfig config = kinematicConfig();
+  config.rate_delay = 0.05;
+  Recorder sink;
+  ap::AttitudeEngine engine(config, sink);
+  const Eigen::Vector3d w(0.0, 0.0, 0.3), bias(0.0, 0.0, 0.1);
+  engine.submit(rate(at(1.0), w));
+  ASSERT_TRUE(engine.submitBias(at(1.01), bias));
+  engine.submit(rate(at(1.01), w));  // moved to 0.96, stamped 1.01: the bias applies
+  ASSERT_EQ(sink.states.size(), 2u);
+  EXPECT_EQ(sink.states[1].stamp, at(0.96));
+  EXPECT_NEAR(sink.states[1].w_B.z(), 0.2, 1e-15);
+}
+
 TEST(RateDelay, TorquesAreNotMovedAndTheDelayIsBoundedByMaxDt) {
   Recorder sink;
   ap::EngineConfig config = torqueConfig();
