@@ -42,8 +42,12 @@ class SensorClockFilter {
 
   enum class Verdict {
     Modelled,   ///< the stamp joined the fit; the line's value at its index is returned
-    Rejected,   ///< an outlier: the line's value at the next index is returned, fit unchanged
-    Restarted,  ///< the model started again from this stamp, which is returned as it is
+    /// An outlier: the line's value at the next index is returned, or the stamp itself when
+    /// earlier (a rate gone up); the fit unchanged.
+    Rejected,
+    /// The model started again from this stamp, which is returned as it is: after a jump; after
+    /// a run of rejections or of lost periods (a new rate), no earlier than the last returned.
+    Restarted,
   };
 
   struct Result {
@@ -81,6 +85,9 @@ class SensorClockFilter {
 
  private:
   void start(double t_receipt);
+  Result restartAfter(double t_receipt);
+  /// The smallest stamp after t: returned stamps increase strictly.
+  static double after(double t);
   void shiftOrigin(std::uint64_t steps, double dt);
   void add(double y);
   void refit();

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace attitude_propagator {
@@ -45,6 +46,10 @@ void SensorClockFilter::reset() {
 
 double SensorClockFilter::jitter() const { return std::sqrt(variance_); }
 
+double SensorClockFilter::after(double t) {
+  return std::nextafter(t, std::numeric_limits<double>::infinity());
+}
+
 double SensorClockFilter::lineMinus(std::uint64_t index, double t) const {
   // base_t_ - t is exact for nearby stamps; the line's part is relative to base_t_.
   return (base_t_ - t) +
@@ -76,22 +81,18 @@ SensorClockFilter::Result SensorClockFilter::filter(double t_receipt) {
   if (samples_ >= static_cast<std::uint64_t>(options_.warm_up) &&
       std::abs(r) > options_.reject_sigmas * sigma) {
     ++rejected_;
-    if (++rejected_in_a_row_ >= options_.restart_after) {
-      ++restarts_;
-      start(t_receipt);
-      return {t_receipt, Verdict::Restarted, 0};
-    }
-    // Assume it is the next sample (a late stamp, not a drop) and keep the fit.
+    if (++rejected_in_a_row_ >= options_.restart_after) return restartAfter(t_receipt);
+    // Assume it is the next sample (a late stamp, not a drop) and keep the fit. An early stamp
+    // (the rate went up) keeps its own: the line's would run ahead of the samples, and the
+    // restart that follows would then have to go back.
     shiftOrigin(1, slope_);
-    last_output_ = base_t_ + origin_t_;
+    last_output_ = std::max(std::min(base_t_ + origin_t_, t_receipt), after(last_output_));
     return {last_output_, Verdict::Rejected, 0};
   }
   rejected_in_a_row_ = 0;
   skipped_in_a_row_ = m > 1 ? skipped_in_a_row_ + 1 : 0;
   if (skipped_in_a_row_ >= options_.restart_after) {  // the rate fell: a new period
-    ++restarts_;
-    start(t_receipt);
-    return {t_receipt, Verdict::Restarted, 0};
+    return restartAfter(t_receipt);
   }
   if (slope_ > 0.0) {
     // Forgetting average once warm; the plain mean of the first innovations before.
@@ -106,6 +107,16 @@ SensorClockFilter::Result SensorClockFilter::filter(double t_receipt) {
   const double out = std::max(base_t_ + origin_t_, last_output_ + 0.5 * slope_);
   last_output_ = out;
   return {out, Verdict::Modelled, m - 1};
+}
+
+// A restart where the stamps went on (a new rate): the new line starts no earlier than the last
+// stamp returned, so no sample after it is stale. (A jump restarts at the raw stamp: the
+// engine's time policy is to see it.)
+SensorClockFilter::Result SensorClockFilter::restartAfter(double t_receipt) {
+  ++restarts_;
+  const double t = std::max(t_receipt, after(last_output_));
+  start(t);
+  return {t, Verdict::Restarted, 0};
 }
 
 void SensorClockFilter::start(double t_receipt) {
@@ -174,8 +185,9 @@ Eigen::Vector3d RestampCorrection::add(const SensorClockFilter& clock,
                                        const SensorClockFilter::Result& sample,
                                        const Eigen::Vector3d& w_B, const Eigen::Quaterniond& q_WB,
                                        bool anchor) {
-  if (!started_ || sample.verdict == SensorClockFilter::Verdict::Restarted) {
-    // A new line numbers the samples again: the earlier terms stay as last corrected.
+  if (!started_ || sample.verdict != SensorClockFilter::Verdict::Modelled) {
+    // A new line numbers the samples again, and a rejected stamp is not on the line: the
+    // earlier terms stay as last corrected.
     start(clock, sample.t, w_B, q_WB, anchor);
     return Eigen::Vector3d::Zero();
   }
