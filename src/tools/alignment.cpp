@@ -156,12 +156,16 @@ OffsetEstimate estimateOffset(const std::vector<TimedRate>& gyro, const RateTrac
     }
     return magnitude ? magnitudeCost(p) : vectorCost(p, mount);
   };
-  // Beyond [truth begin - last gyro time, truth end - first gyro time] no gyro sample meets the
-  // truth: the range is cut to the data, however large max_offset is.
-  const auto [first, last] = std::minmax_element(
-      gyro.begin(), gyro.end(), [](const TimedRate& a, const TimedRate& b) { return a.t < b.t; });
-  const double lo = std::max(-max_offset, truth.begin() - last->t);
-  const double hi = std::min(max_offset, truth.end() - first->t);
+  // An offset counts only when at least half of the gyro samples meet the truth, t + offset in
+  // [truth begin, truth end]; outside [truth begin - t_m, truth end - t_m], with t_m the
+  // gyro's median time, at least half of them miss it. The range is cut to that, however
+  // large max_offset is.
+  std::vector<double> times(gyro.size());
+  for (std::size_t i = 0; i < gyro.size(); ++i) times[i] = gyro[i].t;
+  std::nth_element(times.begin(), times.begin() + times.size() / 2, times.end());
+  const double median = times[times.size() / 2];
+  const double lo = std::max(-max_offset, truth.begin() - median);
+  const double hi = std::min(max_offset, truth.end() - median);
   // Coarse: every step over the range, the step widened so that the pairings stay bounded.
   const double points = std::max(64.0, std::floor(kMaxOffsetPairings / double(gyro.size())));
   const double coarse = std::max(step, (hi - lo) / (points - 1.0));

@@ -76,11 +76,11 @@ struct OffsetEstimate {
 /// (which no mount changes) when |w| varies; otherwise (a constant |w|, e.g. coning) of the
 /// vectors, through `mount` R_ST or, without one, the best rotation per offset.
 ///
-/// Bounded: only offsets at which the two streams' spans still overlap are tried (the range is
-/// cut to the data), and the grid has at most kMaxOffsetPairings / gyro.size() points, its step
-/// widened when needed (`how` says so), so one search pairs at most about kMaxOffsetPairings
-/// samples whatever max_offset is. `checkpoint` is called before each trial offset and may
-/// throw to stop the search (Ctrl-C).
+/// Bounded: only offsets at which half of the gyro samples can meet the truth are tried (the
+/// range is cut to the data's span), and the grid has at most kMaxOffsetPairings / gyro.size()
+/// points, its step widened when needed (`how` says so), so one search pairs at most about
+/// kMaxOffsetPairings samples whatever max_offset is. `checkpoint` is called before each trial
+/// offset and may throw to stop the search (Ctrl-C).
 OffsetEstimate estimateOffset(const std::vector<TimedRate>& gyro, const RateTrack& truth,
                               double max_offset, double step,
                               const std::optional<Eigen::Matrix3d>& mount,
