@@ -943,6 +943,7 @@ int run(int argc, char** argv) {
       summary.path(),
       (o.integrators.size() * o.rate_samples.size()) * (kSeriesPoints * 48 + 512) + 4096);
   evaluation.run(bag);
+  throwIfInterrupted();  // a signal during the last comparisons: still no output
   if (const auto why = evaluation.noRecommendation()) {
     evaluation.report(stdout);
     throw ToolError(o.input + ": no recommendation: " + *why + "; no CSV written",

@@ -680,6 +680,7 @@ int run(int argc, char** argv) {
   PendingFile output(o.output);  // destroyed last: the writer closes before it is removed
   BagPropagator propagator(o, bag);
   propagator.run(output.temporary());
+  throwIfInterrupted();  // a signal after the last message: still no output
   if (const auto why = propagator.nothingUsable()) {
     propagator.summary(stdout, false);
     throw ToolError(o.input + ": " + *why + "; no output written", kExitNothingUsable);

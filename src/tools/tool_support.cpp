@@ -356,6 +356,11 @@ void refuseOutputOverInput(const std::string& output, const std::vector<std::str
   if (exists && S_ISDIR(out.st_mode)) {
     throw UsageError(output + ": is a directory; give the output's file name");
   }
+  if (exists && !S_ISREG(out.st_mode)) {
+    // The output is written aside and renamed over its name: that would replace a device or a
+    // pipe, not write into it.
+    throw UsageError(output + ": is not a regular file (a device or a pipe); give a file name");
+  }
   for (const std::string& input : inputs) {
     struct stat in {};
     const bool same = exists && ::stat(input.c_str(), &in) == 0

