@@ -241,7 +241,10 @@ TempDir::TempDir() {
   path_ = pattern;
 }
 
-TempDir::~TempDir() { std::system(("rm -rf " + quote(path_)).c_str()); }
+TempDir::~TempDir() {
+  if (std::getenv("BAG_TESTS_KEEP")) return;
+  std::system(("rm -rf " + quote(path_)).c_str());
+}
 
 std::vector<std::string> TempDir::list() const {
   std::vector<std::string> names;

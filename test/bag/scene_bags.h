@@ -91,7 +91,8 @@ RunResult run(const std::string& command);
 /// Quoting for a shell command line.
 std::string quote(const std::string& text);
 
-/// A fresh directory under /tmp, removed with everything in it by the destructor.
+/// A fresh directory under /tmp, removed with everything in it by the destructor (kept when
+/// BAG_TESTS_KEEP is set, to look at a test's files).
 class TempDir {
  public:
   TempDir();

@@ -500,10 +500,11 @@ TEST(EvaluateBagSafety, HugeMaxOffsetIsBounded) {
       << e.run.output;
 }
 
-// SIGINT or SIGTERM at any moment of a run whose offset search takes about a second (±30 s on
+// SIGINT or SIGTERM at any moment of a run whose offset search takes about a second (+-30 s on
 // 60 s of coning, whose vectors are matched through the best mount at each offset): the run
-// ends within half a second of the signal with 128 + the signal, or had ended before it; no
-// CSV either way unless it ended with 0.
+// ends with 128 + the signal, within a second of it (one trial offset takes well under a
+// millisecond; the rest is slack for a loaded machine), or had ended before it; no CSV unless
+// it ended with 0.
 TEST(EvaluateBagSafety, OffsetSearchIsInterruptible) {
   TempDir dir;
   SceneBag scene;
@@ -518,6 +519,7 @@ TEST(EvaluateBagSafety, OffsetSearchIsInterruptible) {
   for (int k = 1; k <= 8; ++k) {
     const double delay = 0.15 * k;
     const char* signal = k % 2 ? "INT" : "TERM";
+    std::remove(dir.file("eval.csv").c_str());
     const auto start = std::chrono::steady_clock::now();
     char prefix[64];
     std::snprintf(prefix, sizeof prefix, "timeout --preserve-status -s %s %.2f ", signal, delay);
@@ -525,12 +527,12 @@ TEST(EvaluateBagSafety, OffsetSearchIsInterruptible) {
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (r.status == 0) {
-      EXPECT_LT(seconds, delay + 0.5);
+      EXPECT_LT(seconds, delay + 1.0);
       continue;
     }
     ++interrupted;
     EXPECT_EQ(r.status, 128 + (k % 2 ? SIGINT : SIGTERM)) << r.output;
-    EXPECT_LT(seconds, delay + 0.5) << "signal after " << delay << " s";
+    EXPECT_LT(seconds, delay + 1.0) << "signal after " << delay << " s";
     EXPECT_NE(r.output.find("interrupted"), std::string::npos) << r.output;
     EXPECT_FALSE(exists(dir.file("eval.csv")));
     EXPECT_TRUE(noPartialFiles(dir));
