@@ -183,8 +183,13 @@ OffsetEstimate estimateOffset(const std::vector<TimedRate>& gyro, const RateTrac
     }
   }
   char searched[128];
-  std::snprintf(searched, sizeof searched, "; searched %+.4g..%+.4g s in steps of %.3g ms%s", lo,
-                hi, coarse * 1e3, coarse > step ? " (widened to bound the search)" : "");
+  if (lo <= hi) {
+    std::snprintf(searched, sizeof searched, "; searched %+.4g..%+.4g s in steps of %.3g ms%s", lo,
+                  hi, coarse * 1e3, coarse > step ? " (widened to bound the search)" : "");
+  } else {
+    std::snprintf(searched, sizeof searched, "; no offset within +-%.4g s meets the truth",
+                  max_offset);
+  }
   if (!std::isfinite(best_cost) || worst_cost - best_cost <= kFlatCriterion * scale) {
     e.how = std::string(!std::isfinite(best_cost) ? "not observable: rates and truth do not overlap"
                         : mount                   ? "not observable: the rates do not change enough"

@@ -271,7 +271,11 @@ void checkBagStructure(const std::string& path) {
   FileBytes file(path);
   if (!file.good() || file.size() < kVersionLength) return;  // rosbag says what is wrong
   char version[kVersionLength];
-  file.copy(0, kVersionLength, version);
+  try {
+    file.copy(0, kVersionLength, version);
+  } catch (const Fault&) {
+    return;
+  }
   if (std::memcmp(version, kVersionLine, kVersionLength) != 0) return;
 
   std::uint64_t messages = 0;

@@ -171,6 +171,9 @@ void loadConfigFile(const std::string& path, Parameters& p) {
     throw std::invalid_argument("--config " + path + ": cannot open the file");
   } catch (const YAML::Exception& e) {
     throw std::invalid_argument("--config " + path + ": not YAML (" + e.what() + ")");
+  } catch (const std::exception& e) {
+    // The stream's own errors, e.g. a directory opens but cannot be read.
+    throw std::invalid_argument("--config " + path + ": cannot read the file (" + e.what() + ")");
   }
   if (root.IsNull()) return;  // an empty file sets nothing
   if (!root.IsMap()) {
@@ -216,6 +219,10 @@ int runTool(const char* name, int (*run)(int, char**), int argc, char** argv) {
 }
 
 void openBag(rosbag::Bag& bag, const std::string& path) {
+  struct stat file {};
+  if (::stat(path.c_str(), &file) == 0 && S_ISDIR(file.st_mode)) {
+    throw ToolError(path + ": is a directory, not a bag");
+  }
   std::ifstream probe(path, std::ios::binary);
   if (!probe) throw ToolError(path + ": cannot open (" + std::strerror(errno) + ")");
   probe.seekg(0, std::ios::end);
@@ -693,6 +700,8 @@ std::string formatStamp(Stamp stamp) {
 
 std::string optionValue(int argc, char** argv, int& i) {
   if (i + 1 >= argc) throw UsageError(std::string(argv[i]) + ": needs a value");
+  // An empty value would silently mean the default (an output name, a topic).
+  if (argv[i + 1][0] == '\0') throw UsageError(std::string(argv[i]) + ": an empty value");
   return argv[++i];
 }
 

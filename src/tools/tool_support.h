@@ -330,7 +330,7 @@ class BagOutput {
 /// A stamp as seconds with nanosecond digits ("1700000000.005000000"), exact.
 std::string formatStamp(Stamp stamp);
 
-/// Command-line reading: the value after option `argv[i]`, or UsageError.
+/// Command-line reading: the value after option `argv[i]`, or UsageError (none, or empty).
 std::string optionValue(int argc, char** argv, int& i);
 /// A finite number with nothing after it, or UsageError.
 double parseNumber(const std::string& option, const std::string& text);

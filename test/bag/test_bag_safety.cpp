@@ -337,6 +337,11 @@ TEST(BagSafety, ExitCodesAreDocumentedAndUsed) {
   EXPECT_EQ(run(kEvaluateCore).status, 2);
   EXPECT_EQ(run(kEvaluateCore + " " + dir.file("missing.bag")).status, 2);  // no truth
   EXPECT_EQ(run(kPropagate + " in.bag -o").status, 2);
+  EXPECT_EQ(run(kPropagate + " in.bag -o ''").status, 2);
+  EXPECT_EQ(run(kPropagate + " in.bag --config /").status, 2);
+  const RunResult directory = run(kPropagate + " " + dir.file(""));
+  EXPECT_EQ(directory.status, 1);
+  EXPECT_NE(directory.output.find("is a directory, not a bag"), std::string::npos);
 }
 
 /// Runs `command` in the background, sends `signals` (one or two) as soon as a partial output
