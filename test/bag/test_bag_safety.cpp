@@ -293,6 +293,34 @@ TEST(BagSafety, DamageAnywhereNeverCrashes) {
   }
 }
 
+// A tf truth message whose transform count is damaged (2^24 in a message of about 200 bytes)
+// in an uncompressed bag, where no checksum can tell: deserialising would make room for 2^24
+// transforms (gigabytes) before finding the message short; the count is checked against the
+// message's size first, and the bag is reported damaged after the messages before it.
+TEST(EvaluateBagSafety, DamagedTransformCountIsRefused) {
+  TempDir dir;
+  SceneBag scene;
+  scene.motion = coning();
+  scene.duration = 2.0;
+  scene.truth = TruthType::Tf;
+  scene.truth_topic = "/tf";
+  writeSceneBag(dir.file("in.bag"), scene);
+  std::string bytes = fileText(dir.file("in.bag"));
+  // A TFMessage: count, then the first transform's header (seq, stamp, frame_id "map").
+  const std::string frame = std::string("\x03\x00\x00\x00", 4) + "map";
+  const auto at = bytes.find(frame, bytes.size() / 2);
+  ASSERT_NE(at, std::string::npos);
+  ASSERT_EQ(bytes.compare(at - 16, 4, std::string("\x02\x00\x00\x00", 4)), 0);
+  bytes.replace(at - 16, 4, std::string("\x00\x00\x00\x01", 4));  // 2^24
+  writeText(dir.file("in.bag"), bytes);
+  const RunResult r = run("ulimit -v 2000000 && " + kEvaluateCore + " " + dir.file("in.bag") +
+                          " --truth-tf map body_truth --csv " + dir.file("eval"));
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find(dir.file("in.bag") + ": damaged after "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("16777216 transforms cannot fit in "), std::string::npos) << r.output;
+  EXPECT_EQ(dir.list(), std::vector<std::string>{"in.bag"});
+}
+
 // ---------------------------------------------------------------------------------------------
 // Exit codes
 // ---------------------------------------------------------------------------------------------
