@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include <Eigen/SVD>
@@ -138,52 +139,84 @@ Eigen::Matrix3d wahba(const std::vector<Eigen::Vector3d>& a, const std::vector<E
 
 OffsetEstimate estimateOffset(const std::vector<TimedRate>& gyro, const RateTrack& truth,
                               double max_offset, double step,
-                              const std::optional<Eigen::Matrix3d>& mount) {
+                              const std::optional<Eigen::Matrix3d>& mount,
+                              const std::function<void()>& checkpoint) {
   OffsetEstimate e;
+  if (gyro.empty()) {
+    e.how = "not observable: no rates";
+    return e;
+  }
   const double scale = meanSquare(gyro);
   const bool by_magnitude = magnitudeVariance(gyro) > kVaryingMagnitude * scale;
   auto cost = [&](double offset, bool magnitude) {
+    if (checkpoint) checkpoint();
     const Pairs p = pairsAt(gyro, truth, offset);
     if (double(p.gyro.size()) < kMinOverlap * double(gyro.size())) {
       return std::numeric_limits<double>::infinity();
     }
     return magnitude ? magnitudeCost(p) : vectorCost(p, mount);
   };
-  // Coarse: every step over the range.
-  const int n = std::max(1, static_cast<int>(std::ceil(max_offset / step)));
+  // An offset counts only when at least half of the gyro samples meet the truth, t + offset in
+  // [truth begin, truth end]; outside [truth begin - t_m, truth end - t_m], with t_m the
+  // gyro's median time, at least half of them miss it. The range is cut to that, however
+  // large max_offset is.
+  std::vector<double> times(gyro.size());
+  for (std::size_t i = 0; i < gyro.size(); ++i) times[i] = gyro[i].t;
+  std::nth_element(times.begin(), times.begin() + times.size() / 2, times.end());
+  const double median = times[times.size() / 2];
+  const double lo = std::max(-max_offset, truth.begin() - median);
+  const double hi = std::min(max_offset, truth.end() - median);
+  // Coarse: every step over the range, the step widened so that the pairings stay bounded.
+  const double points = std::max(64.0, std::floor(kMaxOffsetPairings / double(gyro.size())));
+  const double coarse = std::max(step, (hi - lo) / (points - 1.0));
   double best = 0.0, best_cost = std::numeric_limits<double>::infinity();
   double worst_cost = 0.0;
-  for (int j = -n; j <= n; ++j) {
-    const double c = cost(j * step, by_magnitude);
-    if (!std::isfinite(c)) continue;
-    worst_cost = std::max(worst_cost, c);
-    if (c < best_cost) best_cost = c, best = j * step;
+  if (lo <= hi) {
+    // |lo|, |hi| <= max_offset and coarse >= (hi - lo) / (points - 1): the indices stay small.
+    const auto j_lo = static_cast<long long>(std::ceil(lo / coarse));
+    const auto j_hi = static_cast<long long>(std::floor(hi / coarse));
+    for (long long j = j_lo; j <= j_hi; ++j) {
+      const double c = cost(double(j) * coarse, by_magnitude);
+      if (!std::isfinite(c)) continue;
+      worst_cost = std::max(worst_cost, c);
+      if (c < best_cost) best_cost = c, best = double(j) * coarse;
+    }
+  }
+  char searched[128];
+  if (lo <= hi) {
+    std::snprintf(searched, sizeof searched, "; searched %+.4g..%+.4g s in steps of %.3g ms%s", lo,
+                  hi, coarse * 1e3, coarse > step ? " (widened to bound the search)" : "");
+  } else {
+    std::snprintf(searched, sizeof searched, "; no offset within +-%.4g s meets the truth",
+                  max_offset);
   }
   if (!std::isfinite(best_cost) || worst_cost - best_cost <= kFlatCriterion * scale) {
-    e.how = !std::isfinite(best_cost) ? "not observable: rates and truth do not overlap"
-            : mount                   ? "not observable: the rates do not change enough"
-                    : "not observable with an unknown mount (a time shift of this motion is "
-                      "a rotation; give --mount or --offset)";
+    e.how = std::string(!std::isfinite(best_cost) ? "not observable: rates and truth do not overlap"
+                        : mount                   ? "not observable: the rates do not change enough"
+                                : "not observable with an unknown mount (a time shift of this "
+                                  "motion is a rotation; give --mount or --offset)") +
+            searched;
     return e;
   }
   // Fine: golden-section search on the vectors within one step of the coarse minimum.
   const double phi = 0.5 * (std::sqrt(5.0) - 1.0);
-  double lo = best - step, hi = best + step;
-  double x1 = hi - phi * (hi - lo), x2 = lo + phi * (hi - lo);
+  double a = best - coarse, b = best + coarse;
+  double x1 = b - phi * (b - a), x2 = a + phi * (b - a);
   double c1 = cost(x1, false), c2 = cost(x2, false);
-  for (int it = 0; it < 60 && hi - lo > 1e-9; ++it) {
+  for (int it = 0; it < 60 && b - a > 1e-9; ++it) {
     if (c1 < c2) {
-      hi = x2, x2 = x1, c2 = c1;
-      x1 = hi - phi * (hi - lo), c1 = cost(x1, false);
+      b = x2, x2 = x1, c2 = c1;
+      x1 = b - phi * (b - a), c1 = cost(x1, false);
     } else {
-      lo = x1, x1 = x2, c1 = c2;
-      x2 = lo + phi * (hi - lo), c2 = cost(x2, false);
+      a = x1, x1 = x2, c1 = c2;
+      x2 = a + phi * (b - a), c2 = cost(x2, false);
     }
   }
-  e.offset = 0.5 * (lo + hi);
+  e.offset = 0.5 * (a + b);
   e.observable = true;
   e.how = std::string(by_magnitude ? "|w| matched" : "rate vectors matched") + ", refined on " +
-          (mount ? "the vectors through the given mount" : "the vectors through the best mount");
+          (mount ? "the vectors through the given mount" : "the vectors through the best mount") +
+          searched;
   return e;
 }
 

@@ -7,6 +7,7 @@
 // w_S = q_ST w_T) and A = q_VW a fixed rotation, q_VT(t + offset) = A q_WS(t) q_ST.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -45,6 +46,9 @@ class RateTrack {
   /// The rate at t, or nothing outside the track or inside a gap. Calls with increasing t
   /// are cheapest (a cursor moves forward; a smaller t searches from the start).
   std::optional<Eigen::Vector3d> at(double t) const;
+  /// The first and last times of the track (0 for an empty one).
+  double begin() const { return rates_.empty() ? 0.0 : rates_.front().t; }
+  double end() const { return rates_.empty() ? 0.0 : rates_.back().t; }
 
  private:
   const std::vector<TimedRate>& rates_;
@@ -71,9 +75,19 @@ struct OffsetEstimate {
 /// golden-section search within one step. Criterion: the mean squared difference of |w|
 /// (which no mount changes) when |w| varies; otherwise (a constant |w|, e.g. coning) of the
 /// vectors, through `mount` R_ST or, without one, the best rotation per offset.
+///
+/// Bounded: only offsets at which half of the gyro samples can meet the truth are tried (the
+/// range is cut to the data's span), and the grid has at most kMaxOffsetPairings / gyro.size()
+/// points, its step widened when needed (`how` says so), so one search pairs at most about
+/// kMaxOffsetPairings samples whatever max_offset is. `checkpoint` is called before each trial
+/// offset and may throw to stop the search (Ctrl-C).
 OffsetEstimate estimateOffset(const std::vector<TimedRate>& gyro, const RateTrack& truth,
                               double max_offset, double step,
-                              const std::optional<Eigen::Matrix3d>& mount);
+                              const std::optional<Eigen::Matrix3d>& mount,
+                              const std::function<void()>& checkpoint = {});
+
+/// About a second of pairing and comparing samples on one core (20 ns a pairing).
+constexpr double kMaxOffsetPairings = 5e7;
 
 /// The mount R_ST fitted by wahba() to w_S(t_i) and w_T(t_i + offset).
 Eigen::Matrix3d estimateMount(const std::vector<TimedRate>& gyro, const RateTrack& truth,

@@ -64,6 +64,23 @@ drift rate, relative rotation error over 1 s and 10 s, cost per sample, and a re
   --set name=value     one node parameter; repeatable
   --csv PREFIX         writes PREFIX.csv and PREFIX_series.csv (default IN.evaluation)
   --no-progress        no progress line
+
+Times (--offset, --max-offset, --calibration, --truth-gap) are limited to +-2^32 s, the range
+of ROS time. The offset search tries only offsets at which rates and truth overlap, on at most
+about 5e7 / (calibration samples) points. Rate samples with a non-finite component, and truth
+samples that are no rotation, are skipped and counted.
+
+A method is scored when at least half of the samples it compared with the truth, and at least
+100, were integrated from the sample before (not after a gap longer than max_dt or a reset);
+only scored methods are recommended.
+
+Exit codes:
+  0    the table and both CSVs are complete, with a recommendation
+  1    the bag could not be read (missing, truncated, damaged) or a CSV not written
+  2    usage: bad options or parameters, or an output that is an input
+  3    the bag was read, but no method was scored (the report says why): no recommendation,
+       no CSV written
+  128+N  stopped by signal N (130: Ctrl-C); nothing written
 )";
 
 constexpr double kNs = 1e-9;
@@ -71,6 +88,13 @@ constexpr std::size_t kBatch = 512;
 constexpr std::size_t kSeriesPoints = 2048;  // per method, before bins merge
 const double kWindows[2] = {1.0, 10.0};      // relative rotation error windows, s
 constexpr std::uint64_t kWindowStride = 4;
+// Times given on the command line: at most the range of ROS time, so that a stamp plus an
+// offset stays within a 64-bit count of nanoseconds (2 * 2^32 s < 9.2e9 s).
+constexpr double kMaxSeconds = 4294967296.0;
+// Scored (recommendable): at least this share of a method's compared samples, and at least
+// kMinScored of them, integrated from the sample before.
+constexpr double kMinScoredShare = 0.5;
+constexpr std::uint64_t kMinScored = 100;
 
 struct Options {
   std::string input;
@@ -124,16 +148,19 @@ Options parseOptions(int argc, char** argv) {
       double c[4];
       for (double& x : c) x = parseNumber(a, optionValue(argc, argv, i));
       const auto q = safeNormalized(Eigen::Quaterniond(c[3], c[0], c[1], c[2]));
-      if (!q) throw ToolError("--mount: a zero quaternion");
+      if (!q) throw UsageError("--mount: a zero quaternion");
       o.mount = *q;
     } else if (a == "--offset") {
-      o.offset = parseNumber(a, optionValue(argc, argv, i));
+      o.offset = parseNumber(a, optionValue(argc, argv, i), kMaxSeconds, "the range of ROS time");
     } else if (a == "--max-offset") {
-      o.max_offset = parseNumber(a, optionValue(argc, argv, i));
+      o.max_offset =
+          parseNumber(a, optionValue(argc, argv, i), kMaxSeconds, "the range of ROS time");
     } else if (a == "--calibration") {
-      o.calibration = parseNumber(a, optionValue(argc, argv, i));
+      o.calibration =
+          parseNumber(a, optionValue(argc, argv, i), kMaxSeconds, "the range of ROS time");
     } else if (a == "--truth-gap") {
-      o.truth_gap = parseNumber(a, optionValue(argc, argv, i));
+      o.truth_gap =
+          parseNumber(a, optionValue(argc, argv, i), kMaxSeconds, "the range of ROS time");
     } else if (a == "--integrators") {
       o.integrators = splitList(optionValue(argc, argv, i));
     } else if (a == "--rate-samples") {
@@ -147,26 +174,48 @@ Options parseOptions(int argc, char** argv) {
     } else if (a == "--no-progress") {
       o.progress = false;
     } else if (!a.empty() && a[0] == '-') {
-      throw ToolError(a + ": unknown option (see --help)");
+      throw UsageError(a + ": unknown option (see --help)");
     } else if (o.input.empty()) {
       o.input = a;
     } else {
-      throw ToolError(a + ": one input bag only (see --help)");
+      throw UsageError(a + ": one input bag only (see --help)");
     }
   }
-  if (o.input.empty()) throw ToolError("no input bag (see --help)");
+  if (o.input.empty()) throw UsageError("no input bag (see --help)");
   if (o.truth_topic.empty() == o.tf_parent.empty()) {
-    throw ToolError("give the truth as --truth TOPIC or --truth-tf PARENT CHILD (one of them)");
+    throw UsageError("give the truth as --truth TOPIC or --truth-tf PARENT CHILD (one of them)");
   }
   if (!(o.max_offset >= 0.0) || !(o.calibration > 0.0) || (o.truth_gap && !(*o.truth_gap > 0.0))) {
-    throw ToolError("--max-offset must be >= 0, --calibration and --truth-gap > 0");
+    throw UsageError("--max-offset must be >= 0, --calibration and --truth-gap > 0");
   }
   for (const auto& c : configs) loadConfigFile(c, o.parameters);
   for (const auto& s : sets) applySetting(s, o.parameters);
+  // Each method's parameters refused now (std::invalid_argument: a usage error), not after
+  // the bag is opened; a method named twice runs once.
+  for (auto* list : {&o.integrators, &o.rate_samples}) {
+    std::vector<std::string> unique;
+    for (const auto& x : *list) {
+      if (std::find(unique.begin(), unique.end(), x) == unique.end()) unique.push_back(x);
+    }
+    *list = unique;
+  }
+  for (const auto& samples : o.rate_samples) {
+    for (const auto& integrator : o.integrators) {
+      Parameters p = o.parameters;
+      p.model = "kinematic";
+      p.integrator = integrator;
+      p.rate_samples = samples;
+      validateParameters(p);
+    }
+  }
   if (o.prefix.empty()) {
     const bool bag = o.input.size() > 4 && o.input.compare(o.input.size() - 4, 4, ".bag") == 0;
     o.prefix = (bag ? o.input.substr(0, o.input.size() - 4) : o.input) + ".evaluation";
   }
+  std::vector<std::string> inputs = configs;
+  inputs.push_back(o.input);
+  for (const char* suffix : {".csv", "_series.csv"})
+    refuseOutputOverInput(o.prefix + suffix, inputs);
   return o;
 }
 
@@ -315,6 +364,7 @@ class Method : public EngineSink {
       engine_->submit(input);
       ++n;
     }
+    fed_ += n;
     const double ns =
         std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - start).count();
     if (n > 0) batch_costs_.push_back(static_cast<float>(ns / double(n)));
@@ -337,6 +387,16 @@ class Method : public EngineSink {
 
   // Results
   std::uint64_t compared = 0, in_gap = 0, outside = 0;
+  /// Compared samples integrated from the one before: those after a gap longer than max_dt or
+  /// a reset only restart the integration (the state is held), so they do not score a method.
+  std::uint64_t integrated() const {
+    const EngineCounters& c = engine_->counters();
+    const std::uint64_t restarts = c.gaps + c.resets + (fed_ > 0 ? 1 : 0);  // the first too
+    return compared > restarts ? compared - restarts : 0;
+  }
+  bool scored() const {
+    return integrated() >= kMinScored && double(integrated()) >= kMinScoredShare * double(compared);
+  }
   double max_error = 0.0;
   /// The median over the batches of the time per sample: a batch during which the process
   /// was descheduled (the machine is shared) does not count.
@@ -365,6 +425,7 @@ class Method : public EngineSink {
   std::string integrator_, samples_;
   std::unique_ptr<AttitudeEngine> engine_;
   bool started_ = false;
+  std::uint64_t fed_ = 0;
   std::vector<float> batch_costs_;                            // ns per sample, one per batch
   std::deque<std::pair<Stamp, Eigen::Quaterniond>> pending_;  // states awaiting the truth
   std::optional<Eigen::Quaterniond> align_;                   // A = q_VW
@@ -452,12 +513,14 @@ class Evaluation {
         methods_.push_back(std::make_unique<Method>(i, s, o.parameters));
       }
     }
-    if (methods_.empty()) throw ToolError("no method to run (--integrators, --rate-samples)");
+    if (methods_.empty()) throw UsageError("no method to run (--integrators, --rate-samples)");
   }
 
   void run(rosbag::Bag& bag);
   void report(std::FILE* out) const;
   void writeCsv(const std::string& summary_path, const std::string& series_path);
+  /// Why no method can be recommended, or nothing.
+  std::optional<std::string> noRecommendation() const;
 
  private:
   void checkTopics(rosbag::Bag& bag);
@@ -468,6 +531,7 @@ class Evaluation {
   void calibrate();
   void push(const RateSample& s);
   void flush(bool at_end);
+  /// The recommended method (among the scored ones; see noRecommendation()).
   std::size_t recommended() const;
   /// One truth lookup per reading (the two readings look at different offsets).
   TruthLookup& lookup(const Method& m) {
@@ -505,6 +569,7 @@ class Evaluation {
   std::string mount_note_;
   Eigen::Quaterniond mount_ = Eigen::Quaterniond::Identity();
   std::uint64_t rate_count_ = 0, truth_count_ = 0, truth_unordered_ = 0, before_truth_ = 0;
+  std::uint64_t rate_non_finite_ = 0, truth_unusable_ = 0;
   Stamp first_rate_ = 0, last_rate_ = 0;
   double wall_ = 0.0;
 };
@@ -524,7 +589,7 @@ void Evaluation::checkTopics(rosbag::Bag& bag) {
     truth_type_ = requireTopic(bag, o_.tf_topic, "tf", {typeOf<tf2_msgs::TFMessage>()});
     truth_topic_ = recordedName(bag, o_.tf_topic);
   }
-  if (truth_topic_ == rates_topic_) throw ToolError("the rate and truth topics are the same");
+  if (truth_topic_ == rates_topic_) throw UsageError("the rate and truth topics are the same");
 }
 
 void Evaluation::run(rosbag::Bag& bag) {
@@ -550,6 +615,11 @@ void Evaluation::handle(const rosbag::MessageInstance& m) {
   if (m.getTopic() == rates_topic_) {
     RateSample s;
     if (!decodeRate(m, s)) return;
+    if (!s.w.allFinite()) {
+      // Skipped like a lost sample: one NaN would otherwise reach the offset search's sums.
+      ++rate_non_finite_;
+      return;
+    }
     if (rate_count_++ == 0) first_rate_ = s.stamp;
     last_rate_ = std::max(last_rate_, s.stamp);
     if (!calibrating_) return push(s);
@@ -608,7 +678,10 @@ bool Evaluation::decodeTruth(const rosbag::MessageInstance& m, TruthSample& out)
     out = {stampOr(it->header.stamp, record_), rotationOf(*it)};
   }
   const auto q = safeNormalized(out.q);
-  if (!q) return false;
+  if (!q) {
+    ++truth_unusable_;  // non-finite or zero: no rotation
+    return false;
+  }
   out.q = *q;
   return true;
 }
@@ -647,8 +720,10 @@ void Evaluation::calibrate() {
   calibrating_ = false;
   if (truth_.size() < 3 || calibration_rates_.size() < 10) {
     throw ToolError("too little data to align: " + std::to_string(truth_.size()) +
-                    " truth samples and " + std::to_string(calibration_rates_.size()) +
-                    " rate samples overlap in the first " + std::to_string(o_.calibration) + " s");
+                        " truth samples and " + std::to_string(calibration_rates_.size()) +
+                        " rate samples overlap in the first " + std::to_string(o_.calibration) +
+                        " s",
+                    kExitNothingUsable);
   }
   // Seconds from the first truth stamp keep the calibration arithmetic precise.
   const Stamp base = truth_.front().stamp;
@@ -674,7 +749,7 @@ void Evaluation::calibrate() {
     offset_estimate_ = {*o_.offset, true, "given"};
   } else {
     const double step = 0.5 * std::min(truth_period_, rate_period_);
-    offset_estimate_ = estimateOffset(gyro, track, o_.max_offset, step, mount);
+    offset_estimate_ = estimateOffset(gyro, track, o_.max_offset, step, mount, throwIfInterrupted);
   }
   offset_instantaneous_ = offset_estimate_.offset;
   // A sample taken as the mean over the interval it closes stands for its middle, half a
@@ -716,19 +791,39 @@ void Evaluation::flush(bool at_end) {
 }
 
 std::size_t Evaluation::recommended() const {
-  // The cheapest method whose RMS error is within 10 % of the best one's: below that the
-  // difference is not worth its cost on this data.
+  // The cheapest scored method whose RMS error is within 10 % of the best one's: below that
+  // the difference is not worth its cost on this data.
   double best = std::numeric_limits<double>::infinity();
   for (const auto& m : methods_) {
-    if (m->compared > 0) best = std::min(best, m->rms());
+    if (m->scored()) best = std::min(best, m->rms());
   }
   std::size_t pick = 0;
   double cost = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < methods_.size(); ++i) {
     const Method& m = *methods_[i];
-    if (m.compared > 0 && m.rms() <= 1.1 * best && m.costNs() < cost) pick = i, cost = m.costNs();
+    if (m.scored() && m.rms() <= 1.1 * best && m.costNs() < cost) pick = i, cost = m.costNs();
   }
   return pick;
+}
+
+std::optional<std::string> Evaluation::noRecommendation() const {
+  for (const auto& m : methods_) {
+    if (m->scored()) return std::nullopt;
+  }
+  // Say it for the method that came closest.
+  const Method* closest = methods_.front().get();
+  for (const auto& m : methods_) {
+    if (m->integrated() > closest->integrated()) closest = m.get();
+  }
+  const EngineCounters& c = closest->counters();
+  return "no method was scored on enough of the truth (at least half of its compared samples, "
+         "and at least " +
+         std::to_string(kMinScored) + ", integrated from the sample before): " + closest->name() +
+         " integrated " + std::to_string(closest->integrated()) + " of " +
+         std::to_string(closest->compared) + " compared (" + std::to_string(c.gaps) +
+         " gaps longer than max_dt, " + std::to_string(c.resets) + " resets; " +
+         std::to_string(closest->in_gap) + " samples in truth gaps, " +
+         std::to_string(closest->outside + before_truth_) + " outside the truth)";
 }
 
 void Evaluation::report(std::FILE* out) const {
@@ -746,6 +841,13 @@ void Evaluation::report(std::FILE* out) const {
                                        " out-of-order truth samples ignored")
                                           .c_str()
                                     : "");
+  if (rate_non_finite_ > 0 || truth_unusable_ > 0) {
+    std::fprintf(out,
+                 "  skipped: %llu rate samples with a non-finite component, %llu truth samples "
+                 "that are no rotation\n",
+                 static_cast<unsigned long long>(rate_non_finite_),
+                 static_cast<unsigned long long>(truth_unusable_));
+  }
   std::fprintf(out,
                "  time offset (truth - rates): %+.4f ms as instantaneous, %+.4f ms as interval "
                "averages (%s)\n",
@@ -763,6 +865,7 @@ void Evaluation::report(std::FILE* out) const {
                static_cast<unsigned long long>(before_truth_));
   std::fprintf(out, "\n  %-24s %10s %10s %11s %10s %10s %9s\n", "method", "max [rad]", "RMS [rad]",
                "drift[rad/s]", "RPE 1 s", "RPE 10 s", "ns/sample");
+  const auto refused = noRecommendation();
   const std::size_t pick = recommended();
   for (std::size_t i = 0; i < methods_.size(); ++i) {
     const Method& m = *methods_[i];
@@ -776,10 +879,19 @@ void Evaluation::report(std::FILE* out) const {
       }
       return std::string(text);
     };
-    std::fprintf(
-        out, "  %-24s %s %s %s %s %s %9.1f%s\n", m.name().c_str(), cell(m.max_error, 10).c_str(),
-        cell(m.rms(), 10).c_str(), cell(m.drift(), 11).c_str(), cell(m.window(0).rms(), 10).c_str(),
-        cell(m.window(1).rms(), 10).c_str(), m.costNs(), i == pick ? "  <- recommended" : "");
+    std::fprintf(out, "  %-24s %s %s %s %s %s %9.1f%s\n", m.name().c_str(),
+                 cell(m.max_error, 10).c_str(), cell(m.rms(), 10).c_str(),
+                 cell(m.drift(), 11).c_str(), cell(m.window(0).rms(), 10).c_str(),
+                 cell(m.window(1).rms(), 10).c_str(), m.costNs(),
+                 !m.scored()             ? "  (not scored)"
+                 : !refused && i == pick ? "  <- recommended"
+                                         : "");
+  }
+  if (refused) {
+    std::fprintf(out, "\n  no recommendation: %s\n  %.3f s wall for %llu messages\n",
+                 refused->c_str(), wall_,
+                 static_cast<unsigned long long>(rate_count_ + truth_count_));
+    return;
   }
   const Method& r = *methods_[pick];
   std::fprintf(out,
@@ -790,7 +902,7 @@ void Evaluation::report(std::FILE* out) const {
 }
 
 void Evaluation::writeCsv(const std::string& summary_path, const std::string& series_path) {
-  CsvFile summary(summary_path);
+  CsvFile summary(summary_path, o_.prefix + ".csv");
   std::fputs(
       "method,integrator,rate_samples,offset_s,compared,in_truth_gaps,outside_truth,"
       "max_error_rad,rms_error_rad,drift_rad_per_s,rpe_1s_rms_rad,rpe_1s_max_rad,"
@@ -808,24 +920,35 @@ void Evaluation::writeCsv(const std::string& summary_path, const std::string& se
         i == pick ? 1 : 0);
   }
   summary.close();
-  CsvFile series(series_path);
+  CsvFile series(series_path, o_.prefix + "_series.csv");
   std::fputs("method,t_s,error_rad\n", series.get());
   for (auto& m : methods_) {
     for (const auto& [t, e] : m->series.points()) {
       std::fprintf(series.get(), "%s,%.6f,%.6g\n", m->name().c_str(), t, e);
+      series.check();
     }
   }
   series.close();
 }
 
 int run(int argc, char** argv) {
-  const Options o = parseOptions(argc, argv);
   catchInterrupts();
+  const Options o = parseOptions(argc, argv);
   rosbag::Bag bag;
   openBag(bag, o.input);
   PendingFile summary(o.prefix + ".csv"), series(o.prefix + "_series.csv");
   Evaluation evaluation(o);
+  // The CSVs: a row per method, and at most kSeriesPoints of about 48 bytes per method.
+  requireFreeSpace(
+      summary.path(),
+      (o.integrators.size() * o.rate_samples.size()) * (kSeriesPoints * 48 + 512) + 4096);
   evaluation.run(bag);
+  throwIfInterrupted();  // a signal during the last comparisons: still no output
+  if (const auto why = evaluation.noRecommendation()) {
+    evaluation.report(stdout);
+    throw ToolError(o.input + ": no recommendation: " + *why + "; no CSV written",
+                    kExitNothingUsable);
+  }
   evaluation.writeCsv(summary.temporary(), series.temporary());
   summary.commit();
   series.commit();
@@ -839,10 +962,6 @@ int run(int argc, char** argv) {
 }  // namespace attitude_propagator
 
 int main(int argc, char** argv) {
-  try {
-    return attitude_propagator::tools::run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "evaluate_bag: %s\n", e.what());
-    return 1;
-  }
+  return attitude_propagator::tools::runTool("evaluate_bag", attitude_propagator::tools::run, argc,
+                                             argv);
 }

@@ -8,9 +8,11 @@
 // Time, as the node under sim time: a /clock topic in the bag drives the engine's clock. Without
 // one, the input stamps do (each input is submitted, then the clock ticks to its stamp, so a
 // grid stamp's state includes the inputs stamped up to it).
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -58,6 +60,20 @@ the machine allows, and writes attitude_state, imu/data and /tf into a bag (or a
                          identity state per input): the I/O cost alone, for benchmarks
   --no-progress          no progress line (it is shown only on a terminal anyway)
   -h, --help             this text
+
+The output never replaces an input (the bag or a --config file, under any name: refused), is
+written under a temporary name in its directory and appears under its own name only when
+complete; the run is refused at the start when the file system has less free space than the
+output's estimated size.
+
+Exit codes:
+  0    the output is complete and holds the states of the accepted inputs
+  1    an input could not be read (missing, truncated, damaged) or the output not written
+       (full disk, no permission); nothing is left under the output name
+  2    usage: bad options or parameters, or an output that is an input
+  3    the bag was read to the end but no input was accepted (or no state published); the
+       summary counts why (e.g. "no-tf 4001"), and no output is written
+  128+N  stopped by signal N (130: Ctrl-C, 143: SIGTERM, 129: SIGHUP); no output is written
 )";
 
 struct Options {
@@ -79,7 +95,7 @@ struct Options {
 BagOutput::Compression parseCompression(const std::string& name) {
   if (name == "none") return BagOutput::Compression::None;
   if (name == "lz4") return BagOutput::Compression::Lz4;
-  throw ToolError("--compression " + name + ": none or lz4");
+  throw UsageError("--compression " + name + ": none or lz4");
 }
 
 Options parseOptions(int argc, char** argv) {
@@ -114,20 +130,24 @@ Options parseOptions(int argc, char** argv) {
     } else if (a == "--no-progress") {
       o.progress = false;
     } else if (!a.empty() && a[0] == '-') {
-      throw ToolError(a + ": unknown option (see --help)");
+      throw UsageError(a + ": unknown option (see --help)");
     } else if (o.input.empty()) {
       o.input = a;
     } else {
-      throw ToolError(a + ": one input bag only (see --help)");
+      throw UsageError(a + ": one input bag only (see --help)");
     }
   }
-  if (o.input.empty()) throw ToolError("no input bag (see --help)");
+  if (o.input.empty()) throw UsageError("no input bag (see --help)");
   for (const auto& c : configs) loadConfigFile(c, o.parameters);
   for (const auto& s : sets) applySetting(s, o.parameters);
+  validateParameters(o.parameters);  // std::invalid_argument: a usage error, before any reading
   if (o.output.empty()) {
     const bool bag = o.input.size() > 4 && o.input.compare(o.input.size() - 4, 4, ".bag") == 0;
     o.output = (bag ? o.input.substr(0, o.input.size() - 4) : o.input) + ".propagated.bag";
   }
+  std::vector<std::string> inputs = configs;
+  inputs.push_back(o.input);
+  refuseOutputOverInput(o.output, inputs);
   if (o.rates_topic.empty()) {
     o.rates_topic = o.parameters.rate_input == "twist" ? "/body_twist" : "/imu/data_raw";
   }
@@ -142,6 +162,10 @@ Options parseOptions(int argc, char** argv) {
 class Writer {
  public:
   virtual ~Writer() = default;
+  /// Bytes the output takes per state and per republished IMU message (an estimate for the
+  /// free-space check: the messages as they will be written, with their frame names).
+  virtual double bytesPerState() const = 0;
+  virtual double bytesPerImu() const = 0;
   virtual void state(const EngineState& s, const ros::Time& record) = 0;
   virtual void imu(const sensor_msgs::Imu& input, const EngineState& s,
                    const Eigen::Quaterniond& q_BI, const ros::Time& record) = 0;
@@ -153,7 +177,10 @@ class BagWriter : public Writer {
  public:
   BagWriter(const std::string& path, const Options& o, const Parameters& p,
             const AttitudeEngine& engine)
-      : bag_(path, o.compression), publish_tf_(p.publish_tf), reverse_tf_(p.reverse_tf) {
+      : bag_(path, o.output, o.compression),
+        lz4_(o.compression == BagOutput::Compression::Lz4),
+        publish_tf_(p.publish_tf),
+        reverse_tf_(p.reverse_tf) {
     state_.header.frame_id = p.fixed_frame;
     state_.child_frame_id = p.body_frame;
     state_.model = engine.modelName();
@@ -196,8 +223,27 @@ class BagWriter : public Writer {
 
   void close() override { bag_.close(); }
 
+  // A record is its header (op, conn and time fields: 38 bytes), two lengths and the message,
+  // plus a 12-byte index entry. LZ4 stores these streams about 5x smaller (README); a quarter
+  // is assumed.
+  double bytesPerState() const override {
+    const double bytes = record(state_) + (publish_tf_ ? record(tf_) : 0.0);
+    return lz4_ ? bytes / 4 : bytes;
+  }
+  double bytesPerImu() const override {
+    sensor_msgs::Imu imu;
+    imu.header.frame_id = "imu_link";
+    return lz4_ ? record(imu) / 4 : record(imu);
+  }
+
  private:
+  template <class M>
+  static double record(const M& msg) {
+    return 4 + 38 + 4 + ros::serialization::serializationLength(msg) + 12;
+  }
+
   BagOutput bag_;
+  bool lz4_;
   bool publish_tf_;
   bool reverse_tf_;
   AttitudeState state_;
@@ -208,7 +254,7 @@ class BagWriter : public Writer {
 /// One line per state.
 class CsvWriter : public Writer {
  public:
-  explicit CsvWriter(const std::string& path) : file_(path) {
+  CsvWriter(const std::string& path, const std::string& name) : file_(path, name) {
     std::fputs(
         "stamp,qx,qy,qz,qw,wx,wy,wz,P_xx,P_xy,P_xz,P_yx,P_yy,P_yz,P_zx,P_zy,P_zz,norm_error,"
         "steps,Mx,My,Mz,kinetic_energy\n",
@@ -216,22 +262,46 @@ class CsvWriter : public Writer {
   }
 
   void state(const EngineState& s, const ros::Time&) override {
-    const auto& q = s.q_WB;
-    const auto& P = s.P_B;
-    std::fprintf(file_.get(),
-                 "%s,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,"
-                 "%.9g,%.9g,%.9g,%.3g,%llu,%.17g,%.17g,%.17g,%.17g\n",
-                 formatStamp(s.stamp).c_str(), q.x(), q.y(), q.z(), q.w(), s.w_B.x(), s.w_B.y(),
-                 s.w_B.z(), P(0, 0), P(0, 1), P(0, 2), P(1, 0), P(1, 1), P(1, 2), P(2, 0), P(2, 1),
-                 P(2, 2), s.norm_error, static_cast<unsigned long long>(s.steps), s.M_B.x(),
-                 s.M_B.y(), s.M_B.z(), s.kinetic_energy);
+    const int n = format(s, row_, sizeof row_);
+    std::fwrite(row_, 1, static_cast<std::size_t>(std::min<int>(n, sizeof row_ - 1)), file_.get());
+    file_.check();
   }
   void imu(const sensor_msgs::Imu&, const EngineState&, const Eigen::Quaterniond&,
            const ros::Time&) override {}
   void close() override { file_.close(); }
 
+  /// A row of numbers as long as they print (negative, 17 digits, 3-digit exponents).
+  double bytesPerState() const override {
+    EngineState s;
+    const double x = -0.12345678901234567e-100;
+    s.stamp = std::numeric_limits<Stamp>::max();
+    s.q_WB.coeffs().setConstant(x);
+    s.w_B.setConstant(x);
+    s.P_B.setConstant(x);
+    s.M_B.setConstant(x);
+    s.norm_error = s.kinetic_energy = x;
+    s.steps = std::numeric_limits<decltype(s.steps)>::max();
+    char row[sizeof row_];
+    return format(s, row, sizeof row);
+  }
+  double bytesPerImu() const override { return 0.0; }
+
  private:
+  static int format(const EngineState& s, char* row, std::size_t size) {
+    const auto& q = s.q_WB;
+    const auto& P = s.P_B;
+    return std::snprintf(row, size,
+                         "%s,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.9g,%.9g,%.9g,%.9g,%.9g,"
+                         "%.9g,%.9g,%.9g,%.9g,%.3g,%llu,%.17g,%.17g,%.17g,%.17g\n",
+                         formatStamp(s.stamp).c_str(), q.x(), q.y(), q.z(), q.w(), s.w_B.x(),
+                         s.w_B.y(), s.w_B.z(), P(0, 0), P(0, 1), P(0, 2), P(1, 0), P(1, 1), P(1, 2),
+                         P(2, 0), P(2, 1), P(2, 2), s.norm_error,
+                         static_cast<unsigned long long>(s.steps), s.M_B.x(), s.M_B.y(), s.M_B.z(),
+                         s.kinetic_energy);
+  }
+
   CsvFile file_;
+  char row_[1024];
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -251,9 +321,11 @@ class BagPropagator : public EngineSink {
     engine_ = std::make_unique<AttitudeEngine>(engineConfig(config_), *this);
   }
 
-  /// Checks the topics, then runs; writes into `path` (a temporary name).
+  /// Checks the topics and the free space, then runs; writes into `path` (a temporary name).
   void run(const std::string& path);
-  void summary(std::FILE* out) const;
+  /// Why the output holds nothing usable (nothing accepted, no state), or nothing.
+  std::optional<std::string> nothingUsable() const;
+  void summary(std::FILE* out, bool written) const;
 
   // EngineSink
   void publishState(const EngineState& state) override {
@@ -347,12 +419,25 @@ std::vector<std::string> BagPropagator::checkTopics() {
 void BagPropagator::run(const std::string& path) {
   const std::vector<std::string> topics = checkTopics();
   if (o_.csv) {
-    writer_ = std::make_unique<CsvWriter>(path);
+    writer_ = std::make_unique<CsvWriter>(path, o_.output);
   } else {
     writer_ = std::make_unique<BagWriter>(path, o_, config_.parameters, *engine_);
   }
   rosbag::View view(bag_, rosbag::TopicQuery(topics));
   bag_seconds_ = (view.getEndTime() - view.getBeginTime()).toSec();
+  // The output's size: a state per rate input (kinematic) or per grid stamp (dynamic), and
+  // each IMU input republished; the bag's header and index besides.
+  const std::uint64_t rates =
+      rates_.empty() ? 0 : rosbag::View(bag_, rosbag::TopicQuery(rates_)).size();
+  const double states = config_.model == Model::Dynamic && !o_.io_floor
+                            ? config_.parameters.publish_rate * bag_seconds_ + 1.0
+                            : double(o_.io_floor ? view.size() : rates);
+  const double imu = config_.rate_input == RateInput::Imu && !o_.csv ? double(rates) : 0.0;
+  constexpr double kBagOverhead = 64 * 1024;
+  requireFreeSpace(
+      o_.output,
+      static_cast<std::uint64_t>(std::min(
+          states * writer_->bytesPerState() + imu * writer_->bytesPerImu() + kBagOverhead, 1e18)));
   Progress progress(view.size(), o_.progress);
   visitMessages(view, o_.input, progress, messages_, [this](const rosbag::MessageInstance& m) {
     record_ = m.getTime();
@@ -545,7 +630,14 @@ std::optional<Eigen::Quaterniond> BagPropagator::staticRotation(const std::strin
   }
 }
 
-void BagPropagator::summary(std::FILE* out) const {
+std::optional<std::string> BagPropagator::nothingUsable() const {
+  const std::uint64_t accepted = o_.io_floor ? floor_accepted_ : engine_->counters().accepted;
+  if (accepted == 0) return "no input accepted";
+  if (states_ == 0) return "no state published (the clock never reached a grid stamp)";
+  return std::nullopt;
+}
+
+void BagPropagator::summary(std::FILE* out, bool written) const {
   const EngineCounters& c = engine_->counters();
   std::string by_topic;
   for (const auto& [topic, n] : read_) {
@@ -566,30 +658,36 @@ void BagPropagator::summary(std::FILE* out) const {
   add("no-time", c.dropped_no_time);
   add("bias", c.rejected_bias);
   const std::uint64_t accepted = o_.io_floor ? floor_accepted_ : c.accepted;
-  std::fprintf(
-      out,
-      "propagate_bag: %llu messages (%s), %llu accepted, dropped: %s; %llu resets, "
-      "%llu gaps, %llu late; %llu states -> %s; %.3f s wall, %.0f msg/s, %.0fx real "
-      "time%s\n",
-      static_cast<unsigned long long>(messages_), by_topic.c_str(),
-      static_cast<unsigned long long>(accepted), dropped.empty() ? "none" : dropped.c_str(),
-      static_cast<unsigned long long>(c.resets), static_cast<unsigned long long>(c.gaps),
-      static_cast<unsigned long long>(c.late), static_cast<unsigned long long>(states_),
-      o_.output.c_str(), wall_, wall_ > 0 ? double(messages_) / wall_ : 0.0,
-      wall_ > 0 ? bag_seconds_ / wall_ : 0.0, o_.io_floor ? " (I/O floor: no propagation)" : "");
+  std::fprintf(out,
+               "propagate_bag: %llu messages (%s), %llu accepted, dropped: %s; %llu resets, "
+               "%llu gaps, %llu late; %llu states -> %s; %.3f s wall, %.0f msg/s, %.0fx real "
+               "time%s\n",
+               static_cast<unsigned long long>(messages_), by_topic.c_str(),
+               static_cast<unsigned long long>(accepted),
+               dropped.empty() ? "none" : dropped.c_str(),
+               static_cast<unsigned long long>(c.resets), static_cast<unsigned long long>(c.gaps),
+               static_cast<unsigned long long>(c.late), static_cast<unsigned long long>(states_),
+               written ? o_.output.c_str() : "nothing written", wall_,
+               wall_ > 0 ? double(messages_) / wall_ : 0.0, wall_ > 0 ? bag_seconds_ / wall_ : 0.0,
+               o_.io_floor ? " (I/O floor: no propagation)" : "");
 }
 
 int run(int argc, char** argv) {
-  const Options o = parseOptions(argc, argv);
   catchInterrupts();
+  const Options o = parseOptions(argc, argv);
   rosbag::Bag bag;
   openBag(bag, o.input);
   PendingFile output(o.output);  // destroyed last: the writer closes before it is removed
   BagPropagator propagator(o, bag);
   propagator.run(output.temporary());
+  throwIfInterrupted();  // a signal after the last message: still no output
+  if (const auto why = propagator.nothingUsable()) {
+    propagator.summary(stdout, false);
+    throw ToolError(o.input + ": " + *why + "; no output written", kExitNothingUsable);
+  }
   output.commit();
-  propagator.summary(stdout);
-  return 0;
+  propagator.summary(stdout, true);
+  return kExitOk;
 }
 
 }  // namespace
@@ -597,10 +695,6 @@ int run(int argc, char** argv) {
 }  // namespace attitude_propagator
 
 int main(int argc, char** argv) {
-  try {
-    return attitude_propagator::tools::run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "propagate_bag: %s\n", e.what());
-    return 1;
-  }
+  return attitude_propagator::tools::runTool("propagate_bag", attitude_propagator::tools::run, argc,
+                                             argv);
 }

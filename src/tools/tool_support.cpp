@@ -1,5 +1,7 @@
 #include "tool_support.h"
 
+#include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -14,6 +16,8 @@
 
 #include <roslz4/lz4s.h>
 #include <yaml-cpp/yaml.h>
+
+#include "bag_check.h"
 
 namespace attitude_propagator {
 namespace tools {
@@ -87,9 +91,71 @@ void setParameter(Parameters& p, const std::string& name, const YAML::Node& valu
 // Interrupts
 // ---------------------------------------------------------------------------------------------
 
-std::atomic<bool> g_interrupted{false};
+// The first signal only sets g_signal: the run stops at its next check and unwinds, which
+// removes the partial files. A second one (the user insists, or the run is stuck in a long
+// system call) removes them here and exits at once. The handler reads only lock-free atomics
+// and fixed arrays and calls only unlink() and _exit(), which are async-signal-safe.
+std::atomic<int> g_signal{0};
+constexpr int kPendingSlots = 4;
+constexpr std::size_t kPendingPath = 4096;
+std::atomic<bool> g_pending_used[kPendingSlots];
+char g_pending_path[kPendingSlots][kPendingPath];
 
-extern "C" void onSignal(int) { g_interrupted = true; }
+extern "C" void onSignal(int signal) {
+  int none = 0;
+  if (g_signal.compare_exchange_strong(none, signal)) return;
+  for (int i = 0; i < kPendingSlots; ++i) {
+    if (g_pending_used[i].load()) ::unlink(g_pending_path[i]);
+  }
+  ::_exit(128 + signal);
+}
+
+/// Makes `path` known to the signal handler; returns its slot, or -1 when none is free (or the
+/// name is too long), and then only the destructor removes it.
+int registerPending(const std::string& path) {
+  if (path.size() >= kPendingPath) return -1;
+  for (int i = 0; i < kPendingSlots; ++i) {
+    if (g_pending_used[i].load()) continue;
+    std::memcpy(g_pending_path[i], path.c_str(), path.size() + 1);
+    g_pending_used[i].store(true);  // after the name is complete
+    return i;
+  }
+  return -1;
+}
+
+void unregisterPending(int slot) {
+  if (slot >= 0) g_pending_used[slot].store(false);
+}
+
+std::string directoryOf(const std::string& path) {
+  const auto slash = path.rfind('/');
+  if (slash == std::string::npos) return ".";
+  return slash == 0 ? "/" : path.substr(0, slash);
+}
+
+/// The absolute path without symlinks, "." or "..": of the file itself when it exists,
+/// otherwise of its directory followed by its name.
+std::string canonicalPath(const std::string& path) {
+  if (char* full = ::realpath(path.c_str(), nullptr)) {
+    const std::string text = full;
+    std::free(full);
+    return text;
+  }
+  const auto slash = path.rfind('/');
+  const std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
+  if (char* dir = ::realpath(directoryOf(path).c_str(), nullptr)) {
+    const std::string text = std::string(dir) + "/" + name;
+    std::free(dir);
+    return text;
+  }
+  return path;
+}
+
+std::string megabytes(std::uint64_t bytes) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f MB", double(bytes) / 1e6);
+  return text;
+}
 
 std::string withSlash(const std::string& topic) {
   return !topic.empty() && topic[0] == '/' ? topic : "/" + topic;
@@ -105,6 +171,9 @@ void loadConfigFile(const std::string& path, Parameters& p) {
     throw std::invalid_argument("--config " + path + ": cannot open the file");
   } catch (const YAML::Exception& e) {
     throw std::invalid_argument("--config " + path + ": not YAML (" + e.what() + ")");
+  } catch (const std::exception& e) {
+    // The stream's own errors, e.g. a directory opens but cannot be read.
+    throw std::invalid_argument("--config " + path + ": cannot read the file (" + e.what() + ")");
   }
   if (root.IsNull()) return;  // an empty file sets nothing
   if (!root.IsMap()) {
@@ -127,11 +196,39 @@ void applySetting(const std::string& assignment, Parameters& p) {
   setParameter(p, assignment.substr(0, eq), value);
 }
 
+int runTool(const char* name, int (*run)(int, char**), int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const ToolError& e) {
+    std::fprintf(stderr, "%s: %s\n", name, e.what());
+    return e.exit_code;
+  } catch (const std::invalid_argument& e) {
+    // The parameters' loader and validator refuse a value this way.
+    std::fprintf(stderr, "%s: %s\n", name, e.what());
+    return kExitUsage;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr, "%s: out of memory\n", name);
+    return kExitFailed;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: %s\n", name, e.what());
+    return kExitFailed;
+  } catch (...) {
+    std::fprintf(stderr, "%s: unexpected error\n", name);
+    return kExitFailed;
+  }
+}
+
 void openBag(rosbag::Bag& bag, const std::string& path) {
+  struct stat file {};
+  if (::stat(path.c_str(), &file) == 0 && S_ISDIR(file.st_mode)) {
+    throw ToolError(path + ": is a directory, not a bag");
+  }
   std::ifstream probe(path, std::ios::binary);
   if (!probe) throw ToolError(path + ": cannot open (" + std::strerror(errno) + ")");
   probe.seekg(0, std::ios::end);
   const auto size = static_cast<std::uint64_t>(probe.tellg());
+  probe.close();
+  checkBagStructure(path);
   try {
     bag.open(path, rosbag::bagmode::Read);
   } catch (const rosbag::BagUnindexedException&) {
@@ -245,12 +342,56 @@ void Progress::finish() {
 }
 
 void catchInterrupts() {
-  std::signal(SIGINT, onSignal);
-  std::signal(SIGTERM, onSignal);
+  struct sigaction action {};
+  action.sa_handler = onSignal;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESTART;
+  for (int signal : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(signal, &action, nullptr);
+  std::signal(SIGXFSZ, SIG_IGN);
 }
 
 void throwIfInterrupted() {
-  if (g_interrupted) throw ToolError("interrupted: no output written");
+  if (const int signal = g_signal.load()) {
+    throw ToolError(std::string("interrupted (") + ::strsignal(signal) + "): no output written",
+                    128 + signal);
+  }
+}
+
+void refuseOutputOverInput(const std::string& output, const std::vector<std::string>& inputs) {
+  struct stat out {};
+  const bool exists = ::stat(output.c_str(), &out) == 0;
+  if (exists && S_ISDIR(out.st_mode)) {
+    throw UsageError(output + ": is a directory; give the output's file name");
+  }
+  if (exists && !S_ISREG(out.st_mode)) {
+    // The output is written aside and renamed over its name: that would replace a device or a
+    // pipe, not write into it.
+    throw UsageError(output + ": is not a regular file (a device or a pipe); give a file name");
+  }
+  for (const std::string& input : inputs) {
+    struct stat in {};
+    const bool same = exists && ::stat(input.c_str(), &in) == 0
+                          ? in.st_dev == out.st_dev && in.st_ino == out.st_ino
+                          : canonicalPath(output) == canonicalPath(input);
+    if (same) {
+      throw UsageError(output + ": is the input " + input +
+                       " (the same file); choose another output name");
+    }
+  }
+}
+
+void requireFreeSpace(const std::string& output, std::uint64_t bytes) {
+  const std::string dir = directoryOf(output);
+  struct statvfs fs {};
+  if (::statvfs(dir.c_str(), &fs) != 0) {
+    throw ToolError(output + ": cannot write into " + dir + " (" + std::strerror(errno) + ")");
+  }
+  // f_bavail: the blocks an unprivileged writer may use (root may use a few more).
+  const std::uint64_t available = std::uint64_t(fs.f_bavail) * fs.f_frsize;
+  if (available < bytes) {
+    throw ToolError(output + ": needs about " + megabytes(bytes) + " and its file system has " +
+                    megabytes(available) + " free; free some space or write elsewhere");
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -261,12 +402,14 @@ PendingFile::PendingFile(std::string path) : path_(std::move(path)) {
   const auto slash = path_.rfind('/');
   const std::string dir = slash == std::string::npos ? "" : path_.substr(0, slash + 1);
   const std::string name = slash == std::string::npos ? path_ : path_.substr(slash + 1);
-  if (name.empty()) throw ToolError(path_ + ": not a file name");
+  if (name.empty()) throw UsageError(path_ + ": not a file name");
   temporary_ = dir + "." + name + ".partial-" + std::to_string(::getpid());
+  slot_ = registerPending(temporary_);
 }
 
 PendingFile::~PendingFile() {
   if (!committed_) std::remove(temporary_.c_str());
+  unregisterPending(slot_);
 }
 
 void PendingFile::commit() {
@@ -274,11 +417,13 @@ void PendingFile::commit() {
     throw ToolError(path_ + ": cannot write (" + std::strerror(errno) + ")");
   }
   committed_ = true;
+  unregisterPending(slot_);
+  slot_ = -1;
 }
 
-CsvFile::CsvFile(const std::string& path) : path_(path), buffer_(1 << 20) {
+CsvFile::CsvFile(const std::string& path, const std::string& name) : name_(name), buffer_(1 << 20) {
   file_ = std::fopen(path.c_str(), "w");
-  if (!file_) throw ToolError(path + ": cannot write (" + std::strerror(errno) + ")");
+  if (!file_) throw ToolError(name + ": cannot write (" + std::strerror(errno) + ")");
   std::setvbuf(file_, buffer_.data(), _IOFBF, buffer_.size());
 }
 
@@ -286,11 +431,22 @@ CsvFile::~CsvFile() {
   if (file_) std::fclose(file_);
 }
 
+void CsvFile::fail(int error) {
+  throw ToolError(name_ + ": write failed (" + std::strerror(error) + ")");
+}
+
+void CsvFile::check() {
+  // The error flag is set by the write that failed, when the buffer was flushed; errno still
+  // holds its reason (no call since could have failed).
+  if (std::ferror(file_)) fail(errno);
+}
+
 void CsvFile::close() {
-  const bool failed = std::ferror(file_) != 0;
+  check();
   const int closed = std::fclose(file_);
+  const int error = errno;
   file_ = nullptr;
-  if (failed || closed != 0) throw ToolError(path_ + ": write failed (disk full?)");
+  if (closed != 0) fail(error);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -378,11 +534,11 @@ void appendConnection(std::vector<std::uint8_t>& out, std::uint32_t id, const st
 
 }  // namespace
 
-BagOutput::BagOutput(const std::string& path, Compression compression,
+BagOutput::BagOutput(const std::string& path, const std::string& name, Compression compression,
                      std::uint32_t chunk_threshold)
-    : path_(path), compression_(compression), threshold_(chunk_threshold) {
+    : name_(name), compression_(compression), threshold_(chunk_threshold) {
   file_ = std::fopen(path.c_str(), "wb");
-  if (!file_) throw ToolError(path + ": cannot write (" + std::strerror(errno) + ")");
+  if (!file_) throw ToolError(name + ": cannot write (" + std::strerror(errno) + ")");
   out_.assign(kVersionLine, kVersionLine + sizeof kVersionLine - 1);
   put(out_);
   writeHeader(0);  // rewritten by close()
@@ -409,7 +565,7 @@ std::uint32_t BagOutput::connection(const std::string& topic, const char* dataty
 std::uint8_t* BagOutput::beginMessage(std::uint32_t id, const ros::Time& time,
                                       std::uint32_t length) {
   if (time < ros::TIME_MIN) {
-    throw ToolError(path_ + ": record time " + std::to_string(time.toSec()) +
+    throw ToolError(name_ + ": record time " + std::to_string(time.toSec()) +
                     " is before ros::TIME_MIN");
   }
   if (!chunk_open_) {
@@ -442,7 +598,7 @@ void BagOutput::writeChunk() {
     unsigned int n = static_cast<unsigned int>(compressed_.size());
     if (roslz4_buffToBuffCompress(reinterpret_cast<char*>(chunk_.data()), size, compressed_.data(),
                                   &n, kLz4BlockSizeId) != ROSLZ4_OK) {
-      throw ToolError(path_ + ": LZ4 compression failed");
+      throw ToolError(name_ + ": LZ4 compression failed");
     }
     data = compressed_.data();
     stored = n;
@@ -488,8 +644,13 @@ void BagOutput::writeHeader(std::uint64_t index_position) {
   put(out_);
 }
 
+void BagOutput::fail(int error) {
+  throw ToolError(name_ + ": write failed (" + std::strerror(error) + ")");
+}
+
 void BagOutput::put(const std::vector<std::uint8_t>& bytes) {
-  if (std::fwrite(bytes.data(), 1, bytes.size(), file_) != bytes.size()) failed_ = true;
+  // Stops at the first failed write: a full disk ends the run now, not after the whole bag.
+  if (std::fwrite(bytes.data(), 1, bytes.size(), file_) != bytes.size()) fail(errno);
   position_ += bytes.size();
 }
 
@@ -518,11 +679,12 @@ void BagOutput::close() {
                  counts.data(), counts.size());
   }
   put(out_);
-  if (std::fseek(file_, sizeof kVersionLine - 1, SEEK_SET) != 0) failed_ = true;
+  if (std::fseek(file_, sizeof kVersionLine - 1, SEEK_SET) != 0) fail(errno);
   writeHeader(index_position);
   const int closed = std::fclose(file_);
+  const int error = errno;
   file_ = nullptr;
-  if (failed_ || closed != 0) throw ToolError(path_ + ": write failed (disk full?)");
+  if (closed != 0) fail(error);
 }
 
 std::string formatStamp(Stamp stamp) {
@@ -537,7 +699,9 @@ std::string formatStamp(Stamp stamp) {
 }
 
 std::string optionValue(int argc, char** argv, int& i) {
-  if (i + 1 >= argc) throw ToolError(std::string(argv[i]) + ": needs a value");
+  if (i + 1 >= argc) throw UsageError(std::string(argv[i]) + ": needs a value");
+  // An empty value would silently mean the default (an output name, a topic).
+  if (argv[i + 1][0] == '\0') throw UsageError(std::string(argv[i]) + ": an empty value");
   return argv[++i];
 }
 
@@ -548,7 +712,18 @@ double parseNumber(const std::string& option, const std::string& text) {
     if (used == text.size() && std::isfinite(x)) return x;
   } catch (const std::exception&) {
   }
-  throw ToolError(option + ": '" + text + "' is not a finite number");
+  throw UsageError(option + ": '" + text + "' is not a finite number");
+}
+
+double parseNumber(const std::string& option, const std::string& text, double limit,
+                   const char* why) {
+  const double x = parseNumber(option, text);
+  if (std::abs(x) > limit) {
+    char bound[32];
+    std::snprintf(bound, sizeof bound, "%.10g", limit);
+    throw UsageError(option + ": " + text + " is beyond +-" + bound + " (" + why + ")");
+  }
+  return x;
 }
 
 }  // namespace tools

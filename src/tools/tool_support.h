@@ -1,12 +1,13 @@
 // What the offline tools (propagate_bag, evaluate_bag_core) share: the node's parameters from
 // YAML and `--set`, opening a bag and finding its topics with one clear error each, decoding a
 // bag message into a reused message, a progress bar, and an output file that appears under its
-// name only when complete.
+// name only when complete, never over an input and never past a full disk; the exit codes.
 #pragma once
 
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -15,6 +16,7 @@
 #include <ros/serialization.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
+#include <tf2_msgs/TFMessage.h>
 
 #include "attitude_propagator/config/parameters.h"
 #include "attitude_propagator/engine.h"
@@ -22,10 +24,30 @@
 namespace attitude_propagator {
 namespace tools {
 
-/// One clear line for the user; the tools print it and exit non-zero.
-struct ToolError : std::runtime_error {
-  using std::runtime_error::runtime_error;
+/// The tools' exit codes (their --help and the README list them). A signal that stops a run
+/// exits with 128 + its number, as a shell reports a process the signal killed (130: Ctrl-C).
+enum ExitCode : int {
+  kExitOk = 0,             ///< the inputs were used and every output is complete
+  kExitFailed = 1,         ///< an input could not be read (missing, damaged) or an output written
+  kExitUsage = 2,          ///< bad options or parameters, an output that is an input
+  kExitNothingUsable = 3,  ///< the run completed but produced nothing usable (says why)
 };
+
+/// One clear line for the user; the tools print it and exit with `code`.
+struct ToolError : std::runtime_error {
+  explicit ToolError(const std::string& what, int code = kExitFailed)
+      : std::runtime_error(what), exit_code(code) {}
+  int exit_code;
+};
+
+/// A command line the tool cannot run: exit code 2.
+struct UsageError : ToolError {
+  explicit UsageError(const std::string& what) : ToolError(what, kExitUsage) {}
+};
+
+/// main() of a tool: runs `run`, and turns every exception into one line "name: what" on
+/// stderr and its exit code (std::invalid_argument, the parameters' refusal, is a usage error).
+int runTool(const char* name, int (*run)(int, char**), int argc, char** argv);
 
 // ---------------------------------------------------------------------------------------------
 // Parameters: the node's, with the node's YAML (config/default.yaml and the scene files).
@@ -42,7 +64,9 @@ void applySetting(const std::string& assignment, Parameters& p);
 // ---------------------------------------------------------------------------------------------
 
 /// Opens `path` for reading. A missing, truncated, damaged or unindexed file throws ToolError
-/// saying which, and what to do about it.
+/// saying which, and what to do about it. The file's structure is checked first
+/// (bag_check.h), so that rosbag's reader, which trusts the lengths and offsets it reads, only
+/// ever sees a well-formed bag.
 void openBag(rosbag::Bag& bag, const std::string& path);
 
 /// The bag's topics with their types, " /a (type), /b (type)", for one-line error messages.
@@ -83,6 +107,28 @@ void decodeInto(const rosbag::MessageInstance& m, std::vector<std::uint8_t>& buf
   ros::serialization::deserialize(read, out);
 }
 
+/// A TFMessage's transform count is checked against the message's size first: deserialising
+/// makes room for that many transforms before reading them, and a damaged count would ask for
+/// up to 2^32 of them. A transform takes at least 76 bytes (header: seq, stamp and an empty
+/// frame_id; an empty child_frame_id; translation and rotation).
+inline void decodeInto(const rosbag::MessageInstance& m, std::vector<std::uint8_t>& buffer,
+                       tf2_msgs::TFMessage& out) {
+  const std::uint32_t size = m.size();
+  buffer.resize(size);
+  ros::serialization::OStream write(buffer.data(), size);
+  m.write(write);
+  std::uint32_t count = 0;
+  if (size >= 4) std::memcpy(&count, buffer.data(), 4);
+  constexpr std::uint64_t kLeastTransformBytes = 4 + 8 + 4 + 4 + 24 + 32;
+  if (size < 4 || std::uint64_t(count) * kLeastTransformBytes > size - 4) {
+    throw ros::serialization::StreamOverrunException(
+        "tf2_msgs/TFMessage: " + std::to_string(count) + " transforms cannot fit in " +
+        std::to_string(size) + " bytes");
+  }
+  ros::serialization::IStream read(buffer.data(), size);
+  ros::serialization::deserialize(read, out);
+}
+
 inline Stamp toStamp(const ros::Time& time) { return static_cast<Stamp>(time.toNSec()); }
 inline ros::Time toRosTime(Stamp stamp) {
   ros::Time time;
@@ -118,33 +164,61 @@ class Progress {
   std::chrono::steady_clock::time_point last_draw_;
 };
 
-/// SIGINT and SIGTERM set a flag instead of killing the program, so a partial output can be
-/// removed; throwIfInterrupted() turns it into a ToolError.
+/// SIGINT, SIGTERM and SIGHUP set a flag instead of killing the program, so that a partial
+/// output can be removed; throwIfInterrupted() turns it into a ToolError with exit code 128 +
+/// the signal. A second signal removes the partial files itself and exits at once. SIGXFSZ (a
+/// file-size limit reached) is ignored: the write fails with EFBIG and is reported like a full
+/// disk.
 void catchInterrupts();
 void throwIfInterrupted();
 
 /// Visits every message of `view` in order, counting into `count`, with the progress line and
-/// a check for Ctrl-C every 1024 messages. A bag found damaged mid-way is one ToolError that
-/// names `input` and how far it got.
+/// a check for Ctrl-C every 1024 messages. A bag found damaged mid-way (rosbag's exceptions, a
+/// message that does not deserialise) is one ToolError that names `input` and how far it got;
+/// the tool's own errors (ToolError, e.g. a full disk) pass unchanged.
 template <class Visit>
 void visitMessages(rosbag::View& view, const std::string& input, Progress& progress,
                    std::uint64_t& count, Visit visit) {
+  auto damaged = [&](const char* what) {
+    progress.finish();
+    return ToolError(input + ": damaged after " + std::to_string(count) + " messages (" + what +
+                     ")");
+  };
   try {
     for (const rosbag::MessageInstance& m : view) {
       visit(m);
       progress.update(++count);
       if ((count & 1023u) == 0) throwIfInterrupted();
     }
-  } catch (const rosbag::BagException& e) {
+  } catch (const ToolError&) {
     progress.finish();
-    throw ToolError(input + ": damaged after " + std::to_string(count) + " messages (" + e.what() +
-                    ")");
+    throw;
+  } catch (const std::bad_alloc&) {
+    throw damaged("a length in it asks for more memory than there is");
+  } catch (const std::exception& e) {
+    // rosbag::BagException, ros::serialization::StreamOverrunException and the like.
+    throw damaged(e.what());
   }
   throwIfInterrupted();
 }
 
+// ---------------------------------------------------------------------------------------------
+// Outputs: never over an input, never past a full disk
+// ---------------------------------------------------------------------------------------------
+
+/// Throws UsageError when `output` is one of `inputs` under any spelling: the same device and
+/// inode when it exists (a symlink, a hard link, "./in.bag"), the same canonical path
+/// otherwise; or when it is a directory, a device or a pipe (the output is renamed over its
+/// name at the end, which would replace them).
+void refuseOutputOverInput(const std::string& output, const std::vector<std::string>& inputs);
+
+/// Throws ToolError when the file system that holds `output` has fewer than `bytes` available
+/// (statvfs of its directory), saying how much it needs and has.
+void requireFreeSpace(const std::string& output, std::uint64_t bytes);
+
 /// An output written under a temporary name in the same directory and renamed to its own
-/// name by commit(): a failed or interrupted run leaves nothing under the name.
+/// name by commit(): a failed or interrupted run leaves nothing under the name, and the
+/// temporary file is removed (by the destructor, or by the signal handler on a second signal).
 class PendingFile {
  public:
   explicit PendingFile(std::string path);
@@ -159,21 +233,26 @@ class PendingFile {
   std::string path_;
   std::string temporary_;
   bool committed_ = false;
+  int slot_ = -1;  // in the signal handler's list of files to remove
 };
 
-/// A FILE* with a large buffer, closed by the destructor; write errors surface in close().
+/// A FILE* with a large buffer, closed by the destructor. Errors name `name`, the user's
+/// output (the file written may be its temporary name).
 class CsvFile {
  public:
-  explicit CsvFile(const std::string& path);
+  CsvFile(const std::string& path, const std::string& name);
   ~CsvFile();
   CsvFile(const CsvFile&) = delete;
   CsvFile& operator=(const CsvFile&) = delete;
   std::FILE* get() { return file_; }
+  /// Throws ToolError as soon as a write has failed (a full disk stops the run at once).
+  void check();
   /// Throws ToolError when anything failed to reach the disk.
   void close();
 
  private:
-  std::string path_;
+  [[noreturn]] void fail(int error);
+  std::string name_;
   std::FILE* file_ = nullptr;
   std::vector<char> buffer_;
 };
@@ -192,7 +271,8 @@ class BagOutput {
   enum class Compression { None, Lz4 };
   static constexpr std::uint32_t kChunkThreshold = 768 * 1024;  // rosbag's default
 
-  BagOutput(const std::string& path, Compression compression,
+  /// Writes `path`; errors name `name`, the user's output.
+  BagOutput(const std::string& path, const std::string& name, Compression compression,
             std::uint32_t chunk_threshold = kChunkThreshold);
   ~BagOutput();
   BagOutput(const BagOutput&) = delete;
@@ -209,8 +289,8 @@ class BagOutput {
     ros::serialization::serialize(out, msg);
     if (chunk_.size() > threshold_) writeChunk();
   }
-  /// Writes the last chunk and the index; throws ToolError when anything failed to reach the
-  /// disk.
+  /// Writes the last chunk and the index. A failed write (full disk) throws ToolError at once,
+  /// here or in write().
   void close();
 
  private:
@@ -231,12 +311,13 @@ class BagOutput {
   void writeHeader(std::uint64_t index_position);
   void put(const std::vector<std::uint8_t>& bytes);
 
-  std::string path_;
+  [[noreturn]] void fail(int error);
+
+  std::string name_;
   std::FILE* file_ = nullptr;
   Compression compression_;
   std::uint32_t threshold_;
   std::uint64_t position_ = 0;  // bytes written so far
-  bool failed_ = false;
   bool chunk_open_ = false;
   std::vector<Connection> connections_;
   std::vector<std::uint8_t> chunk_;  // the open chunk's records, uncompressed
@@ -249,9 +330,13 @@ class BagOutput {
 /// A stamp as seconds with nanosecond digits ("1700000000.005000000"), exact.
 std::string formatStamp(Stamp stamp);
 
-/// Command-line reading: the value after option `argv[i]`, or ToolError.
+/// Command-line reading: the value after option `argv[i]`, or UsageError (none, or empty).
 std::string optionValue(int argc, char** argv, int& i);
+/// A finite number with nothing after it, or UsageError.
 double parseNumber(const std::string& option, const std::string& text);
+/// A finite number with |x| <= limit, or UsageError naming the limit and `why`.
+double parseNumber(const std::string& option, const std::string& text, double limit,
+                   const char* why);
 
 }  // namespace tools
 }  // namespace attitude_propagator

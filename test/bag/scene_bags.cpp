@@ -3,9 +3,11 @@
 #include <dirent.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -134,6 +136,9 @@ Motion torquedFromRest(const Eigen::Vector3d& n, double torque, double inertia) 
 
 Written writeSceneBag(const std::string& path, const SceneBag& s) {
   rosbag::Bag bag(path, rosbag::bagmode::Write);
+  bag.setCompression(s.compression == Compression::Bz2   ? rosbag::compression::BZ2
+                     : s.compression == Compression::Lz4 ? rosbag::compression::LZ4
+                                                         : rosbag::compression::Uncompressed);
   Written out;
   std::uint64_t random = s.seed;
   const double h = 1.0 / s.rate_hz;
@@ -151,7 +156,10 @@ Written writeSceneBag(const std::string& path, const SceneBag& s) {
       writeTruth(bag, s, stamp, s.fixed * s.motion.attitude(tt) * s.mount);
       if (s.truth != TruthType::None) out.truth_stamps.push_back(stamp);
     }
-    const Eigen::Vector3d w = s.averaged ? intervalMean(s.motion.rate, t - h, t) : s.motion.rate(t);
+    Eigen::Vector3d w = s.averaged ? intervalMean(s.motion.rate, t - h, t) : s.motion.rate(t);
+    if (std::find(s.non_finite.begin(), s.non_finite.end(), k) != s.non_finite.end()) {
+      w.y() = std::nan("");
+    }
     const double delay = k > 0 && s.jitter > 0.0 ? s.jitter * normalRandom(random) : 0.0;
     const bool lost = k > 3 && s.drop > 0.0 && uniformRandom(random) < s.drop;
     if (lost) continue;
@@ -186,6 +194,29 @@ void writeTorqueBag(const std::string& path, const Eigen::Vector3d& torque, doub
   bag.close();
 }
 
+std::vector<ChunkData> chunkData(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  auto u32 = [&bytes](std::size_t at) {
+    std::uint32_t v;
+    std::memcpy(&v, bytes.data() + at, 4);
+    return v;
+  };
+  std::vector<ChunkData> chunks;
+  // "#ROSBAG V2.0\n", then records: header length, header ("<len>op=<byte>" among its
+  // fields), data length, data. The index section at the end holds no chunk records.
+  std::size_t at = 13;
+  while (at + 8 <= bytes.size()) {
+    const std::uint32_t header = u32(at);
+    const std::string fields = bytes.substr(at + 4, header);
+    const std::uint32_t data = u32(at + 4 + header);
+    const std::size_t op = fields.find(std::string("op=") + char(0x05));
+    if (op != std::string::npos) chunks.push_back({at + 4 + header + 4, data});
+    at += 4 + header + 4 + data;
+  }
+  return chunks;
+}
+
 RunResult run(const std::string& command) {
   RunResult r;
   std::FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
@@ -210,7 +241,10 @@ TempDir::TempDir() {
   path_ = pattern;
 }
 
-TempDir::~TempDir() { std::system(("rm -rf " + quote(path_)).c_str()); }
+TempDir::~TempDir() {
+  if (std::getenv("BAG_TESTS_KEEP")) return;
+  std::system(("rm -rf " + quote(path_)).c_str());
+}
 
 std::vector<std::string> TempDir::list() const {
   std::vector<std::string> names;
@@ -222,6 +256,22 @@ std::vector<std::string> TempDir::list() const {
     ::closedir(dir);
   }
   return names;
+}
+
+bool noPartialFiles(const TempDir& dir) {
+  for (const auto& name : dir.list()) {
+    if (name.find(".partial") != std::string::npos) return false;
+  }
+  return true;
+}
+
+std::string fileText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+void writeText(const std::string& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
 }
 
 std::vector<std::vector<std::pair<std::string, std::string>>> readCsv(const std::string& path) {

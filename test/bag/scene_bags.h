@@ -33,6 +33,7 @@ Motion tumbling();
 Motion torquedFromRest(const Eigen::Vector3d& n, double torque, double inertia);
 
 enum class RateType { Imu, TwistStamped };
+enum class Compression { None, Bz2, Lz4 };
 enum class TruthType { None, Pose, PoseWithCovariance, Transform, Odometry, Tf };
 
 struct SceneBag {
@@ -53,6 +54,8 @@ struct SceneBag {
   double gap_from = -1.0, gap_to = -1.0;  ///< s: no truth sample stamped in between
   Eigen::Quaterniond fixed = Eigen::Quaterniond::Identity();  ///< A = q_VW
   Eigen::Quaterniond mount = Eigen::Quaterniond::Identity();  ///< q_ST
+  std::vector<long> non_finite;  ///< indices of rate samples written with a NaN component
+  Compression compression = Compression::None;  ///< of the bag's chunks
 };
 
 struct Written {
@@ -69,7 +72,16 @@ Written writeSceneBag(const std::string& path, const SceneBag& scene);
 void writeTorqueBag(const std::string& path, const Eigen::Vector3d& torque, double hz,
                     double duration, double clock_hz, const std::string& frame);
 
-/// A command's exit status and its output (stdout and stderr together).
+/// Where each chunk's data (compressed or not) lies in a bag file, found by walking its
+/// records (independently of the tools' own check).
+struct ChunkData {
+  std::uint64_t position;
+  std::uint64_t size;
+};
+std::vector<ChunkData> chunkData(const std::string& path);
+
+/// A command's exit status and its output (stdout and stderr together). A command killed by a
+/// signal has status -1.
 struct RunResult {
   int status = -1;
   std::string output;
@@ -79,7 +91,8 @@ RunResult run(const std::string& command);
 /// Quoting for a shell command line.
 std::string quote(const std::string& text);
 
-/// A fresh directory under /tmp, removed with everything in it by the destructor.
+/// A fresh directory under /tmp, removed with everything in it by the destructor (kept when
+/// BAG_TESTS_KEEP is set, to look at a test's files).
 class TempDir {
  public:
   TempDir();
@@ -90,6 +103,12 @@ class TempDir {
  private:
   std::string path_;
 };
+
+/// No temporary output (".partial") left in the directory.
+bool noPartialFiles(const TempDir& dir);
+
+std::string fileText(const std::string& path);
+void writeText(const std::string& path, const std::string& text);
 
 /// Rows of a CSV file with a header, as maps from column to text.
 std::vector<std::vector<std::pair<std::string, std::string>>> readCsv(const std::string& path);
