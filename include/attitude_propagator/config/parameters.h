@@ -19,6 +19,12 @@
 
 namespace attitude_propagator {
 
+/// Smallest `max_dt` (s) the validator accepts, and the minimum of its slider in
+/// cfg/AttitudePropagator.cfg (test/ros/test_bad_params.py checks that the two agree). A
+/// microsecond is below the period of any rate stream; a smaller max_dt would only make every
+/// sample a gap.
+constexpr double kMinMaxDt = 1e-6;
+
 /// Every private parameter of the node with its default: the one place defaults live.
 struct Parameters {
   std::string model = "auto";
@@ -85,7 +91,7 @@ void forEachParameter(P& p, F&& f) {
   f("max_step", p.max_step, "s",
     "dynamic model: largest integration step, in [1e-5, 60] and at least max_dt / 1e5; "
     "0: 1/publish_rate");
-  f("max_dt", p.max_dt, "s", "largest gap between stamps integrated across; at most 60");
+  f("max_dt", p.max_dt, "s", "largest gap between stamps integrated across, in [1e-6, 60]");
   f("tolerance", p.tolerance, "", "relative and absolute tolerance of `dopri5`, in [1e-12, 1e-2]");
   f("angular_velocity_stddev", p.angular_velocity_stddev, "rad/s",
     "rate noise used when an input carries no covariance (drives the growth of the orientation "
