@@ -84,8 +84,8 @@ void forEachParameter(P& p, F&& f) {
     "publish `body_frame → fixed_frame` instead (for a tree rooted at the body)");
   f("tf_conflict", p.tf_conflict, "",
     "another node publishes a parent of our child frame: `warn` (once, counted), `stop` "
-    "(also stop publishing tf) or `ignore` (no watch: it sees every transform we publish, "
-    "which costs throughput above about 20 kHz)");
+    "(also stop publishing tf until it is over) or `ignore` (no watch: it sees every transform "
+    "we publish, which costs throughput above about 20 kHz)");
   f("publish_rate", p.publish_rate, "Hz",
     "dynamic model: publish at multiples of 1/rate; at most 1000");
   f("max_step", p.max_step, "s",
