@@ -19,15 +19,17 @@ namespace attitude_propagator {
 
 namespace {
 
-// Every queue is bounded in messages, so memory is bounded whatever the load: at most the queue
-// size times the size of one message, per queue.
+// Every queue the node sets is bounded in messages: at most the queue size times the size of
+// one message, per queue. (roscpp's hand-over from publish() to its I/O thread is not ours to
+// bound: it grows while that thread is kept reading an input faster than it can.)
 // Inputs are queued, not dropped, through a burst of this many messages (a bag played fast,
 // a load generator); beyond it roscpp drops the oldest.
 constexpr std::uint32_t kInputQueueSize = 10000;
 // Per subscriber connection. The kernel's socket buffer absorbs a burst before this queue
 // fills; a subscriber that falls further behind (a slow remote reader) loses the oldest
-// messages instead of growing the node without bound (with 10 000 per output, 82 MB at 31 kHz
-// of input). Subscribers in the same nodelet manager are served through their own queue.
+// messages. The node holds up to this many per output and slow subscriber: with 10 000, one
+// slow subscriber of all three outputs held it at 82 MB (IMU input at 31 kHz), with 1 000 at
+// 20-26 MB. Subscribers in the same nodelet manager are served through their own queue.
 constexpr std::uint32_t kOutputQueueSize = 1000;
 // The tf watch needs one message of a conflicting publisher, not every transform on /tf.
 constexpr std::uint32_t kTfWatchQueueSize = 1000;
