@@ -25,12 +25,13 @@ namespace {
 // Inputs are queued, not dropped, through a burst of this many messages (a bag played fast,
 // a load generator); beyond it roscpp drops the oldest.
 constexpr std::uint32_t kInputQueueSize = 10000;
-// Per subscriber connection. The kernel's socket buffer absorbs a burst before this queue
-// fills; a subscriber that falls further behind (a slow remote reader) loses the oldest
-// messages. The node holds up to this many per output and slow subscriber: with 10 000, one
-// slow subscriber of all three outputs held it at 82 MB (IMU input at 31 kHz), with 1 000 at
-// 20-26 MB. Subscribers in the same nodelet manager are served through their own queue.
-constexpr std::uint32_t kOutputQueueSize = 1000;
+// Per subscriber connection: a burst of a few thousand reaches a subscriber that keeps reading
+// (kinematic.test sends 3000 to a Python subscriber; with 1000 here it lost some), while one
+// that falls further behind (a slow remote reader) loses the oldest messages. The node holds up
+// to this many per output and slow subscriber: one slow subscriber of all three outputs held it
+// at 82 MB with 10 000 (IMU input at 31 kHz), at 31 MB with 5 000. Subscribers in the same
+// nodelet manager are served through their own queue.
+constexpr std::uint32_t kOutputQueueSize = 5000;
 // The tf watch needs one message of a conflicting publisher, not every transform on /tf.
 constexpr std::uint32_t kTfWatchQueueSize = 1000;
 // Topics with a message now and then (gyro bias, /tf_static).
