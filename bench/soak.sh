@@ -11,8 +11,8 @@
 #                      [--slow-subscriber]
 # RATE_HZ defaults to 1000, --out to docs/data/soak.csv, --every (the sampling period) to 10 s.
 # --slow-subscriber adds a subscriber in another process to every output (imu/data,
-# attitude_state, /tf) that takes 10 ms per message: its sockets back up, and only the node's
-# outgoing queues stand between that and unbounded memory. With a dynamic configuration whose
+# attitude_state, /tf) that takes 10 ms per message: its sockets back up, and the node's
+# outgoing queues fill to their bound (README: Queues). With a dynamic configuration whose
 # rate_input is none (config/spinning_top.yaml) the node runs on its publish timer and the IMU
 # stream is not subscribed. Builds the two executables if they are missing.
 set -euo pipefail
@@ -31,7 +31,7 @@ while [ $# -gt 0 ]; do
     --out) out="$2"; shift ;;
     --every) every="$2"; shift ;;
     --slow-subscriber) slow=true ;;
-    -h | --help) sed -n '2,18p' "$0"; exit 0 ;;
+    -h | --help) sed -n '2,17p' "$0"; exit 0 ;;
     *) positional+=("$1") ;;
   esac
   shift
