@@ -5,9 +5,14 @@
 # (bench_imu_load_node) publishing sensor_msgs/Imu at RATE_HZ, and every 10 s writes one CSV
 # row: t_s, rss_kib (VmRSS of the node), cpu_percent (of one core, over the last 10 s),
 # messages (the node's diagnostics counter `received`). Stops everything at the end and prints
-# RSS after the warm-up (min, max, growth, least-squares slope).
-#   bash bench/soak.sh DURATION_S [RATE_HZ] [--config FILE] [--out FILE.csv]
-# RATE_HZ defaults to 1000, --out to docs/data/soak.csv. With a dynamic configuration whose
+# RSS after the warm-up (min, max, growth, least-squares slope) and over the last half of the
+# run (its spread relative to its mean: "flat" means within 10 %).
+#   bash bench/soak.sh DURATION_S [RATE_HZ] [--config FILE] [--out FILE.csv] [--every S]
+#                      [--slow-subscriber]
+# RATE_HZ defaults to 1000, --out to docs/data/soak.csv, --every (the sampling period) to 10 s.
+# --slow-subscriber adds a subscriber in another process to every output (imu/data,
+# attitude_state, /tf) that takes 10 ms per message: its sockets back up, and the node's
+# outgoing queues fill to their bound (README: Queues). With a dynamic configuration whose
 # rate_input is none (config/spinning_top.yaml) the node runs on its publish timer and the IMU
 # stream is not subscribed. Builds the two executables if they are missing.
 set -euo pipefail
@@ -17,12 +22,16 @@ duration=""
 rate=1000
 config="$REPO_DIR/config/default.yaml"
 out="$REPO_DIR/docs/data/soak.csv"
+every=10
+slow=false
 positional=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --config) config="$(realpath "$2")"; shift ;;
     --out) out="$2"; shift ;;
-    -h | --help) sed -n '2,13p' "$0"; exit 0 ;;
+    --every) every="$2"; shift ;;
+    --slow-subscriber) slow=true ;;
+    -h | --help) sed -n '2,17p' "$0"; exit 0 ;;
     *) positional+=("$1") ;;
   esac
   shift
@@ -71,15 +80,44 @@ rosparam load "$config" /attitude_propagator
 "$bin/attitude_propagator_node" __name:=attitude_propagator >"$tmp/node.log" 2>&1 &
 node_pid=$!
 pids+=("$node_pid")
-# The generator sends for longer than the soak; it is stopped with the rest.
-"$bin/bench_imu_load_node" __name:=imu_load_generator _rates:="[${rate}.0]" \
+# The generator sends for longer than the soak; it is stopped with the rest. Its rate list goes
+# through rosparam: roscpp reads a `_rates:=[...]` argument as a string, and the generator would
+# silently fall back to its own list (starting at 1 kHz).
+rosparam set /imu_load_generator/rates "[${rate}.0]"
+"$bin/bench_imu_load_node" __name:=imu_load_generator \
   _seconds:=$((duration + 3600)) _mode:=soak _out:="$tmp/generator.csv" >"$tmp/generator.log" 2>&1 &
 pids+=($!)
+if $slow; then
+  /usr/bin/python3 - >"$tmp/slow.log" 2>&1 <<'PYTHON' &
+"""A subscriber that reads 100 messages a second of each output: rospy runs the callback in
+the thread that reads the socket, so a sleeping callback stops the reading and the node's
+outgoing queue to this process fills up."""
+import time
 
-echo "soak: node pid $node_pid, $(basename "$config"), IMU at $rate Hz, ${duration} s, every 10 s -> $out"
+import rospy
+from attitude_propagator.msg import AttitudeState
+from sensor_msgs.msg import Imu
+from tf2_msgs.msg import TFMessage
+
+
+def slow(_):
+    time.sleep(0.01)
+
+
+rospy.init_node("slow_subscriber")
+subs = [rospy.Subscriber(topic, kind, slow, tcp_nodelay=True)
+        for topic, kind in (("imu/data", Imu), ("attitude_state", AttitudeState),
+                            ("/tf", TFMessage))]
+rospy.spin()
+PYTHON
+  pids+=($!)
+fi
+
+echo "soak: node pid $node_pid, $(basename "$config"), IMU at $rate Hz, ${duration} s," \
+  "slow subscriber: $slow, every $every s -> $out"
 mkdir -p "$(dirname "$out")"
-/usr/bin/python3 - "$node_pid" "$duration" "$out" <<'PYTHON'
-"""Samples the node every 10 s: VmRSS, CPU over the interval, diagnostics `received`."""
+/usr/bin/python3 - "$node_pid" "$duration" "$out" "$every" <<'PYTHON'
+"""Samples the node every `every` s: VmRSS, CPU over the interval, diagnostics `received`."""
 import os
 import sys
 import threading
@@ -88,7 +126,7 @@ import time
 import rospy
 from diagnostic_msgs.msg import DiagnosticArray
 
-pid, duration, out = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3]
+pid, duration, out, every = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3], float(sys.argv[4])
 ticks = os.sysconf("SC_CLK_TCK")
 received = [0]
 lock = threading.Lock()
@@ -125,7 +163,7 @@ with open(out, "w") as f:
     f.write("t_s,rss_kib,cpu_percent,messages\n")
     k = 1
     while True:
-        time.sleep(max(0.0, start + 10 * k - time.monotonic()))
+        time.sleep(max(0.0, start + every * k - time.monotonic()))
         if not os.path.exists(f"/proc/{pid}"):
             sys.exit("soak: the node exited early")
         now, cpu = time.monotonic(), cpu_seconds()
@@ -164,5 +202,13 @@ print(f"soak: {end:.0f} s, {int(rows[-1]['messages'])} messages received "
       f"({rate:.0f}/s after the warm-up)")
 print(f"soak: RSS after {t[0]:.0f} s: min {min(rss):.0f} KiB, max {max(rss):.0f} KiB, "
       f"growth {rss[-1] - rss[0]:+.0f} KiB (first to last), slope {slope * 3600:+.1f} KiB/h")
+half = [r["rss_kib"] for r in rows if r["t_s"] >= end / 2]
+mean = sum(half) / len(half)
+spread = (max(half) - min(half)) / mean
+print(f"soak: RSS over the last half ({len(half)} samples): {min(half):.0f} .. {max(half):.0f} "
+      f"KiB, spread {100 * spread:.1f} % of the mean: {'flat' if spread <= 0.1 else 'NOT flat'}")
+for mark in (end / 2, end):
+    near = min(rows, key=lambda r: abs(r["t_s"] - mark))
+    print(f"soak: RSS at {near['t_s']:.0f} s: {near['rss_kib']:.0f} KiB")
 print(f"soak: CPU {min(cpu):.1f} .. {max(cpu):.1f} % of one core, mean {sum(cpu) / len(cpu):.1f} %")
 PYTHON

@@ -8,7 +8,10 @@ WORKSPACE="${AP_WORKSPACE:-${XDG_CACHE_HOME:-$HOME/.cache}/attitude_propagator_w
 # ROS tools and matplotlib live in Debian's /usr/bin/python3, not in a python3 earlier on PATH.
 export PATH="/usr/bin:$PATH"
 
-# Debian 12 packages by name (Debian's own ROS 1 lives under /usr, no rosdep index).
+# Debian 12 packages by name (Debian's own ROS 1 lives under /usr, no rosdep index). Besides
+# the build, what the README's commands run: roslaunch and roscore (python3-roslaunch), rosrun
+# (rosbash), rosparam (python3-rosparam), rostopic, rosbag, and dynparam (with
+# python3-dynamic-reconfigure, run through rosrun).
 DEBIAN_PACKAGES=(
   build-essential cmake catkin catkin-lint
   ros-base-dev ros-message-generation ros-message-runtime
@@ -18,7 +21,7 @@ DEBIAN_PACKAGES=(
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
   libnodelet-dev pluginlib-dev libtopic-tools-dev
   librostest-dev python3-rostest python3-rospy python3-roslaunch python3-rosnode
-  python3-rostopic python3-tf2-ros python3-tf2-msgs python3-sensor-msgs python3-diagnostic-msgs
+  rosbash python3-rosparam python3-rostopic python3-tf2-ros python3-tf2-msgs python3-sensor-msgs python3-diagnostic-msgs
   python3-std-srvs python3-geometry-msgs python3-std-msgs python3-rosgraph-msgs python3-yaml
   libeigen3-dev libboost-dev libboost-math-dev
   librosbag-storage-dev libnav-msgs-dev libyaml-cpp-dev python3-rosbag

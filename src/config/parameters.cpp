@@ -134,8 +134,7 @@ void checkScalars(const Parameters& p) {
   if (p.max_step > 0.0 && p.max_step < kMinMaxStep) {
     fail("max_step", "invalid value " + formatParameter(p.max_step) + "; accepted: " + step_range);
   }
-  requireFinite("max_dt", p.max_dt, 0.0, false, kMaxMaxDt,
-                "a finite number > 0 and at most 60 (s)");
+  requireFinite("max_dt", p.max_dt, kMinMaxDt, true, kMaxMaxDt, "a number in [1e-6, 60] (s)");
   requireFinite("max_future", p.max_future, 0.0, true, kMaxFuture,
                 "a finite number >= 0 and at most 3600 (s)");
   requireFinite("rate_delay", p.rate_delay, 0.0, true, p.max_dt,

@@ -1,5 +1,7 @@
 #include "attitude_propagator/ros/attitude_propagator_ros.h"
 
+#include <algorithm>
+#include <cstdio>
 #include <exception>
 #include <string>
 
@@ -10,20 +12,41 @@
 #include "attitude_propagator/orientation_covariance.h"
 #include "attitude_propagator/ros/conversions.h"
 #include "attitude_propagator/ros/imu_input.h"
+#include "attitude_propagator/ros/log_text.h"
 #include "attitude_propagator/ros/parameter_loader.h"
 
 namespace attitude_propagator {
 
 namespace {
 
+// Every queue the node sets is bounded in messages: at most the queue size times the size of
+// one message, per queue. (roscpp's hand-over from publish() to its I/O thread is not ours to
+// bound: it grows while that thread is kept reading an input faster than it can.)
 // Inputs are queued, not dropped, through a burst of this many messages (a bag played fast,
-// a load generator); outputs likewise for slow subscribers.
-constexpr std::uint32_t kQueueSize = 10000;
+// a load generator); beyond it roscpp drops the oldest.
+constexpr std::uint32_t kInputQueueSize = 10000;
+// Per subscriber connection: a burst of a few thousand reaches a subscriber that keeps reading
+// (kinematic.test sends 3000 to a Python subscriber; with 1000 here it lost some), while one
+// that falls further behind (a slow remote reader) loses the oldest messages. The node holds up
+// to this many per output and slow subscriber: one slow subscriber of all three outputs held it
+// at 82 MB with 10 000 (IMU input at 31 kHz), at 31 MB with 5 000. Subscribers in the same
+// nodelet manager are served through their own queue.
+constexpr std::uint32_t kOutputQueueSize = 5000;
+// The tf watch needs one message of a conflicting publisher, not every transform on /tf.
+constexpr std::uint32_t kTfWatchQueueSize = 1000;
+// Topics with a message now and then (gyro bias, /tf_static).
+constexpr std::uint32_t kSparseQueueSize = 100;
 // Throttle period (s) of warnings about input that keeps coming bad.
 constexpr double kWarnPeriod = 5.0;
 // How often the clock is looked at while nothing else happens (wall seconds): publishes a
 // grid stamp the timer missed, notices a clock that went back, updates diagnostics.
 constexpr double kWatchdogPeriod = 0.1;
+// tf stopped by a conflict on /tf resumes after this long (wall s) without another parent of
+// our child frame there: tf publishers repeat their transforms at 10 Hz or more, so 2 s is
+// many missed messages, not a pause between two.
+constexpr double kTfConflictClearance = 2.0;
+// Diagnostics judge what became of the rate samples over windows of this long (wall s).
+constexpr double kInputWindow = 1.0;
 
 template <class M>
 bool isType(const topic_tools::ShapeShifter& message) {
@@ -85,6 +108,7 @@ AttitudePropagatorRos::AttitudePropagatorRos(ros::NodeHandle nh, ros::NodeHandle
     dynamic_timer_ = nh_.createTimer(ros::Duration(1.0 / config_.parameters.publish_rate),
                                      &AttitudePropagatorRos::onDynamicTimer, this);
   }
+  writeResolved();
   logModel();
 }
 
@@ -93,9 +117,9 @@ AttitudePropagatorRos::~AttitudePropagatorRos() = default;
 void AttitudePropagatorRos::advertise() {
   // Published as shared pointers so subscribers in the same nodelet manager get them without
   // a copy. The tf publisher is our own (tf2_ros::TransformBroadcaster publishes by value).
-  tf_pub_ = nh_.advertise<tf2_msgs::TFMessage>("/tf", kQueueSize);
-  imu_pub_ = imu_nh_.advertise<sensor_msgs::Imu>("data", kQueueSize);
-  state_pub_ = nh_.advertise<AttitudeState>("attitude_state", kQueueSize);
+  tf_pub_ = nh_.advertise<tf2_msgs::TFMessage>("/tf", kOutputQueueSize);
+  imu_pub_ = imu_nh_.advertise<sensor_msgs::Imu>("data", kOutputQueueSize);
+  state_pub_ = nh_.advertise<AttitudeState>("attitude_state", kOutputQueueSize);
   reset_srv_ = pnh_.advertiseService("reset", &AttitudePropagatorRos::onReset, this);
   set_state_srv_ = pnh_.advertiseService("set_state", &AttitudePropagatorRos::onSetState, this);
 }
@@ -104,27 +128,48 @@ void AttitudePropagatorRos::subscribe() {
   const auto hints = ros::TransportHints().tcpNoDelay();
   if (config_.rate_input == RateInput::Imu) {
     rate_sub_ =
-        imu_nh_.subscribe("data_raw", kQueueSize, &AttitudePropagatorRos::onImu, this, hints);
+        imu_nh_.subscribe("data_raw", kInputQueueSize, &AttitudePropagatorRos::onImu, this, hints);
   } else if (config_.rate_input == RateInput::Twist) {
     rate_sub_ =
-        nh_.subscribe("body_twist", kQueueSize, &AttitudePropagatorRos::onTwist, this, hints);
+        nh_.subscribe("body_twist", kInputQueueSize, &AttitudePropagatorRos::onTwist, this, hints);
   }
   if (engine_->dynamicModel() && config_.torque_input) {
     torque_sub_ =
-        nh_.subscribe("torque", kQueueSize, &AttitudePropagatorRos::onTorque, this, hints);
+        nh_.subscribe("torque", kInputQueueSize, &AttitudePropagatorRos::onTorque, this, hints);
   }
   if (config_.rate_input != RateInput::None) {
-    bias_sub_ = nh_.subscribe("gyro_bias", 100, &AttitudePropagatorRos::onGyroBias, this, hints);
+    bias_sub_ = nh_.subscribe("gyro_bias", kSparseQueueSize, &AttitudePropagatorRos::onGyroBias,
+                              this, hints);
   }
-  if (config_.parameters.publish_tf && config_.parameters.tf_conflict != "ignore") {
-    tf_watch_sub_ = nh_.subscribe("/tf", kQueueSize, &AttitudePropagatorRos::onTfSeen, this);
-    tf_static_watch_sub_ = nh_.subscribe("/tf_static", 100, &AttitudePropagatorRos::onTfSeen, this);
-  }
+  watchTf();
   if (sim_time_) {
     // Under sim time /clock is the time source: every tick is seen, in order with the inputs
     // on this queue, so a jump of the clock is told apart from a callback that ran late.
-    clock_sub_ = nh_.subscribe("/clock", kQueueSize, &AttitudePropagatorRos::onClock, this, hints);
+    clock_sub_ =
+        nh_.subscribe("/clock", kInputQueueSize, &AttitudePropagatorRos::onClock, this, hints);
   }
+}
+
+void AttitudePropagatorRos::watchTf() {
+  const auto& p = config_.parameters;
+  if (!p.publish_tf || p.tf_conflict == "ignore") {
+    tf_watch_sub_.shutdown();
+    tf_static_watch_sub_.shutdown();
+    return;
+  }
+  if (tf_watch_sub_) return;
+  using TfEvent = ros::MessageEvent<const tf2_msgs::TFMessage>;
+  tf_watch_sub_ = nh_.subscribe<tf2_msgs::TFMessage, const TfEvent&>(
+      "/tf", kTfWatchQueueSize,
+      boost::function<void(const TfEvent&)>([this](const TfEvent& e) { onTfSeen(e, false); }));
+  tf_static_watch_sub_ = nh_.subscribe<tf2_msgs::TFMessage, const TfEvent&>(
+      "/tf_static", kSparseQueueSize,
+      boost::function<void(const TfEvent&)>([this](const TfEvent& e) { onTfSeen(e, true); }));
+}
+
+void AttitudePropagatorRos::writeResolved() const {
+  pnh_.setParam("resolved_model", modelName(config_.model));
+  pnh_.setParam("resolved_integrator", integratorName(engine_->integrator()));
 }
 
 void AttitudePropagatorRos::logModel() const {
@@ -151,8 +196,9 @@ void AttitudePropagatorRos::guarded(const char* where, F&& f) {
     f();
   } catch (const std::exception& e) {
     ++callback_errors_;
-    ROS_ERROR_THROTTLE(kWarnPeriod, "%s: %s (input ignored, %lu errors so far)", where, e.what(),
-                       callback_errors_);
+    // The text may quote a message's strings (tf's errors quote frame ids).
+    ROS_ERROR_THROTTLE(kWarnPeriod, "%s: %s (input ignored, %lu errors so far)", where,
+                       logText(e.what(), 4 * kLogTextBytes).c_str(), callback_errors_);
   } catch (...) {
     ++callback_errors_;
     ROS_ERROR_THROTTLE(kWarnPeriod, "%s: unknown exception (input ignored)", where);
@@ -222,7 +268,7 @@ bool AttitudePropagatorRos::decodeVectorInput(const topic_tools::ShapeShifter& m
     ROS_WARN_THROTTLE(kWarnPeriod,
                       "%s: message type %s rejected; the topic carries %s (its first message's "
                       "type; accepted: %s or %s) (%lu rejected so far)",
-                      topic, msg.getDataType().c_str(),
+                      topic, logText(msg.getDataType()).c_str(),
                       type.datatype.empty() ? "nothing yet" : type.datatype.c_str(),
                       ros::message_traits::datatype<Plain>(),
                       ros::message_traits::datatype<Stamped>(), engine_->counters().rejected_type);
@@ -292,7 +338,7 @@ void AttitudePropagatorRos::onGyroBias(const geometry_msgs::Vector3Stamped::Cons
       ROS_WARN_THROTTLE(kWarnPeriod,
                         "gyro_bias: frame '%s' rejected; accepted: '%s' (the body), the rate "
                         "messages' frame once known, or empty (%lu rejected so far)",
-                        frame.c_str(), config_.parameters.body_frame.c_str(),
+                        logText(frame).c_str(), config_.parameters.body_frame.c_str(),
                         engine_->counters().rejected_bias);
       return;
     }
@@ -341,17 +387,17 @@ const Eigen::Quaterniond* AttitudePropagatorRos::mountRotation(const std::string
   if (!tf_buffer_->canTransform(body, frame_id, ros::Time(0), &error)) {
     engine_->reject(Rejection::NoTransform);
     ROS_WARN_THROTTLE(kWarnPeriod,
-                      "rates in frame '%s': waiting for the static transform %s -> %s; "
+                      "rates in frame '%s': waiting for the static transform from '%s'; "
                       "dropped %lu messages so far (%s)",
-                      frame_id.c_str(), body.c_str(), frame_id.c_str(),
-                      engine_->counters().dropped_no_tf, error.c_str());
+                      logText(frame_id).c_str(), body.c_str(), engine_->counters().dropped_no_tf,
+                      logText(error, 4 * kLogTextBytes).c_str());
     return nullptr;
   }
   q_BS_ = rotationOf(tf_buffer_->lookupTransform(body, frame_id, ros::Time(0))).normalized();
   sensor_frame_ = frame_id;
   mount_known_ = true;
   ROS_INFO("rates in frame '%s' are rotated into '%s' by q = [%g, %g, %g, %g] (x y z w)",
-           frame_id.c_str(), body.c_str(), q_BS_.x(), q_BS_.y(), q_BS_.z(), q_BS_.w());
+           logText(frame_id).c_str(), body.c_str(), q_BS_.x(), q_BS_.y(), q_BS_.z(), q_BS_.w());
   if (!config_.torque_input) {
     // Cached for good: stop listening, or the listener would keep digesting our own /tf.
     tf_listener_.reset();
@@ -369,7 +415,8 @@ std::optional<Eigen::Quaterniond> AttitudePropagatorRos::torqueFrameRotation(
   } catch (const tf2::TransformException& e) {
     engine_->reject(Rejection::NoTransform);
     ROS_WARN_THROTTLE(kWarnPeriod, "torque in frame '%s': no transform to '%s' yet: dropped (%s)",
-                      frame_id.c_str(), body.c_str(), e.what());
+                      logText(frame_id).c_str(), body.c_str(),
+                      logText(e.what(), 4 * kLogTextBytes).c_str());
     return std::nullopt;
   }
 }
@@ -412,6 +459,8 @@ void AttitudePropagatorRos::onWatchdog(const ros::WallTimerEvent&) {
     } else {
       pollClock();
     }
+    resumeTfIfClear();
+    closeInputWindow();
     if ((ros::WallTime::now() - last_diagnosis_).toSec() >= updater_.getPeriod()) {
       updater_.force_update();
     }
@@ -519,29 +568,58 @@ void AttitudePropagatorRos::note(const EngineNote& note) {
   }
 }
 
-void AttitudePropagatorRos::onTfSeen(const ros::MessageEvent<const tf2_msgs::TFMessage>& event) {
-  guarded("/tf watch", [&] {
+void AttitudePropagatorRos::onTfSeen(const ros::MessageEvent<const tf2_msgs::TFMessage>& event,
+                                     bool latched) {
+  guarded(latched ? "/tf_static watch" : "/tf watch", [&] {
     if (event.getPublisherName() == ros::this_node::getName()) return;  // our own
     const auto& p = config_.parameters;
     const std::string& child = p.reverse_tf ? p.fixed_frame : p.body_frame;
     const std::string& parent = p.reverse_tf ? p.body_frame : p.fixed_frame;
     for (const auto& t : event.getConstMessage()->transforms) {
       if (t.child_frame_id != child) continue;
-      if (++tf_conflicts_ == 1) {
-        ROS_WARN(
-            "tf: %s also publishes '%s' as the child of '%s' (we publish %s -> %s): a frame "
-            "has one parent. Publish our transform to a frame of its own "
-            "(body_frame:=%s_attitude), "
-            "or reverse_tf:=true for a tree rooted at the body, or publish_tf:=false%s",
-            event.getPublisherName().c_str(), child.c_str(), t.header.frame_id.c_str(),
-            parent.c_str(), child.c_str(), child.c_str(),
-            p.tf_conflict == "stop" ? "; tf_conflict is stop: no more tf from this node"
-                                    : "; tf_conflict:=stop would stop our tf instead");
+      ++tf_conflicts_;
+      const bool stop = p.tf_conflict == "stop";
+      if (stop) {
+        if (latched) tf_conflict_latched_ = true;
+        if (!latched) last_tf_conflict_ = ros::WallTime::now();
       }
-      if (p.tf_conflict == "stop") tf_stopped_ = true;
+      // warn: once. stop: at each stop, so a conflict that comes back is named again.
+      if (stop ? !tf_stopped_ : tf_conflicts_ == 1) {
+        ROS_WARN(
+            "tf: %s also publishes '%s' as the child of '%s' on %s (we publish %s -> %s): a "
+            "frame has one parent. Publish our transform to a frame of its own "
+            "(body_frame:=%s_attitude), or reverse_tf:=true for a tree rooted at the body, or "
+            "publish_tf:=false%s",
+            logText(event.getPublisherName()).c_str(), child.c_str(),
+            logText(t.header.frame_id).c_str(), latched ? "/tf_static" : "/tf", parent.c_str(),
+            child.c_str(), child.c_str(),
+            !stop     ? "; tf_conflict:=stop would stop our tf instead"
+            : latched ? "; tf_conflict is stop: no tf from this node until publish_tf is "
+                        "switched off and on"
+                      : "; tf_conflict is stop: no tf from this node until no other parent "
+                        "has been seen on /tf for 2 s, or publish_tf is switched off and on");
+      }
+      if (stop) tf_stopped_ = true;
       return;
     }
   });
+}
+
+void AttitudePropagatorRos::resumeTfIfClear() {
+  if (!tf_stopped_ || tf_conflict_latched_) return;
+  if ((ros::WallTime::now() - last_tf_conflict_).toSec() < kTfConflictClearance) return;
+  resumeTf("no other parent on /tf for 2 s");
+}
+
+void AttitudePropagatorRos::resumeTf(const char* why) {
+  tf_conflict_latched_ = false;
+  if (!tf_stopped_) return;
+  tf_stopped_ = false;
+  ++tf_resumes_;
+  const auto& p = config_.parameters;
+  ROS_INFO("tf: %s: publishing %s -> %s again", why,
+           (p.reverse_tf ? p.body_frame : p.fixed_frame).c_str(),
+           (p.reverse_tf ? p.fixed_frame : p.body_frame).c_str());
 }
 
 void AttitudePropagatorRos::publishTf(const ros::Time& stamp, const Eigen::Quaterniond& q_WB) {
@@ -620,6 +698,8 @@ void AttitudePropagatorRos::onReconfigure(AttitudePropagatorConfig& live, std::u
   const bool engine_changes = p.angular_velocity_stddev != now.angular_velocity_stddev ||
                               p.max_dt != now.max_dt || p.torque_timeout != now.torque_timeout ||
                               p.integrator != now.integrator;
+  const bool tf_toggled = p.publish_tf != now.publish_tf;
+  const bool child_changed = p.reverse_tf != now.reverse_tf;
   std::string error;
   guarded("reconfigure", [&] {
     try {
@@ -629,9 +709,25 @@ void AttitudePropagatorRos::onReconfigure(AttitudePropagatorConfig& live, std::u
     } catch (const std::invalid_argument& e) {
       error = e.what();
     }
+    if (!error.empty()) return;
+    // Switching publish_tf off and on says "look again": the stop is lifted, and the watch,
+    // subscribed anew, gets the latched /tf_static parents still published (which stop tf
+    // again). reverse_tf changes our child frame, so the old conflict is not ours any more.
+    if (tf_toggled || child_changed) {
+      if (p.publish_tf) {
+        resumeTf(tf_toggled ? "publish_tf switched off and on"
+                            : "reverse_tf changed our child frame");
+      }
+      tf_watch_sub_.shutdown();
+      tf_static_watch_sub_.shutdown();
+      watchTf();
+    }
+    if (engine_changes) writeResolved();
   });
   if (!error.empty()) {
-    ROS_WARN("reconfigure refused: %s; keeping the values in force", error.c_str());
+    // The text quotes the value asked for (the integrator name is any string a client sends).
+    ROS_WARN("reconfigure refused: %s; keeping the values in force",
+             logText(error, 4 * kLogTextBytes).c_str());
   } else if (engine_changes) {
     ROS_INFO(
         "reconfigured: integrator %s, max_dt %g s, torque_timeout %g s, "
@@ -668,6 +764,8 @@ void AttitudePropagatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   const double silence = last_input_.isZero() ? -1.0 : (now - last_input_).toSec();
   if (expects_input && (silence < 0.0 || silence > 1.0)) {
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no rate input in the last second");
+  } else if (!input_window_problem_.empty()) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, input_window_problem_);
   } else if (const std::optional<double> lag = inputLagBeyondWarning()) {
     status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
                     "inputs arrive %.3f s %s ROS time (sensor clock skewed, or a queue): tf "
@@ -711,6 +809,7 @@ void AttitudePropagatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   status.add("rejected_bias", c.rejected_bias);
   status.add("tf_conflicts", tf_conflicts_);
   status.add("tf_stopped", tf_stopped_);
+  status.add("tf_resumes", tf_resumes_);
   const Eigen::Vector3d& b = engine_->gyroBias();
   status.addf("gyro_bias", "[%g, %g, %g]", b.x(), b.y(), b.z());
   if (const KinematicPropagator* k = engine_->kinematic()) {
@@ -731,6 +830,68 @@ void AttitudePropagatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
     status.add("energy_drift", engine_->energyDrift());
     status.add("momentum_drift", engine_->momentumDrift());
   }
+}
+
+void AttitudePropagatorRos::closeInputWindow() {
+  const ros::WallTime now = ros::WallTime::now();
+  if (window_start_.isZero()) {
+    window_start_ = now;
+    window_start_counters_ = engine_->counters();
+    return;
+  }
+  const double seconds = (now - window_start_).toSec();
+  if (seconds < kInputWindow) return;
+  const EngineCounters& c = engine_->counters();
+  const EngineCounters& s = window_start_counters_;
+  // Counts of rate samples lost in the window, by cause. Torque counts with them: the
+  // counters do not tell the sources apart (a torque topic rarely fails alone).
+  struct Loss {
+    std::uint64_t count;
+    std::string cause;
+  };
+  const std::uint64_t received = c.received - s.received;
+  const double period = received > 0 ? seconds / static_cast<double>(received) : 0.0;
+  const double max_dt = config_.parameters.max_dt;
+  char gap_cause[160];
+  if (max_dt < period) {
+    std::snprintf(gap_cause, sizeof(gap_cause), "max_dt %g s is below the input period %g s",
+                  max_dt, period);
+  } else {
+    std::snprintf(gap_cause, sizeof(gap_cause),
+                  "gaps longer than max_dt %g s (input period %g s): messages lost on the way "
+                  "or stamps far apart",
+                  max_dt, period);
+  }
+  const Loss losses[] = {
+      {c.gaps - s.gaps, gap_cause},
+      {c.dropped_stale - s.dropped_stale,
+       "stamps at or before the previous one (two publishers on one topic, or a source that "
+       "loops)"},
+      {c.rejected_future - s.rejected_future,
+       "stamps more than max_future ahead of ROS time (clocks not synchronised?)"},
+      {c.rejected_non_finite - s.rejected_non_finite, "NaN or infinite rates or stamps"},
+      {c.rejected_out_of_range - s.rejected_out_of_range, "rates out of the accepted range"},
+      {c.rejected_no_rate - s.rejected_no_rate,
+       "angular_velocity_covariance[0] == -1 (REP-145: no rate)"},
+      {c.rejected_type - s.rejected_type, "a message type the topic does not take"},
+      {c.rejected_covariance - s.rejected_covariance, "rate covariances that are not ones"},
+      {c.dropped_no_tf - s.dropped_no_tf, "no transform from the rates' frame to the body yet"},
+      {c.dropped_no_time - s.dropped_no_time, "unstamped messages before the first /clock"},
+  };
+  std::uint64_t lost = 0;
+  const Loss* worst = &losses[0];
+  for (const Loss& loss : losses) {
+    lost += loss.count;
+    if (loss.count > worst->count) worst = &loss;
+  }
+  input_window_problem_.clear();
+  if (received > 0 && 2 * lost > received) {
+    input_window_problem_ = "most rate samples of the last second were lost (" +
+                            std::to_string(std::min(lost, received)) + " of " +
+                            std::to_string(received) + "): " + worst->cause;
+  }
+  window_start_ = now;
+  window_start_counters_ = c;
 }
 
 }  // namespace attitude_propagator

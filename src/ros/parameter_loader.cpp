@@ -1,6 +1,8 @@
 #include "attitude_propagator/ros/parameter_loader.h"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -12,9 +14,11 @@ namespace attitude_propagator {
 
 namespace {
 
-// Private parameters read by libraries the node uses, not by us (diagnostic_updater reads
-// ~diagnostic_period), so they are not unknown.
-const std::vector<std::string> kForeignParameters{"diagnostic_period"};
+// Private parameters that are not ours to read but are not unknown either: read by libraries
+// the node uses (diagnostic_updater reads ~diagnostic_period), or written by the node itself
+// (a respawned node finds what its previous run wrote).
+const std::vector<std::string> kForeignParameters{"diagnostic_period", "resolved_model",
+                                                  "resolved_integrator"};
 
 std::string describe(XmlRpc::XmlRpcValue& value) {
   std::ostringstream text;
@@ -26,6 +30,44 @@ std::string describe(XmlRpc::XmlRpcValue& value) {
                             const std::string& accepted) {
   throw std::invalid_argument(name + ": wrong type, got '" + describe(value) +
                               "'; accepted: " + accepted);
+}
+
+/// How to write the decimal number `text` so that YAML 1.1 (PyYAML, hence rosparam and
+/// roslaunch) reads a number: with an exponent it needs a dot in the mantissa and a sign in
+/// the exponent ("1e12" and "1.0e12" are strings to it, "1.0e+12" is a number); without one
+/// the text was quoted. Empty when `text` is not a finite decimal number.
+std::string yamlNumberFix(const std::string& text) {
+  if (text.empty() || text.find_first_not_of("0123456789+-.eE") != std::string::npos) return "";
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (end != text.c_str() + text.size() || !std::isfinite(value)) return "";
+  const auto e = text.find_first_of("eE");
+  if (e == std::string::npos) return text + " without quotes";
+  std::string mantissa = text.substr(0, e);
+  std::string exponent = text.substr(e + 1);
+  if (mantissa.find('.') == std::string::npos) mantissa += ".0";
+  if (exponent[0] != '+' && exponent[0] != '-') exponent = "+" + exponent;
+  const std::string fix = mantissa + text[e] + exponent;
+  return fix == text ? text + " without quotes" : fix;
+}
+
+/// A number that YAML read as a string (`inertia: [1.0e12, ...]` in a file): the error names
+/// the text and how to write it, since "wrong type" alone sends one looking elsewhere.
+[[noreturn]] void numberAsString(const std::string& name, const std::string& text,
+                                 const std::string& fix, const std::string& accepted) {
+  throw std::invalid_argument(name + ": '" + text + "' is a string to YAML; write " + fix +
+                              " (YAML 1.1 reads an exponent only after a dot and with a sign: "
+                              "1.0e+12, 2.5e-3); accepted: " +
+                              accepted);
+}
+
+/// Throws numberAsString when v is a string that reads as a finite number.
+void rejectNumberText(const std::string& name, XmlRpc::XmlRpcValue& v,
+                      const std::string& accepted) {
+  if (v.getType() != XmlRpc::XmlRpcValue::TypeString) return;
+  const std::string text = static_cast<std::string>(v);
+  const std::string fix = yamlNumberFix(text);
+  if (!fix.empty()) numberAsString(name, text, fix, accepted);
 }
 
 bool isNumber(const XmlRpc::XmlRpcValue& v) {
@@ -48,6 +90,7 @@ void read(const std::string& name, XmlRpc::XmlRpcValue& v, bool& out) {
 }
 
 void read(const std::string& name, XmlRpc::XmlRpcValue& v, double& out) {
+  rejectNumberText(name, v, "a number");
   if (!isNumber(v)) wrongType(name, v, "a number");
   out = toDouble(v);
 }
@@ -56,6 +99,7 @@ void read(const std::string& name, XmlRpc::XmlRpcValue& v, std::vector<double>& 
   if (v.getType() != XmlRpc::XmlRpcValue::TypeArray) wrongType(name, v, "a list of numbers");
   out.clear();
   for (int i = 0; i < v.size(); ++i) {
+    rejectNumberText(name, v[i], "a list of numbers");
     if (!isNumber(v[i])) wrongType(name, v, "a list of numbers");
     out.push_back(toDouble(v[i]));
   }

@@ -11,7 +11,7 @@ from attitude_propagator.msg import AttitudeState
 from attitude_propagator.srv import SetState, SetStateRequest
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Quaternion, Vector3
-from rosgraph_msgs.msg import Clock
+from rosgraph_msgs.msg import Clock, Log
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Empty
 from tf2_msgs.msg import TFMessage
@@ -98,6 +98,23 @@ class Recorder:
     def count(self):
         with self.lock:
             return len(self.messages)
+
+
+class RosoutLines:
+    """rosout lines (level, text) per node name."""
+
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.lines = []
+        self.sub = rospy.Subscriber("/rosout", Log, self._cb, queue_size=100000)
+
+    def _cb(self, msg):
+        with self.lock:
+            self.lines.append((msg.name, msg.level, msg.msg))
+
+    def of(self, node, level, text):
+        with self.lock:
+            return [m for n, lv, m in self.lines if n == node and lv == level and text in m]
 
 
 class Diagnostics:

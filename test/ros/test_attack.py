@@ -16,9 +16,9 @@ from rosgraph_msgs.msg import Log
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Empty
 
-from ap_test_util import (Diagnostics, Node, Recorder, Stamps, as_tuple, axis_angle,
-                          call_with_timeout, check_each, check_finite_state, make_imu, qmul,
-                          rotation_angle, wait_connected, wait_for)
+from ap_test_util import (Diagnostics, Node, Recorder, RosoutLines, Stamps, as_tuple,
+                          axis_angle, call_with_timeout, check_each, check_finite_state, make_imu,
+                          qmul, rotation_angle, wait_connected, wait_for)
 
 TOL = 1e-9  # cf4 is exact for a constant rate; only round-off remains
 SQRT_HALF = math.sqrt(0.5)
@@ -33,23 +33,6 @@ def exp_rotation(w, t):
     """Exp(t w) as a quaternion: the rotation of a constant body rate w over t seconds."""
     n = math.sqrt(sum(c * c for c in w))
     return IDENTITY if n == 0.0 else axis_angle(w, n * t)
-
-
-class RosoutLines:
-    """rosout lines (level, text) per node name."""
-
-    def __init__(self):
-        self.lock = threading.Lock()
-        self.lines = []
-        self.sub = rospy.Subscriber("/rosout", Log, self._cb, queue_size=100000)
-
-    def _cb(self, msg):
-        with self.lock:
-            self.lines.append((msg.name, msg.level, msg.msg))
-
-    def of(self, node, level, text):
-        with self.lock:
-            return [m for n, lv, m in self.lines if n == node and lv == level and text in m]
 
 
 class AttackTest(unittest.TestCase):

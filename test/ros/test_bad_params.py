@@ -20,6 +20,7 @@ import rospkg
 import rospy
 import rostest
 import yaml
+from attitude_propagator.cfg import AttitudePropagatorConfig as ReconfigureConfig
 from attitude_propagator.msg import AttitudeState
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from sensor_msgs.msg import Imu
@@ -41,6 +42,12 @@ CASES = [
     ("rate_input", "gps", "rate_input: unknown value 'gps'; accepted: imu twist none"),
     ("publish_rate", -5.0, "publish_rate: invalid value -5.0; accepted: a finite number > 0"),
     ("max_dt", "soon", "max_dt: wrong type"),
+    # Numbers that YAML 1.1 reads as strings (no dot, or no sign in the exponent), as a YAML
+    # file gives them to the parameter server.
+    ("inertia", yaml.safe_load("[1.0e12, 2.0e12, 2.0e12]"),
+     "inertia: '1.0e12' is a string to YAML; write 1.0e+12"),
+    ("max_dt", yaml.safe_load("1e-3"), "max_dt: '1e-3' is a string to YAML; write 1.0e-3"),
+    ("max_dt", "0.5", "max_dt: '0.5' is a string to YAML; write 0.5 without quotes"),
     ("initial_orientation", [0, 0, 0, 0], "initial_orientation: zero quaternion"),
     ("body_frame", "world", "body_frame: equals fixed_frame"),
 ]
@@ -166,6 +173,19 @@ class BadParametersTest(unittest.TestCase):
                   if "[FATAL]" in line or "[ERROR]" in line]
         self.assertEqual(len(errors), 1, result.stderr)
         self.assertIn("accepted", errors[0])
+
+    def test_max_dt_minimum_is_the_reconfigure_minimum(self):
+        """One minimum for max_dt: the validator refuses just below the slider's minimum in
+        cfg/AttitudePropagator.cfg and starts at it."""
+        minimum = ReconfigureConfig.min["max_dt"]
+        self.expect_refused(90, "max_dt", minimum * (1 - 1e-9), "max_dt: invalid value")
+        self.expect_refused(91, "max_dt", minimum * (1 - 1e-9), "accepted: a number in [%s, 60]"
+                            % ("%g" % minimum).replace("e-0", "e-"))
+        with RunningNode(self.node, "min_dt", "node", {"max_dt": minimum}) as node:
+            wait_for(lambda: rospy.get_param("/min_dt/node/resolved_model", None), 20.0,
+                     "the node started with max_dt %g" % minimum)
+            self.assertEqual(rospy.get_param("/min_dt/node/max_dt"), minimum)
+            self.assertTrue(node.running(), node.output())
 
     def test_nodelet_refuses_to_start(self):
         result = run([self.nodelet, "standalone", "attitude_propagator/AttitudePropagatorNodelet",

@@ -19,6 +19,12 @@
 
 namespace attitude_propagator {
 
+/// Smallest `max_dt` (s) the validator accepts, and the minimum of its slider in
+/// cfg/AttitudePropagator.cfg (test/ros/test_bad_params.py checks that the two agree). A
+/// microsecond is below the period of any rate stream; a smaller max_dt would only make every
+/// sample a gap.
+constexpr double kMinMaxDt = 1e-6;
+
 /// Every private parameter of the node with its default: the one place defaults live.
 struct Parameters {
   std::string model = "auto";
@@ -81,14 +87,14 @@ void forEachParameter(P& p, F&& f) {
     "publish `body_frame → fixed_frame` instead (for a tree rooted at the body)");
   f("tf_conflict", p.tf_conflict, "",
     "another node publishes a parent of our child frame: `warn` (once, counted), `stop` "
-    "(also stop publishing tf) or `ignore` (no watch: it sees every transform we publish, "
-    "which costs throughput above about 20 kHz)");
+    "(also stop publishing tf until it is over) or `ignore` (no watch: it sees every transform "
+    "we publish, which costs throughput above about 20 kHz)");
   f("publish_rate", p.publish_rate, "Hz",
     "dynamic model: publish at multiples of 1/rate; at most 1000");
   f("max_step", p.max_step, "s",
     "dynamic model: largest integration step, in [1e-5, 60] and at least max_dt / 1e5; "
     "0: 1/publish_rate");
-  f("max_dt", p.max_dt, "s", "largest gap between stamps integrated across; at most 60");
+  f("max_dt", p.max_dt, "s", "largest gap between stamps integrated across, in [1e-6, 60]");
   f("max_future", p.max_future, "s",
     "an input or `~set_state` stamped further ahead of ROS time is refused (counted); at most "
     "3600");

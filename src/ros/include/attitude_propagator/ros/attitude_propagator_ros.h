@@ -64,7 +64,14 @@ class AttitudePropagatorRos : public EngineSink {
  private:
   void advertise();
   void subscribe();
+  /// Subscribes the /tf and /tf_static watch when publish_tf is on and tf_conflict is not
+  /// `ignore`, unsubscribes it otherwise; a fresh subscription receives the latched
+  /// /tf_static parents again.
+  void watchTf();
   void logModel() const;
+  /// ~resolved_model and ~resolved_integrator: what `auto` (or the user) chose, on the
+  /// parameter server next to the parameters as given.
+  void writeResolved() const;
 
   /// Runs f, turning any exception into a throttled error and a count, so none crosses a
   /// callback (a numeric surprise must never take the node down).
@@ -119,9 +126,15 @@ class AttitudePropagatorRos : public EngineSink {
   void pollClock();
 
   /// Watches /tf and /tf_static for another parent of the frame we publish as a child (or the
-  /// same edge from another node): warns once with the fix, counts, and with
-  /// `tf_conflict: stop` stops publishing tf rather than fight over the tree.
-  void onTfSeen(const ros::MessageEvent<const tf2_msgs::TFMessage>& event);
+  /// same edge from another node): warns with the fix, counts, and with `tf_conflict: stop`
+  /// stops publishing tf rather than fight over the tree, until the conflict is over
+  /// (resumeTfIfClear) or publish_tf is switched off and on.
+  void onTfSeen(const ros::MessageEvent<const tf2_msgs::TFMessage>& event, bool latched);
+  /// Resumes tf stopped by a conflict on /tf once no other parent has been seen there for
+  /// kTfConflictClearance. A /tf_static parent stays in every tf buffer: no time clears it.
+  void resumeTfIfClear();
+  /// Clears a stop (publish_tf switched off and on, or reverse_tf changing our child frame).
+  void resumeTf(const char* why);
 
   // Outputs.
   void publishTf(const ros::Time& stamp, const Eigen::Quaterniond& q_WB);
@@ -135,6 +148,9 @@ class AttitudePropagatorRos : public EngineSink {
   /// kInputLagWarning, if any.
   std::optional<double> inputLagBeyondWarning() const;
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
+  /// Closes the one-second window of input counters when it is due: what became of the rate
+  /// samples received in it (input_window_problem_ names the cause when most were lost).
+  void closeInputWindow();
   /// dynamic_reconfigure: validated like the start-up parameters; a refused change is
   /// logged and the values shown in rqt_reconfigure go back to those in force.
   void onReconfigure(AttitudePropagatorConfig& live, std::uint32_t level);
@@ -170,6 +186,9 @@ class AttitudePropagatorRos : public EngineSink {
   ros::Subscriber tf_static_watch_sub_;
   std::uint64_t tf_conflicts_ = 0;
   bool tf_stopped_ = false;
+  bool tf_conflict_latched_ = false;  // the stop came from /tf_static: only a toggle clears it
+  ros::WallTime last_tf_conflict_;    // the latest other parent of our child frame seen on /tf
+  std::uint64_t tf_resumes_ = 0;
   ros::Publisher tf_pub_;
   ros::Publisher imu_pub_;
   ros::Publisher state_pub_;
@@ -184,6 +203,10 @@ class AttitudePropagatorRos : public EngineSink {
   std::uint64_t accepted_at_last_diagnosis_ = 0;
   ros::WallTime last_diagnosis_;
   ros::WallTime last_input_;
+  // The input window: counters at its start, and the verdict on the last complete one.
+  EngineCounters window_start_counters_;
+  ros::WallTime window_start_;
+  std::string input_window_problem_;  // empty: most rate samples were used
 };
 
 }  // namespace attitude_propagator

@@ -1,0 +1,69 @@
+#!/usr/bin/python3
+"""Launch arguments (launch_args.test): each <arg> a launch file declares has a doc= text and a
+default (or a fixed value), so `roslaunch --ros-args` explains every one and none is required.
+The <arg> elements inside an <include> pass values on; they are not declarations."""
+import glob
+import os
+import subprocess
+import unittest
+import xml.etree.ElementTree as ET
+
+import rospkg
+import rostest
+
+from ap_test_util import check_each
+
+
+def launch_files():
+    root = rospkg.RosPack().get_path("attitude_propagator")
+    return sorted(glob.glob(os.path.join(root, "launch", "*.launch")) +
+                  glob.glob(os.path.join(root, "launch", "examples", "*.launch")))
+
+
+def declared_args(path):
+    """(name, attributes) of every <arg> that declares an argument (not one in an <include>)."""
+    tree = ET.parse(path)
+    inside_include = {id(arg) for include in tree.iter("include") for arg in include.iter("arg")}
+    return [(arg.get("name"), arg.attrib) for arg in tree.iter("arg")
+            if id(arg) not in inside_include]
+
+
+class LaunchArgsTest(unittest.TestCase):
+    def test_there_are_launch_files(self):
+        names = {os.path.basename(p) for p in launch_files()}
+        self.assertTrue({"attitude_propagator.launch", "demo.launch", "standalone.launch",
+                         "imu_on_robot.launch", "body_root.launch"} <= names, names)
+
+    def test_every_arg_has_a_doc(self):
+        def check(path):
+            missing = [name for name, attrs in declared_args(path) if not attrs.get("doc")]
+            self.assertEqual(missing, [], "args without doc= in %s" % path)
+        check_each(self, launch_files(), check)
+
+    def test_no_arg_is_required(self):
+        def check(path):
+            required = [name for name, attrs in declared_args(path)
+                        if "default" not in attrs and "value" not in attrs]
+            self.assertEqual(required, [], "args without a default in %s" % path)
+        check_each(self, launch_files(), check)
+
+    def test_the_frames_default_to_the_parameters_defaults(self):
+        """attitude_propagator.launch's frame args are the node's defaults, not empty."""
+        path = [p for p in launch_files() if p.endswith("/attitude_propagator.launch")][0]
+        args = dict(declared_args(path))
+        self.assertEqual(args["fixed_frame"]["default"], "world")
+        self.assertEqual(args["body_frame"]["default"], "base_link")
+
+    def test_ros_args_lists_no_required_argument(self):
+        """What a user sees: `roslaunch --ros-args` names no argument as required."""
+        def check(path):
+            out = subprocess.run(["roslaunch", "--ros-args", path], stdout=subprocess.PIPE,
+                                 stderr=subprocess.STDOUT, text=True, timeout=60).stdout
+            self.assertNotIn("Required Arguments", out, out)
+            self.assertNotIn("undocumented", out, out)
+            self.assertIn("Optional Arguments", out, out)
+        check_each(self, launch_files(), check)
+
+
+if __name__ == "__main__":
+    rostest.rosrun("attitude_propagator", "launch_args", LaunchArgsTest)
