@@ -206,6 +206,8 @@ class AttitudeEngine {
   std::string setState(Stamp stamp, const Eigen::Quaterniond& q_WB, const Eigen::Vector3d& w_B);
 
   const EngineCounters& counters() const { return counters_; }
+  /// The configuration in force (budgets, bounds), for callers that drive the clock.
+  const EngineConfig& config() const { return config_; }
   /// Mean seconds by which the inputs of `source` arrive behind the clock (negative: ahead);
   /// empty before one arrived with a clock known.
   std::optional<double> inputLag(Source source) const;

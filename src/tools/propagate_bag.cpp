@@ -577,10 +577,11 @@ void BagPropagator::submit(Input& input) {
 }
 
 void BagPropagator::tickTo(Stamp now) {
-  // Steps of at most half the grid budget, so no grid stamp is ever deferred; a jump longer
-  // than max_dt stays one tick (a gap, as the node treats a clock that jumps ahead).
+  // Steps of at most half the engine's grid budget, so no grid stamp is ever deferred; a jump
+  // longer than max_dt stays one tick (a gap, as the node treats a clock that jumps ahead).
   const auto& p = config_.parameters;
-  const auto step = static_cast<Stamp>(0.5 * 1000.0 / p.publish_rate * 1e9);
+  const double budget = static_cast<double>(engine_->config().grid_budget);
+  const auto step = static_cast<Stamp>(0.5 * budget / p.publish_rate * 1e9);
   if (last_tick_ && now > *last_tick_ && double(now - *last_tick_) * 1e-9 <= p.max_dt) {
     for (Stamp t = *last_tick_ + step; t < now; t += step) engine_->clockTick(t);
   }
@@ -649,6 +650,8 @@ void BagPropagator::summary(std::FILE* out, bool written) const {
       dropped += (dropped.empty() ? "" : ", ") + std::string(name) + " " + std::to_string(n);
   };
   add("stale", c.dropped_stale);
+  add("future", c.rejected_future);
+  add("reset", c.dropped_on_reset);
   add("non-finite", c.rejected_non_finite);
   add("out-of-range", c.rejected_out_of_range);
   add("no-rate", c.rejected_no_rate);
@@ -660,12 +663,13 @@ void BagPropagator::summary(std::FILE* out, bool written) const {
   const std::uint64_t accepted = o_.io_floor ? floor_accepted_ : c.accepted;
   std::fprintf(out,
                "propagate_bag: %llu messages (%s), %llu accepted, dropped: %s; %llu resets, "
-               "%llu gaps, %llu late; %llu states -> %s; %.3f s wall, %.0f msg/s, %.0fx real "
-               "time%s\n",
+               "%llu jumps back, %llu gaps, %llu late; %llu states -> %s; %.3f s wall, %.0f "
+               "msg/s, %.0fx real time%s\n",
                static_cast<unsigned long long>(messages_), by_topic.c_str(),
                static_cast<unsigned long long>(accepted),
                dropped.empty() ? "none" : dropped.c_str(),
-               static_cast<unsigned long long>(c.resets), static_cast<unsigned long long>(c.gaps),
+               static_cast<unsigned long long>(c.resets),
+               static_cast<unsigned long long>(c.jumps_back), static_cast<unsigned long long>(c.gaps),
                static_cast<unsigned long long>(c.late), static_cast<unsigned long long>(states_),
                written ? o_.output.c_str() : "nothing written", wall_,
                wall_ > 0 ? double(messages_) / wall_ : 0.0, wall_ > 0 ? bag_seconds_ / wall_ : 0.0,
