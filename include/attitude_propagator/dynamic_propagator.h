@@ -74,8 +74,8 @@ class DynamicPropagator {
   /// unchanged); FailedStep as for advanceTo (the torque then acts from the new anchor). A sample
   /// stamped at or before time() (it arrived after the clock passed its stamp) acts from its stamp
   /// if no grid point was committed since, else from the last grid point, and returns Advanced; a
-  /// sample not newer than the previous torque sample is DroppedStale, however far back. With the exact model a
-  /// non-zero torque throws std::logic_error.
+  /// sample not newer than the previous torque sample is DroppedStale, however far back. With the
+  /// exact model a non-zero torque throws std::logic_error.
   StampOutcome setTorque(double t, const Eigen::Vector3d& tau, TorqueFrame frame);
 
   /// A measured body rate at t: advances to t, then sets w_B (the orientation is kept). Late

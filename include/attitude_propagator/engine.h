@@ -74,10 +74,10 @@ struct EngineCounters {
   std::uint64_t dropped_stale = 0;
   std::uint64_t dropped_no_tf = 0;
   std::uint64_t dropped_no_time = 0;
-  std::uint64_t late = 0;              ///< dynamic: arrived after the clock passed its stamp
-  std::uint64_t gaps = 0;              ///< longer than max_dt: state held
-  std::uint64_t resets = 0;  ///< the state back to the initial one: time went back, reset()
-  std::uint64_t jumps_back = 0;        ///< a source's stamps went back, and persisted
+  std::uint64_t late = 0;        ///< dynamic: arrived after the clock passed its stamp
+  std::uint64_t gaps = 0;        ///< longer than max_dt: state held
+  std::uint64_t resets = 0;      ///< the state back to the initial one: time went back, reset()
+  std::uint64_t jumps_back = 0;  ///< a source's stamps went back, and persisted
   std::uint64_t rejected_future = 0;   ///< stamped more than max_future ahead of the clock
   std::uint64_t dropped_on_reset = 0;  ///< dynamic: queued inputs that reset() dropped
   std::uint64_t failed_steps = 0;      ///< the integrator could not complete an interval
@@ -265,10 +265,10 @@ class AttitudeEngine {
   Eigen::Vector3d gyro_bias_B_ = Eigen::Vector3d::Zero();
   std::vector<std::pair<Stamp, Eigen::Vector3d>> pending_gyro_bias_;  // sorted by stamp, bounded
 
-  std::optional<Stamp> origin_;          // core time 0, whole seconds; set by the first stamp
-  std::optional<Stamp> last_published_;  // one state per stamp, increasing
-  std::optional<Stamp> clock_;           // the latest ROS time seen
-  Stamp rate_delay_ns_ = 0;              // config_.rate_delay
+  std::optional<Stamp> origin_;              // core time 0, whole seconds; set by the first stamp
+  std::optional<Stamp> last_published_;      // one state per stamp, increasing
+  std::optional<Stamp> clock_;               // the latest ROS time seen
+  Stamp rate_delay_ns_ = 0;                  // config_.rate_delay
   std::array<SourceTimeline, 3> timelines_;  // per Source: Imu, Twist, Torque
   EngineCounters counters_;
 };

@@ -45,8 +45,9 @@ class KinematicPropagator {
   /// follows the filter's later stamps of the samples before, RestampCorrection). The first
   /// sample anchors time: the state at its stamp is the initial (or set) state. The orientation
   /// then holds at the newest stamp; a stamp at or before it is DroppedStale, however far back
-  /// (a persistent jump back is the engine's to recognise: reset()). A NaN or infinite stamp or rate is RejectedNonFinite,
-  /// |w_B| > kMaxBodyRate (limits.h) RejectedOutOfRange; neither changes the state. Never throws.
+  /// (a persistent jump back is the engine's to recognise: reset()). A NaN or infinite stamp or
+  /// rate is RejectedNonFinite, |w_B| > kMaxBodyRate (limits.h) RejectedOutOfRange; neither changes
+  /// the state. Never throws.
   StampOutcome addSample(double t, const Eigen::Vector3d& w_B);
 
   /// Back to the initial orientation, waiting for an anchoring sample.

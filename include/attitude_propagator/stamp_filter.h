@@ -41,7 +41,7 @@ class SensorClockFilter {
   };
 
   enum class Verdict {
-    Modelled,   ///< the stamp joined the fit; the line's value at its index is returned
+    Modelled,  ///< the stamp joined the fit; the line's value at its index is returned
     /// An outlier: the line's value at the next index is returned, or the stamp itself when
     /// earlier (a rate gone up); the fit unchanged.
     Rejected,

@@ -6,13 +6,13 @@ namespace attitude_propagator {
 
 /// What a propagator did with a stamped input.
 enum class StampOutcome {
-  Anchored,           // first input (or first after a reset): the state holds at this stamp
-  Advanced,           // integrated up to the stamp
+  Anchored,  // first input (or first after a reset): the state holds at this stamp
+  Advanced,  // integrated up to the stamp
   /// Stamp at or before the last one, by any amount: a propagator never goes back in time. A
   /// backward jump that persists (a looped bag, a restarted driver) is the engine's to
   /// recognise (SourceTimeline); it then resets the propagator and anchors again.
   DroppedStale,
-  HeldGap,            // gap longer than max_dt: not integrated across, state held, re-anchored
+  HeldGap,  // gap longer than max_dt: not integrated across, state held, re-anchored
   /// Accepted, not integrated yet: a mean stamped at its interval's start or midpoint waits
   /// for the next sample to show where the interval ends (average_stamp). State unchanged.
   Waiting,

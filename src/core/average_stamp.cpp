@@ -40,8 +40,8 @@ std::optional<RateSample> IntervalEnds::push(const RateSample& next) {
     const double period = nominalPeriod(interval);
     // Regular: the interval reaches the next stamp (start) or the boundary halfway to it (mid).
     const double length = interval <= 1.5 * period ? interval : period;
-    ready = RateSample{held_->t + (position_ == AverageStamp::Mid ? 0.5 : 1.0) * length,
-                       held_->w_B};
+    ready =
+        RateSample{held_->t + (position_ == AverageStamp::Mid ? 0.5 : 1.0) * length, held_->w_B};
     intervals_[count_++ % intervals_.size()] = interval;
   }
   held_ = next;

@@ -661,19 +661,18 @@ void BagPropagator::summary(std::FILE* out, bool written) const {
   add("no-time", c.dropped_no_time);
   add("bias", c.rejected_bias);
   const std::uint64_t accepted = o_.io_floor ? floor_accepted_ : c.accepted;
-  std::fprintf(out,
-               "propagate_bag: %llu messages (%s), %llu accepted, dropped: %s; %llu resets, "
-               "%llu jumps back, %llu gaps, %llu late; %llu states -> %s; %.3f s wall, %.0f "
-               "msg/s, %.0fx real time%s\n",
-               static_cast<unsigned long long>(messages_), by_topic.c_str(),
-               static_cast<unsigned long long>(accepted),
-               dropped.empty() ? "none" : dropped.c_str(),
-               static_cast<unsigned long long>(c.resets),
-               static_cast<unsigned long long>(c.jumps_back), static_cast<unsigned long long>(c.gaps),
-               static_cast<unsigned long long>(c.late), static_cast<unsigned long long>(states_),
-               written ? o_.output.c_str() : "nothing written", wall_,
-               wall_ > 0 ? double(messages_) / wall_ : 0.0, wall_ > 0 ? bag_seconds_ / wall_ : 0.0,
-               o_.io_floor ? " (I/O floor: no propagation)" : "");
+  std::fprintf(
+      out,
+      "propagate_bag: %llu messages (%s), %llu accepted, dropped: %s; %llu resets, "
+      "%llu jumps back, %llu gaps, %llu late; %llu states -> %s; %.3f s wall, %.0f "
+      "msg/s, %.0fx real time%s\n",
+      static_cast<unsigned long long>(messages_), by_topic.c_str(),
+      static_cast<unsigned long long>(accepted), dropped.empty() ? "none" : dropped.c_str(),
+      static_cast<unsigned long long>(c.resets), static_cast<unsigned long long>(c.jumps_back),
+      static_cast<unsigned long long>(c.gaps), static_cast<unsigned long long>(c.late),
+      static_cast<unsigned long long>(states_), written ? o_.output.c_str() : "nothing written",
+      wall_, wall_ > 0 ? double(messages_) / wall_ : 0.0, wall_ > 0 ? bag_seconds_ / wall_ : 0.0,
+      o_.io_floor ? " (I/O floor: no propagation)" : "");
 }
 
 int run(int argc, char** argv) {

@@ -93,7 +93,7 @@ inline ap::Input rate(ap::Stamp stamp, const Eigen::Vector3d& w_B) {
 }
 
 inline ap::Input torque(ap::Stamp stamp, const Eigen::Vector3d& tau,
-                 ap::TorqueFrame frame = ap::TorqueFrame::Body) {
+                        ap::TorqueFrame frame = ap::TorqueFrame::Body) {
   ap::Input in;
   in.source = ap::Source::Torque;
   in.stamp = stamp;

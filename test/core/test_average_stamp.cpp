@@ -158,7 +158,7 @@ TEST(AverageStamp, AMeanWaitingFromBeforeASetStateIsNotAppliedAfterIt) {
   for (int k = 0; k <= 3; ++k) engine.submit(rate(at(1.0 + 0.01 * k), kW));  // 1.03 waits
   const std::size_t before = sink.states.size();
   ASSERT_EQ(engine.setState(at(1.035), Eigen::Quaterniond::Identity(), kW), "");
-  engine.submit(rate(at(1.04), kW));  // waits in turn: its interval starts after the pin
+  engine.submit(rate(at(1.04), kW));          // waits in turn: its interval starts after the pin
   EXPECT_EQ(sink.states.size(), before + 1);  // only the pinned state
   engine.submit(rate(at(1.05), kW));
   EXPECT_EQ(sink.states.back().stamp, at(1.05));

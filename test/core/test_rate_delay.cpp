@@ -31,8 +31,7 @@ double worstError(const Recorder& sink, const ap::ConingMotion& cone) {
 }
 
 /// Runs the kinematic engine (cf4) over rates[k] stamped k / kRate, with `rate_delay`.
-double runError(const std::vector<Eigen::Vector3d>& rates, double rate_delay,
-                double start_time) {
+double runError(const std::vector<Eigen::Vector3d>& rates, double rate_delay, double start_time) {
   const ap::ConingMotion cone;
   ap::EngineConfig config = kinematicConfig();
   config.kinematic.integrator = ap::Integrator::Cf4;

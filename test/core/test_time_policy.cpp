@@ -117,7 +117,7 @@ TEST(SourceTimeline, ARunMustGoOnWithinMaxDt) {
   ap::SourceTimeline line;
   line.judge(ns(100.0), policy());
   EXPECT_EQ(line.judge(ns(1.0), policy()), Verdict::Straggler);
-  EXPECT_EQ(line.judge(ns(1.5), policy()), Verdict::Straggler);  // exactly max_dt on: goes on
+  EXPECT_EQ(line.judge(ns(1.5), policy()), Verdict::Straggler);      // exactly max_dt on: goes on
   EXPECT_EQ(line.judge(ns(2.0) + 1, policy()), Verdict::Straggler);  // beyond max_dt: run of one
   EXPECT_EQ(line.judge(ns(2.1), policy()), Verdict::Straggler);
   EXPECT_EQ(line.judge(ns(2.1), policy()), Verdict::Straggler);  // repeated: not on, run of one
@@ -200,13 +200,14 @@ TEST_P(SkewedSensorClock, NeverResetsNorRepeatsAStamp) {
   const ap::EngineState& s = sink.states.back();
   const double t = dynamic ? static_cast<double>(s.stamp - at(0.0)) * 1e-9 : 5.0;
   EXPECT_ROTATION_NEAR(s.q_WB, aboutAxis(kSpin, 0.2 * t), 1e-9);
-  if (dynamic) EXPECT_EQ(c.late, skew < 0.0 ? 1001u : 0u);
+  if (dynamic) {
+    EXPECT_EQ(c.late, skew < 0.0 ? 1001u : 0u);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Skews, SkewedSensorClock,
-                         ::testing::Combine(::testing::Bool(),
-                                            ::testing::Values(-100.0, -1.5, -0.5, 0.5, 1.5,
-                                                              100.0)));
+                         ::testing::Combine(::testing::Bool(), ::testing::Values(-100.0, -1.5, -0.5,
+                                                                                 0.5, 1.5, 100.0)));
 
 class StarvedProcess : public ::testing::TestWithParam<bool> {};
 
@@ -335,7 +336,7 @@ TEST_P(FutureStamps, MoreThanMaxFutureAheadOfTheClockIsRefusedAtItAccepted) {
   engine.submit(rate(at(1.25), kSpin));  // exactly max_future ahead
   EXPECT_EQ(engine.counters().rejected_future, 1u);
   EXPECT_EQ(engine.counters().accepted + engine.pending(), 2u);  // dynamic: it waits
-  engine.submit(rate(at(3601.0), kSpin));  // an hour ahead
+  engine.submit(rate(at(3601.0), kSpin));                        // an hour ahead
   EXPECT_EQ(engine.counters().rejected_future, 2u);
   for (const auto& s : sink.states) EXPECT_LE(s.stamp, at(1.25));
   // The next normal inputs go on as if the far one had never come.
@@ -346,7 +347,9 @@ TEST_P(FutureStamps, MoreThanMaxFutureAheadOfTheClockIsRefusedAtItAccepted) {
   EXPECT_EQ(engine.counters().dropped_stale, 0u);
   EXPECT_EQ(engine.counters().resets, 0u);
   EXPECT_EQ(sink.repeated_or_older, 0u);
-  if (!dynamic) EXPECT_ROTATION_NEAR(sink.states.back().q_WB, aboutAxis(kSpin, 0.2 * 1.25), 1e-12);
+  if (!dynamic) {
+    EXPECT_ROTATION_NEAR(sink.states.back().q_WB, aboutAxis(kSpin, 0.2 * 1.25), 1e-12);
+  }
 }
 
 TEST_P(FutureStamps, SetStateBeyondMaxFutureIsRefusedWithTheReason) {
