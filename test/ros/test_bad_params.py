@@ -274,8 +274,9 @@ class BadParametersTest(unittest.TestCase):
         with RunningNode(self.node, ns, name, KINEMATIC) as node:
             wait_connected(imu)
             wait_for(lambda: states.sub.get_num_connections() > 0, 20.0, "attitude_state")
-            # 2 s of samples at 50 Hz, stamped on their own grid, sent in wall time.
-            start_ns = rospy.Time.now().to_nsec() // NS_PER_S * NS_PER_S
+            # 2 s of samples at 50 Hz, stamped on their own grid, sent in wall time (the grid's
+            # stamps at most one step behind it, as a sensor's would be).
+            start_ns = rospy.Time.now().to_nsec() // IMU_STEP_NS * IMU_STEP_NS
             sent = []
             for k in range(100):
                 sent.append(time_ns(start_ns + k * IMU_STEP_NS))

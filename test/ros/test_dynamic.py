@@ -60,6 +60,9 @@ class DynamicTest(unittest.TestCase):
     def test_1_sphere_turns_at_constant_rate(self):
         self.run_clock(100.0, step=1.0)
         node = self.nodes["sph"]
+        # The node has seen /clock reach 100 s (its grid state there), so a state pinned there is
+        # not ahead of its clock (max_future).
+        node.state.wait_at(rospy.Time(100))
         response = node.set_state(rospy.Time(100), (0, 0, 0, 1), (0, 0, 0.5))
         self.assertTrue(response.success, response.message)
         self.run_clock(102.0)
