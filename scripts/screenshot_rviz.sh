@@ -5,7 +5,8 @@
 # and every process started here is stopped, on success, failure or interrupt.
 #   bash scripts/screenshot_rviz.sh [scene] [out.png] [settle seconds]
 #     scene: coning (default: base_link and base_link_truth) | t_handle | spinning_top
-# Needs the built workspace (scripts/build.sh) and: apt-get install -y xvfb imagemagick rviz
+# Needs the built workspace (scripts/build.sh); installs Xvfb, x11-utils, ImageMagick and rviz
+# when they are missing.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 scene="${1:-coning}"
@@ -18,10 +19,13 @@ case "$scene" in
      exit 2 ;;
 esac
 for tool in Xvfb xwininfo import convert rviz; do
-  command -v "$tool" >/dev/null || {
-    echo "screenshot_rviz: $tool is missing: apt-get install -y xvfb x11-utils imagemagick rviz" >&2
-    exit 2
-  }
+  if ! command -v "$tool" >/dev/null; then
+    echo "screenshot_rviz: $tool is missing; installing xvfb x11-utils imagemagick rviz"
+    as_root apt-get update -q
+    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends \
+      xvfb x11-utils imagemagick rviz
+    break
+  fi
 done
 [ -f "${WORKSPACE}/devel/setup.bash" ] ||
   { echo "screenshot_rviz: no workspace at $WORKSPACE; run scripts/build.sh first" >&2; exit 2; }
