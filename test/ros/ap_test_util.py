@@ -146,6 +146,27 @@ class Diagnostics:
                         "%s %s >= %d (now %s)" % (node, key, at_least, self.get(node, key)))
 
 
+class NodeDiagnostics:
+    """The latest diagnostic status of one node (level, message, values)."""
+
+    def __init__(self, private_name):
+        self.prefix = private_name.lstrip("/") + ":"
+        self.lock = threading.Lock()
+        self.latest = None
+        self.sub = rospy.Subscriber("/diagnostics", DiagnosticArray, self._cb, queue_size=100)
+
+    def _cb(self, msg):
+        with self.lock:
+            for status in msg.status:
+                if status.name.startswith(self.prefix):
+                    self.latest = (status.level, status.message,
+                                   {kv.key: kv.value for kv in status.values})
+
+    def get(self):
+        with self.lock:
+            return self.latest
+
+
 class Node:
     """The public interface of one attitude_propagator instance in namespace ns."""
 

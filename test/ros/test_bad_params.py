@@ -11,7 +11,6 @@ import math
 import os
 import subprocess
 import tempfile
-import threading
 import time
 import unittest
 
@@ -22,11 +21,12 @@ import rostest
 import yaml
 from attitude_propagator.cfg import AttitudePropagatorConfig as ReconfigureConfig
 from attitude_propagator.msg import AttitudeState
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from diagnostic_msgs.msg import DiagnosticStatus
 from sensor_msgs.msg import Imu
 
-from ap_test_util import (NS_PER_S, Recorder, TfRecorder, as_tuple, axis_angle, make_imu, qconj,
-                          qmul, rotation_angle, time_ns, wait_connected, wait_for)
+from ap_test_util import (NS_PER_S, NodeDiagnostics, Recorder, TfRecorder, as_tuple, axis_angle,
+                          make_imu, qconj, qmul, rotation_angle, time_ns, wait_connected,
+                          wait_for)
 
 # (private parameter, value set on the master, text the single error must contain)
 CASES = [
@@ -133,27 +133,6 @@ class RunningNode:
 
     def running(self):
         return self.process.poll() is None
-
-
-class NodeDiagnostics:
-    """The latest diagnostic status of one node (level, message, values)."""
-
-    def __init__(self, private_name):
-        self.prefix = private_name.lstrip("/") + ":"
-        self.lock = threading.Lock()
-        self.latest = None
-        self.sub = rospy.Subscriber("/diagnostics", DiagnosticArray, self._cb, queue_size=100)
-
-    def _cb(self, msg):
-        with self.lock:
-            for status in msg.status:
-                if status.name.startswith(self.prefix):
-                    self.latest = (status.level, status.message,
-                                   {kv.key: kv.value for kv in status.values})
-
-    def get(self):
-        with self.lock:
-            return self.latest
 
 
 class BadParametersTest(unittest.TestCase):

@@ -6,19 +6,19 @@ below the input period) and OK again when it is fixed; a message's strings reach
 to 64 bytes with their length, and without control characters."""
 import subprocess
 import threading
-import time
 import unittest
 
 import rospy
 import rostest
 import yaml
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+from diagnostic_msgs.msg import DiagnosticStatus
 from dynamic_reconfigure.client import Client
 from geometry_msgs.msg import Vector3Stamped
 from rosgraph_msgs.msg import Log
 from sensor_msgs.msg import Imu
 
-from ap_test_util import Node, RosoutLines, make_imu, wait_connected, wait_for
+from ap_test_util import (Node, NodeDiagnostics, RosoutLines, make_imu, wait_connected,
+                          wait_for)
 
 HAB = "/hab/attitude_propagator"
 HABD = "/habd/attitude_propagator"
@@ -31,26 +31,6 @@ def rosparam_get(name):
     out = subprocess.run(["rosparam", "get", name], stdout=subprocess.PIPE, text=True,
                          timeout=30, check=True).stdout
     return yaml.safe_load(out)
-
-
-class Status:
-    """The latest diagnostic status (level, message) of one node."""
-
-    def __init__(self, node):
-        self.prefix = node.lstrip("/") + ":"
-        self.lock = threading.Lock()
-        self.latest = None
-        self.sub = rospy.Subscriber("/diagnostics", DiagnosticArray, self._cb, queue_size=100)
-
-    def _cb(self, msg):
-        with self.lock:
-            for status in msg.status:
-                if status.name.startswith(self.prefix):
-                    self.latest = (status.level, status.message)
-
-    def get(self):
-        with self.lock:
-            return self.latest
 
 
 class ImuFeed:
@@ -78,7 +58,7 @@ class NodeHabitsTest(unittest.TestCase):
     def setUpClass(cls):
         rospy.init_node("test_node_habits")
         cls.rosout = RosoutLines()
-        cls.status = Status(HAB)
+        cls.status = NodeDiagnostics(HAB)
         cls.nodes = {ns: Node(ns) for ns in ("hab", "habd")}
         for node in cls.nodes.values():
             node.wait_ready()
@@ -113,14 +93,15 @@ class NodeHabitsTest(unittest.TestCase):
             self.assertEqual(self.client.update_configuration({"max_dt": 1e-6})["max_dt"], 1e-6)
             status = wait_for(lambda: self.status.get()[0] == DiagnosticStatus.WARN
                               and self.status.get(), 10.0, "diagnostics WARN")
-            level, message = status
+            level, message, _ = status
             self.assertIn("most rate samples of the last second were lost", message)
             self.assertIn("max_dt 1e-06 s is below the input period 0.00", message)
             period = float(message.split("input period ")[1].split(" s")[0])
             # The period of arrival in the window: the feed's, slower on a loaded machine.
             self.assertTrue(0.5 / RATE_HZ < period < 4.0 / RATE_HZ, message)
             self.client.update_configuration({"max_dt": 1.0})
-            wait_for(lambda: self.status.get() == (DiagnosticStatus.OK, "propagating"), 10.0,
+            wait_for(lambda: (self.status.get() or ())[:2] == (DiagnosticStatus.OK, "propagating"),
+                     10.0,
                      "diagnostics OK again")
         finally:
             self.client.update_configuration({"max_dt": 1.0})
