@@ -597,7 +597,8 @@ void Evaluation::checkTopics(BagSet& bag) {
     truth_type_ = requireTopic(bag, o_.tf_topic, "tf", {typeOf<tf2_msgs::TFMessage>()});
     truth_topic_ = o_.tf_topic;
   }
-  if (sameTopic(truth_topic_, rates_topic_)) throw UsageError("the rate and truth topics are the same");
+  if (sameTopic(truth_topic_, rates_topic_))
+    throw UsageError("the rate and truth topics are the same");
 }
 
 void Evaluation::run(BagSet& bag) {

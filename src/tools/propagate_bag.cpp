@@ -11,6 +11,7 @@
 // grid stamp's state includes the inputs stamped up to it).
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <iostream>
 #include <limits>
@@ -837,27 +838,25 @@ void BagPropagator::summary(std::FILE* out, bool written) const {
   add("no-tf", c.dropped_no_tf);
   add("no-time", c.dropped_no_time);
   const std::uint64_t accepted = o_.io_floor ? floor_accepted_ : c.accepted;
-  std::fprintf(out,
-               "propagate_bag: %llu messages (%s), %llu accepted, dropped: %s; %llu resets, "
-               "%llu jumps back, %llu gaps, %llu late; %llu states -> %s; %.3f s wall, %.0f "
-               "msg/s, %.0fx real time%s\n",
-               static_cast<unsigned long long>(messages_), by_topic.c_str(),
-               static_cast<unsigned long long>(accepted),
-               dropped.empty() ? "none" : dropped.c_str(),
-               static_cast<unsigned long long>(c.resets),
-               static_cast<unsigned long long>(c.jumps_back), static_cast<unsigned long long>(c.gaps),
-               static_cast<unsigned long long>(c.late), static_cast<unsigned long long>(states_),
-               written ? o_.output.c_str() : "nothing written", wall_,
-               wall_ > 0 ? double(messages_) / wall_ : 0.0, wall_ > 0 ? bag_seconds_ / wall_ : 0.0,
-               o_.io_floor ? " (I/O floor: no propagation)" : "");
+  std::fprintf(
+      out,
+      "propagate_bag: %llu messages (%s), %llu accepted, dropped: %s; %llu resets, "
+      "%llu jumps back, %llu gaps, %llu late; %llu states -> %s; %.3f s wall, %.0f "
+      "msg/s, %.0fx real time%s\n",
+      static_cast<unsigned long long>(messages_), by_topic.c_str(),
+      static_cast<unsigned long long>(accepted), dropped.empty() ? "none" : dropped.c_str(),
+      static_cast<unsigned long long>(c.resets), static_cast<unsigned long long>(c.jumps_back),
+      static_cast<unsigned long long>(c.gaps), static_cast<unsigned long long>(c.late),
+      static_cast<unsigned long long>(states_), written ? o_.output.c_str() : "nothing written",
+      wall_, wall_ > 0 ? double(messages_) / wall_ : 0.0, wall_ > 0 ? bag_seconds_ / wall_ : 0.0,
+      o_.io_floor ? " (I/O floor: no propagation)" : "");
   if (o_.io_floor) return;
   const auto pending = static_cast<std::uint64_t>(engine_->pending());
   const std::uint64_t accounted = accepted + dropped_total + pending;
-  std::fprintf(out, "  inputs: %llu = %llu accepted + %llu dropped + %llu pending at the end",
-               static_cast<unsigned long long>(c.received),
-               static_cast<unsigned long long>(accepted),
-               static_cast<unsigned long long>(dropped_total),
-               static_cast<unsigned long long>(pending));
+  std::fprintf(
+      out, "  inputs: %llu = %llu accepted + %llu dropped + %llu pending at the end",
+      static_cast<unsigned long long>(c.received), static_cast<unsigned long long>(accepted),
+      static_cast<unsigned long long>(dropped_total), static_cast<unsigned long long>(pending));
   if (accounted != c.received) {
     std::fprintf(out, " (%lld not accounted for)",
                  static_cast<long long>(c.received) - static_cast<long long>(accounted));
@@ -881,8 +880,12 @@ void BagPropagator::summary(std::FILE* out, bool written) const {
 std::string valueText(const std::string& v) { return v.empty() ? "''" : v; }
 std::string valueText(bool v) { return v ? "true" : "false"; }
 std::string valueText(double v) {
+  // The shortest digits that read back as v: 1e-09, not 1.0000000000000001e-09.
   char text[32];
-  std::snprintf(text, sizeof text, "%.17g", v);
+  for (int digits = 6; digits <= 17; ++digits) {
+    std::snprintf(text, sizeof text, "%.*g", digits, v);
+    if (std::strtod(text, nullptr) == v) break;
+  }
   return text;
 }
 std::string valueText(const std::vector<double>& v) {
@@ -944,7 +947,8 @@ void BagPropagator::dryRun(std::FILE* out) {
   if (o_.csv) {
     outputs = "CSV";
   } else {
-    outputs = "bag (" + std::string(o_.compression == BagOutput::Compression::Lz4 ? "lz4" : "uncompressed") +
+    outputs = "bag (" +
+              std::string(o_.compression == BagOutput::Compression::Lz4 ? "lz4" : "uncompressed") +
               "): " + o_.state_out;
     if (config_.rate_input == RateInput::Imu) outputs += ", " + o_.imu_out;
     if (p.publish_tf) outputs += ", " + o_.tf_out;

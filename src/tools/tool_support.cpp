@@ -277,7 +277,8 @@ std::string seconds(double s) {
 BagSet::BagSet(const std::vector<std::string>& paths) : paths_(paths) {
   for (std::size_t i = 0; i < paths.size(); ++i) {
     for (std::size_t j = 0; j < i; ++j) {
-      struct stat a {}, b {};
+      struct stat a {};
+      struct stat b {};
       const bool same = ::stat(paths[i].c_str(), &a) == 0 && ::stat(paths[j].c_str(), &b) == 0 &&
                         a.st_dev == b.st_dev && a.st_ino == b.st_ino;
       if (same) {
@@ -619,7 +620,8 @@ void appendConnection(std::vector<std::uint8_t>& out, std::uint32_t id, const st
   data.add("message_definition", definition);
   // As `rosbag record` stores a latched publisher's connection header: `rosbag play` then
   // latches the topic, so a node that subscribes later still receives it.
-  if (latched) data.add("callerid", std::string("/propagate_bag")).add("latching", std::string("1"));
+  if (latched)
+    data.add("callerid", std::string("/propagate_bag")).add("latching", std::string("1"));
   appendRecord(out, Fields().add("op", Op::kConnection).add("conn", id).add("topic", topic),
                data.bytes().data(), data.bytes().size());
 }

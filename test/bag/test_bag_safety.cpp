@@ -573,10 +573,11 @@ TEST(EvaluateBagSafety, OffsetSearchIsInterruptible) {
   EXPECT_GE(interrupted, 4);
 }
 
-// max_dt below the sample period makes every sample a gap: the state is held, nothing is
-// integrated, and by the rule in --help (at least half of the compared samples, and at least
-// 100, integrated from the one before) no method is scored: exit 3, "no recommendation" and
-// why, the table still printed, no CSV. An offset beyond the data (nothing compared) too.
+// max_dt below the sample period (1e-6 s, the least accepted) makes every sample a gap: the state
+// is held, nothing is integrated, and by the rule in --help (at least half of the compared samples,
+// and at least 100, integrated from the one before) no method is scored: exit 3, "no
+// recommendation" and why, the table still printed, no CSV. An offset beyond the data (nothing
+// compared) too.
 TEST(EvaluateBagSafety, NoRecommendationWithoutEnoughTruth) {
   TempDir dir;
   SceneBag scene;
@@ -584,7 +585,7 @@ TEST(EvaluateBagSafety, NoRecommendationWithoutEnoughTruth) {
   scene.duration = 10.0;
   writeSceneBag(dir.file("in.bag"), scene);
   for (const char* arguments :
-       {"--set max_dt=1e-9", "--set max_dt=0.004", "--offset 1000 --mount 0 0 0 1"}) {
+       {"--set max_dt=1e-6", "--set max_dt=0.004", "--offset 1000 --mount 0 0 0 1"}) {
     const Evaluated e =
         evaluateBag(dir, dir.file("in.bag"), std::string("--truth /truth ") + arguments);
     EXPECT_EQ(e.run.status, 3) << arguments << "\n" << e.run.output;
@@ -612,7 +613,7 @@ TEST(EvaluateBagSafety, FrontEndPassesExitCodesOn) {
                             quote(kEvaluate) + " " + dir.file("in.bag") + " --csv " +
                             dir.file("e") + " ";
   EXPECT_EQ(run(front + "--truth /truth --max-offset 1e300").status, 2);
-  EXPECT_EQ(run(front + "--truth /truth --set max_dt=1e-9").status, 3);
+  EXPECT_EQ(run(front + "--truth /truth --set max_dt=1e-6").status, 3);
   EXPECT_EQ(run(front + "--truth /truth --png").status, 2);
   EXPECT_EQ(run(front + "--truth /nothing").status, 1);
   EXPECT_FALSE(exists(dir.file("e.png")));

@@ -181,8 +181,8 @@ TEST(SplitBags, KinematicPartsGiveTheWholeRecording) {
   const RunResult whole =
       run(kPropagate + " " + dir.file("whole.bag") + " -o " + dir.file("a.bag") + common);
   ASSERT_EQ(whole.status, 0) << whole.output;
-  const RunResult pieces = run(kPropagate + join({parts[2], parts[0], parts[1]}) + " -o " +
-                               dir.file("b.bag") + common);
+  const RunResult pieces =
+      run(kPropagate + join({parts[2], parts[0], parts[1]}) + " -o " + dir.file("b.bag") + common);
   ASSERT_EQ(pieces.status, 0) << pieces.output;
   EXPECT_EQ(pieces.output.find("share"), std::string::npos) << "parts that touch do not overlap";
   const auto a = readRecorded(dir.file("a.bag"));
@@ -194,8 +194,7 @@ TEST(SplitBags, KinematicPartsGiveTheWholeRecording) {
 // state at every grid stamp is the unsplit run's.
 TEST(SplitBags, DynamicPartsGiveTheWholeRecording) {
   TempDir dir;
-  writeTorqueBag(dir.file("whole.bag"), Eigen::Vector3d(0, 0, 0.3), 50.0, 6.0, 40.0,
-                 "base_link");
+  writeTorqueBag(dir.file("whole.bag"), Eigen::Vector3d(0, 0, 0.3), 50.0, 6.0, 40.0, "base_link");
   const auto parts = split(dir.file("whole.bag"), {3.01}, dir);
   const std::string common =
       " --set inertia=[2,3,4] --set torque_input=true --set rate_input=none"
@@ -221,8 +220,8 @@ TEST(SplitBags, EvaluationOfPartsIsTheWholeRecordings) {
   writeSceneBag(dir.file("whole.bag"), scene);
   const auto parts = split(dir.file("whole.bag"), {5.0}, dir);
   const std::string common = " --rates /imu/data_raw --truth /truth --calibration 4 --no-progress";
-  const RunResult whole = run(kEvaluateCore + " " + dir.file("whole.bag") + common + " --csv " +
-                              dir.file("a"));
+  const RunResult whole =
+      run(kEvaluateCore + " " + dir.file("whole.bag") + common + " --csv " + dir.file("a"));
   ASSERT_EQ(whole.status, 0) << whole.output;
   const RunResult pieces =
       run(kEvaluateCore + join({parts[1], parts[0]}) + common + " --csv " + dir.file("b"));
@@ -296,10 +295,8 @@ TEST(OutputOptions, TopicsFollowTheNamespaceAndOptions) {
   const std::string in = dir.file("in.bag") + " --no-progress -o " + dir.file("out.bag");
   RunResult r = run(kPropagate + " " + in + " --ns robot1");
   ASSERT_EQ(r.status, 0) << r.output;
-  const std::map<std::string, std::size_t> expected{{"/robot1/attitude_state", 201},
-                                                    {"/robot1/imu/data", 201},
-                                                    {"/tf", 201},
-                                                    {"/tf_static", 1}};
+  const std::map<std::string, std::size_t> expected{
+      {"/robot1/attitude_state", 201}, {"/robot1/imu/data", 201}, {"/tf", 201}, {"/tf_static", 1}};
   EXPECT_EQ(topicCounts(dir.file("out.bag")), expected);
   r = run(kPropagate + " " + in + " --ns /r2 --state-topic /state --imu-topic imu/out" +
           " --tf-topic tf --tf-static-topic /r2/tf_static");
@@ -338,8 +335,8 @@ TEST(OutputOptions, MountGoesToTfStatic) {
   ASSERT_EQ(by_child.size(), 2u);
   EXPECT_EQ(by_child["plate"].header.frame_id, "base_link");
   EXPECT_EQ(by_child["imu_link"].header.frame_id, "plate");
-  const Eigen::Quaterniond q_BI =
-      toEigen(by_child["plate"].transform.rotation) * toEigen(by_child["imu_link"].transform.rotation);
+  const Eigen::Quaterniond q_BI = toEigen(by_child["plate"].transform.rotation) *
+                                  toEigen(by_child["imu_link"].transform.rotation);
   EXPECT_LT(ap::rotationAngle(q_BI, kPlate * kImuOnPlate), 1e-15);
   EXPECT_EQ(by_child["plate"].transform.translation.x, 0.1);
 
@@ -370,8 +367,8 @@ struct Account {
 Account account(const std::string& output) {
   Account a;
   std::smatch m;
-  if (std::regex_search(output, m,
-                        std::regex(R"(inputs: (\d+) = (\d+) accepted \+ (\d+) dropped \+ (\d+))"))) {
+  if (std::regex_search(
+          output, m, std::regex(R"(inputs: (\d+) = (\d+) accepted \+ (\d+) dropped \+ (\d+))"))) {
     a.inputs = std::stol(m[1]);
     a.accepted = std::stol(m[2]);
     a.dropped = std::stol(m[3]);
@@ -404,9 +401,9 @@ TEST(Summary, KinematicCountsAddUpToTheMessagesRead) {
     m.header.frame_id = "base_link";
     toMsg(body.rate(t), m.angular_velocity);
     if (k % 100 == 50 && k < 750) m.header.stamp = rosTime(stampAt(t - 0.0125));  // 7 stale
-    if (k % 100 == 60 && k < 560) m.header.frame_id = "nowhere";                   // 5 no-tf
-    if (k % 100 == 70 && k < 370) m.angular_velocity.y = std::nan("");             // 3
-    if (k % 100 == 80 && k < 280) m.angular_velocity_covariance[0] = -1;           // 2
+    if (k % 100 == 60 && k < 560) m.header.frame_id = "nowhere";                  // 5 no-tf
+    if (k % 100 == 70 && k < 370) m.angular_velocity.y = std::nan("");            // 3
+    if (k % 100 == 80 && k < 280) m.angular_velocity_covariance[0] = -1;          // 2
     bag.write("/imu/data_raw", rosTime(stampAt(t)), m);
     ++written;
   }
@@ -446,7 +443,7 @@ TEST(Summary, DynamicCountsAddUpToTheMessagesRead) {
     bag.write("/clock", c.clock, c);
     if (k % 2 != 0) continue;
     const double t = k / 100.0;
-    const bool straggler = k % 100 == 50;  // 4: stamped before the torque before it
+    const bool straggler = k % 100 == 50;          // 4: stamped before the torque before it
     const bool future = k % 100 == 24 && k < 300;  // 3
     torque(t + 0.005, straggler ? t - 0.03 : future ? t + 5.0 : t);
   }
@@ -500,9 +497,8 @@ TEST(ToolOptions, DryRunWritesNothing) {
        {std::string("dry run, nothing written"), parts[0] + ": 201 messages",
         parts[1] + ": 201 messages", std::string("/imu/data_raw"), std::string("sensor_msgs/Imu"),
         std::string("200  rates"), std::string("/tf_static"), std::string("model kinematic"),
-        std::string("integrator exp2"), std::string("body_frame base_link"),
-        std::string("max_dt"), std::string("part_0.propagated.bag"),
-        std::string("/attitude_state")}) {
+        std::string("integrator exp2"), std::string("body_frame base_link"), std::string("max_dt"),
+        std::string("part_0.propagated.bag"), std::string("/attitude_state")}) {
     EXPECT_NE(r.output.find(text), std::string::npos) << text << "\n" << r.output;
   }
   const RunResult missing = run(kPropagate + join(parts) + " --dry-run --rates /nothing");
@@ -513,9 +509,9 @@ TEST(ToolOptions, DryRunWritesNothing) {
 TEST(ToolOptions, HelpNamesTheNewOptions) {
   const RunResult r = run(kPropagate + " --help");
   ASSERT_EQ(r.status, 0);
-  for (const char* text : {"IN2.bag", "--ns NS", "--state-topic", "--imu-topic", "--tf-topic",
-                           "--tf-static-topic", "--dry-run", "--version", "lz4",
-                           "faster in wall time only"}) {
+  for (const char* text :
+       {"IN2.bag", "--ns NS", "--state-topic", "--imu-topic", "--tf-topic", "--tf-static-topic",
+        "--dry-run", "--version", "lz4", "faster in wall time only"}) {
     EXPECT_NE(r.output.find(text), std::string::npos) << text;
   }
 }
