@@ -237,6 +237,12 @@ TEST(SplitBags, EvaluationOfPartsIsTheWholeRecordings) {
     }
   }
   EXPECT_EQ(fileText(dir.file("a_series.csv")), fileText(dir.file("b_series.csv")));
+  // The front end passes every input on and names the outputs after the first.
+  const RunResult front =
+      run("EVALUATE_BAG_CORE=" + quote(kEvaluateCore) + " /usr/bin/python3 " + quote(kEvaluate) +
+          join({parts[1], parts[0]}) + common + " --no-plot");
+  EXPECT_EQ(front.status, 0) << front.output;
+  EXPECT_EQ(readCsv(dir.file("part_1.evaluation.csv")).size(), a.size());
 }
 
 // What a user may get wrong with several inputs: each is one clear line, its exit code, and
@@ -462,6 +468,42 @@ TEST(Summary, DynamicCountsAddUpToTheMessagesRead) {
   EXPECT_EQ(a.drops, drops) << r.output;
   EXPECT_NE(r.output.find("dynamic: 0 failed steps, 6 inputs pending"), std::string::npos)
       << r.output;
+}
+
+// A /clock that jumps back 2 s (a looped recording) resets the engine, and the torques that
+// were waiting for the clock go with the reset: counted as "clock-reset", so the account still
+// adds up. Torques are stamped 0.5 s ahead of the clock at 50 Hz: 25 wait at the jump, and 25
+// at the end.
+TEST(Summary, ClockJumpBackLosesNoInputUncounted) {
+  TempDir dir;
+  rosbag::Bag bag(dir.file("in.bag"), rosbag::bagmode::Write);
+  long written = 0;
+  for (long k = 0; k <= 300; ++k) {
+    const ros::Time record = rosTime(stampAt(k / 100.0));
+    const double clock = k <= 200 ? k / 100.0 : (k - 201) / 100.0;
+    rosgraph_msgs::Clock c;
+    c.clock = rosTime(stampAt(clock));
+    bag.write("/clock", record, c);
+    if (k % 2 != 0) continue;
+    geometry_msgs::WrenchStamped m;
+    m.header.stamp = rosTime(stampAt(clock + 0.5));
+    m.header.frame_id = "base_link";
+    m.wrench.torque.z = 0.3;
+    bag.write("/torque", record, m);
+    ++written;
+  }
+  bag.close();
+  const RunResult r = run(kPropagate + " " + dir.file("in.bag") + " -o " + dir.file("out.bag") +
+                          " --set inertia=[2,3,4] --set torque_input=true --set rate_input=none"
+                          " --set integrator=rk4 --set publish_rate=100 --no-progress");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const Account a = account(r.output);
+  EXPECT_EQ(a.inputs, written) << r.output;
+  EXPECT_EQ(a.accepted + a.dropped + a.pending, written) << r.output;
+  EXPECT_FALSE(a.unaccounted) << r.output;
+  const std::map<std::string, long> drops{{"clock-reset", 25}};
+  EXPECT_EQ(a.drops, drops) << r.output;
+  EXPECT_EQ(a.pending, 25) << r.output;
 }
 
 // ---------------------------------------------------------------------------------------------
