@@ -198,11 +198,14 @@ Options parseOptions(int argc, char** argv) {
     }
   }
   if (o.inputs.empty()) throw UsageError("no input bag (see --help)");
-  if (ns[0] != '/') ns = "/" + ns;
+  if (ns.find('~') != std::string::npos) {
+    throw UsageError("--ns " + ns + ": not a namespace (no private ~names)");
+  }
   std::string error;
-  if (ns.find('~') != std::string::npos || !ros::names::validate(ns, error)) {
+  if (!ros::names::validate(ns[0] == '/' ? ns : "/" + ns, error)) {
     throw UsageError("--ns " + ns + ": not a namespace (" + error + ")");
   }
+  if (ns[0] != '/') ns = "/" + ns;
   o.state_out = resolveTopic("--state-topic", ns, o.state_out);
   o.imu_out = resolveTopic("--imu-topic", ns, o.imu_out);
   o.tf_out = resolveTopic("--tf-topic", ns, o.tf_out);
