@@ -79,7 +79,8 @@ struct EngineCounters {
   std::uint64_t resets = 0;      ///< the state back to the initial one: time went back, reset()
   std::uint64_t jumps_back = 0;  ///< a source's stamps went back, and persisted
   std::uint64_t rejected_future = 0;   ///< stamped more than max_future ahead of the clock
-  std::uint64_t dropped_on_reset = 0;  ///< dynamic: queued inputs that reset() dropped
+  /// Dynamic: queued inputs a reset dropped (reset(), ROS time jumping back).
+  std::uint64_t dropped_on_reset = 0;
   std::uint64_t failed_steps = 0;      ///< the integrator could not complete an interval
   std::uint64_t pending_overflow = 0;  ///< dynamic: queue full, the furthest ahead dropped
   std::uint64_t deferred_ticks = 0;    ///< dynamic: grid stamps left for the next call (budget)

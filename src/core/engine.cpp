@@ -323,6 +323,7 @@ bool AttitudeEngine::handleOutcome(StampOutcome outcome, std::optional<Source> s
       sink_.note({EngineNote::OutOfRange, source, stamp});
       return false;
     case StampOutcome::FailedStep:
+      if (input) ++counters_.accepted;  // it acts from the new anchor
       ++counters_.failed_steps;
       sink_.note({EngineNote::FailedStep, source, stamp});
       return true;  // held and re-anchored at the stamp, like a gap
@@ -500,6 +501,7 @@ double AttitudeEngine::energyDrift() const { return dynamic_ ? dynamic_->energyD
 double AttitudeEngine::momentumDrift() const { return dynamic_ ? dynamic_->momentumDrift() : 0.0; }
 
 void AttitudeEngine::resetState(bool forget_time) {
+  counters_.dropped_on_reset += pending_.size();  // every input is accounted for
   if (kinematic_) kinematic_->reset();
   if (dynamic_) dynamic_->reset();
   pending_.clear();
@@ -552,7 +554,6 @@ std::string AttitudeEngine::reconfigure(const EngineConfig& next) {
 
 void AttitudeEngine::reset() {
   ++counters_.resets;
-  counters_.dropped_on_reset += pending_.size();
   resetState(false);
 }
 

@@ -40,12 +40,14 @@ namespace tools {
 namespace {
 
 const char* const kUsage =
-    R"(usage: evaluate_bag_core IN.bag --rates TOPIC (--truth TOPIC | --truth-tf PARENT CHILD)
-                         [options]
+    R"(usage: evaluate_bag_core IN.bag [IN2.bag ...] --rates TOPIC
+                         (--truth TOPIC | --truth-tf PARENT CHILD) [options]
 
 Runs every kinematic integrator with each rate_samples choice over the rate topic, compares
 each with the truth attitude and reports, per method: largest and RMS attitude error, error
 drift rate, relative rotation error over 1 s and 10 s, cost per sample, and a recommendation.
+Several bags (the parts of `rosbag record --split`) are read as one stream merged by record
+time, in whatever order they are given.
 
   --rates TOPIC        sensor_msgs/Imu, geometry_msgs/Twist or TwistStamped (default /imu/data_raw)
   --truth TOPIC        geometry_msgs/PoseStamped, PoseWithCovarianceStamped, TransformStamped
@@ -62,8 +64,10 @@ drift rate, relative rotation error over 1 s and 10 s, cost per sample, and a re
   --rate-samples LIST  comma-separated (default instantaneous,interval_average)
   --config FILE.yaml   node parameters shared by every method (e.g. stamp_filter, gyro_bias)
   --set name=value     one node parameter; repeatable
-  --csv PREFIX         writes PREFIX.csv and PREFIX_series.csv (default IN.evaluation)
+  --csv PREFIX         writes PREFIX.csv and PREFIX_series.csv (default IN.evaluation, after
+                       the first input)
   --no-progress        no progress line
+  --version            the package version
 
 Times (--offset, --max-offset, --calibration, --truth-gap) are limited to +-2^32 s, the range
 of ROS time. The offset search tries only offsets at which rates and truth overlap, on at most
@@ -77,7 +81,7 @@ only scored methods are recommended.
 Exit codes:
   0    the table and both CSVs are complete, with a recommendation
   1    the bag could not be read (missing, truncated, damaged) or a CSV not written
-  2    usage: bad options or parameters, or an output that is an input
+  2    usage: bad options or parameters, an output that is an input, an input given twice
   3    the bag was read, but no method was scored (the report says why): no recommendation,
        no CSV written
   128+N  stopped by signal N (130: Ctrl-C); nothing written
@@ -97,7 +101,8 @@ constexpr double kMinScoredShare = 0.5;
 constexpr std::uint64_t kMinScored = 100;
 
 struct Options {
-  std::string input;
+  std::vector<std::string> inputs;
+  std::string input;  // the inputs, for messages
   std::string rates_topic = "/imu/data_raw";
   std::string truth_topic;
   std::string tf_topic = "/tf";
@@ -134,6 +139,9 @@ Options parseOptions(int argc, char** argv) {
     const std::string a = argv[i];
     if (a == "-h" || a == "--help") {
       std::cout << kUsage;
+      std::exit(0);
+    } else if (a == "--version") {
+      std::cout << "evaluate_bag (attitude_propagator) " << AP_VERSION << "\n";
       std::exit(0);
     } else if (a == "--rates") {
       o.rates_topic = optionValue(argc, argv, i);
@@ -175,13 +183,12 @@ Options parseOptions(int argc, char** argv) {
       o.progress = false;
     } else if (!a.empty() && a[0] == '-') {
       throw UsageError(a + ": unknown option (see --help)");
-    } else if (o.input.empty()) {
-      o.input = a;
     } else {
-      throw UsageError(a + ": one input bag only (see --help)");
+      o.inputs.push_back(a);
+      o.input += (o.input.empty() ? "" : ", ") + a;
     }
   }
-  if (o.input.empty()) throw UsageError("no input bag (see --help)");
+  if (o.inputs.empty()) throw UsageError("no input bag (see --help)");
   if (o.truth_topic.empty() == o.tf_parent.empty()) {
     throw UsageError("give the truth as --truth TOPIC or --truth-tf PARENT CHILD (one of them)");
   }
@@ -209,11 +216,12 @@ Options parseOptions(int argc, char** argv) {
     }
   }
   if (o.prefix.empty()) {
-    const bool bag = o.input.size() > 4 && o.input.compare(o.input.size() - 4, 4, ".bag") == 0;
-    o.prefix = (bag ? o.input.substr(0, o.input.size() - 4) : o.input) + ".evaluation";
+    const std::string& first = o.inputs.front();
+    const bool bag = first.size() > 4 && first.compare(first.size() - 4, 4, ".bag") == 0;
+    o.prefix = (bag ? first.substr(0, first.size() - 4) : first) + ".evaluation";
   }
   std::vector<std::string> inputs = configs;
-  inputs.push_back(o.input);
+  inputs.insert(inputs.end(), o.inputs.begin(), o.inputs.end());
   for (const char* suffix : {".csv", "_series.csv"})
     refuseOutputOverInput(o.prefix + suffix, inputs);
   return o;
@@ -516,14 +524,14 @@ class Evaluation {
     if (methods_.empty()) throw UsageError("no method to run (--integrators, --rate-samples)");
   }
 
-  void run(rosbag::Bag& bag);
+  void run(BagSet& bag);
   void report(std::FILE* out) const;
   void writeCsv(const std::string& summary_path, const std::string& series_path);
   /// Why no method can be recommended, or nothing.
   std::optional<std::string> noRecommendation() const;
 
  private:
-  void checkTopics(rosbag::Bag& bag);
+  void checkTopics(BagSet& bag);
   void handle(const rosbag::MessageInstance& m);
   bool decodeRate(const rosbag::MessageInstance& m, RateSample& out);
   bool decodeTruth(const rosbag::MessageInstance& m, TruthSample& out);
@@ -574,27 +582,35 @@ class Evaluation {
   double wall_ = 0.0;
 };
 
-void Evaluation::checkTopics(rosbag::Bag& bag) {
+void Evaluation::checkTopics(BagSet& bag) {
   rates_type_ = requireTopic(bag, o_.rates_topic, "rate",
                              {typeOf<sensor_msgs::Imu>(), typeOf<geometry_msgs::Twist>(),
                               typeOf<geometry_msgs::TwistStamped>()});
-  rates_topic_ = recordedName(bag, o_.rates_topic);
+  rates_topic_ = o_.rates_topic;
   if (!o_.truth_topic.empty()) {
     truth_type_ = requireTopic(
         bag, o_.truth_topic, "truth",
         {typeOf<geometry_msgs::PoseStamped>(), typeOf<geometry_msgs::PoseWithCovarianceStamped>(),
          typeOf<geometry_msgs::TransformStamped>(), typeOf<nav_msgs::Odometry>()});
-    truth_topic_ = recordedName(bag, o_.truth_topic);
+    truth_topic_ = o_.truth_topic;
   } else {
     truth_type_ = requireTopic(bag, o_.tf_topic, "tf", {typeOf<tf2_msgs::TFMessage>()});
-    truth_topic_ = recordedName(bag, o_.tf_topic);
+    truth_topic_ = o_.tf_topic;
   }
-  if (truth_topic_ == rates_topic_) throw UsageError("the rate and truth topics are the same");
+  if (sameTopic(truth_topic_, rates_topic_))
+    throw UsageError("the rate and truth topics are the same");
 }
 
-void Evaluation::run(rosbag::Bag& bag) {
+void Evaluation::run(BagSet& bag) {
   checkTopics(bag);
-  rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{rates_topic_, truth_topic_}));
+  for (const std::string& overlap : bag.overlaps({rates_topic_, truth_topic_})) {
+    std::fprintf(stderr,
+                 "evaluate_bag: %s of record time: their messages are interleaved by record "
+                 "time\n",
+                 overlap.c_str());
+  }
+  rosbag::View view;
+  bag.addQuery(view, {rates_topic_, truth_topic_});
   Progress progress(view.size(), o_.progress);
   std::uint64_t done = 0;
   visitMessages(view, o_.input, progress, done, [this](const rosbag::MessageInstance& m) {
@@ -612,7 +628,7 @@ void Evaluation::run(rosbag::Bag& bag) {
 }
 
 void Evaluation::handle(const rosbag::MessageInstance& m) {
-  if (m.getTopic() == rates_topic_) {
+  if (sameTopic(m.getTopic(), rates_topic_)) {
     RateSample s;
     if (!decodeRate(m, s)) return;
     if (!s.w.allFinite()) {
@@ -934,15 +950,14 @@ void Evaluation::writeCsv(const std::string& summary_path, const std::string& se
 int run(int argc, char** argv) {
   catchInterrupts();
   const Options o = parseOptions(argc, argv);
-  rosbag::Bag bag;
-  openBag(bag, o.input);
+  BagSet bags(o.inputs);
   PendingFile summary(o.prefix + ".csv"), series(o.prefix + "_series.csv");
   Evaluation evaluation(o);
   // The CSVs: a row per method, and at most kSeriesPoints of about 48 bytes per method.
   requireFreeSpace(
       summary.path(),
       (o.integrators.size() * o.rate_samples.size()) * (kSeriesPoints * 48 + 512) + 4096);
-  evaluation.run(bag);
+  evaluation.run(bags);
   throwIfInterrupted();  // a signal during the last comparisons: still no output
   if (const auto why = evaluation.noRecommendation()) {
     evaluation.report(stdout);

@@ -2,14 +2,16 @@
 // Reads the rate topic (sensor_msgs/Imu, geometry_msgs/Twist or TwistStamped) and, in the
 // dynamic model, the torque topic, with the node's parameters and YAML, through the same core
 // engine; writes attitude_state, imu/data and /tf into an output bag at the input messages'
-// record times (or the states into a CSV). The bag is read chunk by chunk (rosbag::View),
-// never whole.
+// record times (or the states into a CSV). Several bags (the parts of a split recording) are
+// read as one stream merged by record time, so the state carries on across the parts. The bags
+// are read chunk by chunk (rosbag::View), never whole.
 //
 // Time, as the node under sim time: a /clock topic in the bag drives the engine's clock. Without
 // one, the input stamps do (each input is submitted, then the clock ticks to its stamp, so a
 // grid stamp's state includes the inputs stamped up to it).
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <iostream>
 #include <limits>
@@ -24,6 +26,7 @@
 #include <geometry_msgs/Vector3Stamped.h>
 #include <geometry_msgs/Wrench.h>
 #include <geometry_msgs/WrenchStamped.h>
+#include <ros/names.h>
 #include <rosgraph_msgs/Clock.h>
 #include <sensor_msgs/Imu.h>
 #include <tf2/buffer_core.h>
@@ -41,43 +44,67 @@ namespace attitude_propagator {
 namespace tools {
 namespace {
 
-const char* const kUsage = R"(usage: propagate_bag IN.bag [options]
+const char* const kUsage = R"(usage: propagate_bag IN.bag [IN2.bag ...] [options]
 
-Propagates the attitude over a recorded bag with the node's engine and parameters, as fast as
+Propagates the attitude over recorded bags with the node's engine and parameters, as fast as
 the machine allows, and writes attitude_state, imu/data and /tf into a bag (or a CSV).
+Several bags (the parts of `rosbag record --split`, e.g. rec_*.bag) are read as one stream
+merged by record time, in whatever order they are given: the state carries on from one part to
+the next, as over the unsplit recording.
 
-  -o, --output OUT.bag   output bag (default: IN.propagated.bag)
+  -o, --output OUT.bag   output bag (default: IN.propagated.bag, after the first input)
   --csv OUT.csv          write the states as CSV instead of a bag
-  --compression none|lz4 output bag chunks stored as they are (default) or LZ4-compressed
-                         (about 5x smaller, slower)
+  --compression none|lz4 output bag chunks stored as they are (default) or LZ4-compressed:
+                         about 5x smaller for about 20 % more CPU; faster in wall time only
+                         where the disk, not the CPU, limits the run (see the README)
   --config FILE.yaml     node parameters (the keys of config/default.yaml)
   --set name=value       one node parameter (YAML value), after --config; repeatable
   --rates TOPIC          rate topic (default /imu/data_raw, or /body_twist for rate_input twist)
   --torque TOPIC         torque topic, dynamic model with torque_input (default /torque)
   --clock TOPIC          clock topic driving the engine when present (default /clock)
   --no-clock             ignore the clock topic: input stamps drive the engine
+
+Output topics, named as the node's would be (relative names resolved in --ns, as ROS does):
+  --ns NS                namespace of the relative output topics (default /): with --ns r1,
+                         /r1/attitude_state and /r1/imu/data; /tf and /tf_static stay, as
+                         tf2 listeners only hear those (give robots their own frame names)
+  --state-topic NAME     default attitude_state
+  --imu-topic NAME       default imu/data
+  --tf-topic NAME        default /tf
+  --tf-static-topic NAME default /tf_static: the mounts used (body frame to the IMU's, twist's
+                         or torque's frame, the transforms read from the input's /tf_static),
+                         latched as rosbag records a latched topic
+
+  --dry-run              open and check the bags, print their topics, types and message
+                         counts, the settings that would run and the output's topics and
+                         estimated size; write nothing
   --io-floor             read, decode and write the same outputs without propagating (one
                          identity state per input): the I/O cost alone, for benchmarks
   --no-progress          no progress line (it is shown only on a terminal anyway)
+  --version              the package version
   -h, --help             this text
 
-The output never replaces an input (the bag or a --config file, under any name: refused), is
+The output never replaces an input (a bag or a --config file, under any name: refused), is
 written under a temporary name in its directory and appears under its own name only when
 complete; the run is refused at the start when the file system has less free space than the
-output's estimated size.
+output's estimated size. Every input bag is checked before any is read.
+
+The summary accounts for every rate and torque message: accepted, dropped for a named reason
+(stale, future, no-tf, ...) or still pending at the end (dynamic model: stamped after the
+last clock tick).
 
 Exit codes:
   0    the output is complete and holds the states of the accepted inputs
   1    an input could not be read (missing, truncated, damaged) or the output not written
        (full disk, no permission); nothing is left under the output name
-  2    usage: bad options or parameters, or an output that is an input
-  3    the bag was read to the end but no input was accepted (or no state published); the
+  2    usage: bad options or parameters, an output that is an input, an input given twice
+  3    the bags were read to the end but no input was accepted (or no state published); the
        summary counts why (e.g. "no-tf 4001"), and no output is written
   128+N  stopped by signal N (130: Ctrl-C, 143: SIGTERM, 129: SIGHUP); no output is written
 )";
 
 struct Options {
-  std::string input;
+  std::vector<std::string> inputs;
   std::string output;
   bool csv = false;
   BagOutput::Compression compression = BagOutput::Compression::None;
@@ -89,8 +116,27 @@ struct Options {
   bool use_clock = true;
   bool io_floor = false;
   bool progress = true;
+  bool dry_run = false;
+  // Output topics, resolved (absolute).
+  std::string state_out = "attitude_state";
+  std::string imu_out = "imu/data";
+  std::string tf_out = "/tf";
+  std::string tf_static_out = "/tf_static";
   Parameters parameters;
 };
+
+/// A ROS graph name resolved as a node in namespace `ns` resolves it: absolute names stay,
+/// relative ones are put under `ns`. A private name (~) has no node to belong to here.
+std::string resolveTopic(const std::string& option, const std::string& ns,
+                         const std::string& name) {
+  std::string error;
+  if (name.empty() || name[0] == '~' || !ros::names::validate(name, error)) {
+    throw UsageError(option + " " + name + ": not a topic name" +
+                     (error.empty() ? std::string(" (no private ~names)") : " (" + error + ")"));
+  }
+  if (name[0] == '/') return name;
+  return (ns.back() == '/' ? ns : ns + "/") + name;
+}
 
 BagOutput::Compression parseCompression(const std::string& name) {
   if (name == "none") return BagOutput::Compression::None;
@@ -101,10 +147,14 @@ BagOutput::Compression parseCompression(const std::string& name) {
 Options parseOptions(int argc, char** argv) {
   Options o;
   std::vector<std::string> configs, sets;
+  std::string ns = "/";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "-h" || a == "--help") {
       std::cout << kUsage;
+      std::exit(0);
+    } else if (a == "--version") {
+      std::cout << "propagate_bag (attitude_propagator) " << AP_VERSION << "\n";
       std::exit(0);
     } else if (a == "-o" || a == "--output") {
       o.output = optionValue(argc, argv, i);
@@ -125,28 +175,60 @@ Options parseOptions(int argc, char** argv) {
       o.clock_topic = optionValue(argc, argv, i);
     } else if (a == "--no-clock") {
       o.use_clock = false;
+    } else if (a == "--ns") {
+      ns = optionValue(argc, argv, i);
+    } else if (a == "--state-topic") {
+      o.state_out = optionValue(argc, argv, i);
+    } else if (a == "--imu-topic") {
+      o.imu_out = optionValue(argc, argv, i);
+    } else if (a == "--tf-topic") {
+      o.tf_out = optionValue(argc, argv, i);
+    } else if (a == "--tf-static-topic") {
+      o.tf_static_out = optionValue(argc, argv, i);
+    } else if (a == "--dry-run") {
+      o.dry_run = true;
     } else if (a == "--io-floor") {
       o.io_floor = true;
     } else if (a == "--no-progress") {
       o.progress = false;
     } else if (!a.empty() && a[0] == '-') {
       throw UsageError(a + ": unknown option (see --help)");
-    } else if (o.input.empty()) {
-      o.input = a;
     } else {
-      throw UsageError(a + ": one input bag only (see --help)");
+      o.inputs.push_back(a);
     }
   }
-  if (o.input.empty()) throw UsageError("no input bag (see --help)");
+  if (o.inputs.empty()) throw UsageError("no input bag (see --help)");
+  if (ns.find('~') != std::string::npos) {
+    throw UsageError("--ns " + ns + ": not a namespace (no private ~names)");
+  }
+  std::string error;
+  if (!ros::names::validate(ns[0] == '/' ? ns : "/" + ns, error)) {
+    throw UsageError("--ns " + ns + ": not a namespace (" + error + ")");
+  }
+  if (ns[0] != '/') ns = "/" + ns;
+  o.state_out = resolveTopic("--state-topic", ns, o.state_out);
+  o.imu_out = resolveTopic("--imu-topic", ns, o.imu_out);
+  o.tf_out = resolveTopic("--tf-topic", ns, o.tf_out);
+  o.tf_static_out = resolveTopic("--tf-static-topic", ns, o.tf_static_out);
+  // One topic, one type: a bag connection carries one.
+  const std::vector<std::string> outs = {o.state_out, o.imu_out, o.tf_out, o.tf_static_out};
+  for (std::size_t i = 0; i < outs.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      if (outs[i] == outs[j]) {
+        throw UsageError(outs[i] + ": two outputs on one topic; give each its own");
+      }
+    }
+  }
   for (const auto& c : configs) loadConfigFile(c, o.parameters);
   for (const auto& s : sets) applySetting(s, o.parameters);
   validateParameters(o.parameters);  // std::invalid_argument: a usage error, before any reading
   if (o.output.empty()) {
-    const bool bag = o.input.size() > 4 && o.input.compare(o.input.size() - 4, 4, ".bag") == 0;
-    o.output = (bag ? o.input.substr(0, o.input.size() - 4) : o.input) + ".propagated.bag";
+    const std::string& first = o.inputs.front();
+    const bool bag = first.size() > 4 && first.compare(first.size() - 4, 4, ".bag") == 0;
+    o.output = (bag ? first.substr(0, first.size() - 4) : first) + ".propagated.bag";
   }
   std::vector<std::string> inputs = configs;
-  inputs.push_back(o.input);
+  inputs.insert(inputs.end(), o.inputs.begin(), o.inputs.end());
   refuseOutputOverInput(o.output, inputs);
   if (o.rates_topic.empty()) {
     o.rates_topic = o.parameters.rate_input == "twist" ? "/body_twist" : "/imu/data_raw";
@@ -162,15 +244,53 @@ Options parseOptions(int argc, char** argv) {
 class Writer {
  public:
   virtual ~Writer() = default;
-  /// Bytes the output takes per state and per republished IMU message (an estimate for the
-  /// free-space check: the messages as they will be written, with their frame names).
-  virtual double bytesPerState() const = 0;
-  virtual double bytesPerImu() const = 0;
   virtual void state(const EngineState& s, const ros::Time& record) = 0;
   virtual void imu(const sensor_msgs::Imu& input, const EngineState& s,
                    const Eigen::Quaterniond& q_BI, const ros::Time& record) = 0;
+  /// The static transforms used so far (all of them: a latched topic keeps its last message).
+  virtual void mounts(const tf2_msgs::TFMessage& transforms, const ros::Time& record) = 0;
   virtual void close() = 0;
 };
+
+/// The state and tf messages as written, but for stamp and values: frames, model, integrator.
+struct StateMessages {
+  AttitudeState state;
+  tf2_msgs::TFMessage tf;
+  StateMessages(const Parameters& p, const AttitudeEngine& engine) {
+    state.header.frame_id = p.fixed_frame;
+    state.child_frame_id = p.body_frame;
+    state.model = engine.modelName();
+    state.integrator = integratorName(engine.integrator());
+    tf.transforms.resize(1);
+    auto& t = tf.transforms[0];
+    t.header.frame_id = p.reverse_tf ? p.body_frame : p.fixed_frame;
+    t.child_frame_id = p.reverse_tf ? p.fixed_frame : p.body_frame;
+  }
+};
+
+/// Bytes the output takes per state and per republished IMU message (an estimate for the
+/// free-space check: the messages as they will be written, with their frame names).
+struct RecordSizes {
+  double per_state = 0.0;
+  double per_imu = 0.0;
+};
+
+// A record is its header (op, conn and time fields: 38 bytes), two lengths and the message,
+// plus a 12-byte index entry. LZ4 stores these streams about 5x smaller (README); a quarter is
+// assumed.
+template <class M>
+double recordBytes(const M& msg) {
+  return 4 + 38 + 4 + ros::serialization::serializationLength(msg) + 12;
+}
+
+RecordSizes bagRecordSizes(const Options& o, const Parameters& p, const AttitudeEngine& engine) {
+  const StateMessages m(p, engine);
+  sensor_msgs::Imu imu;
+  imu.header.frame_id = "imu_link";
+  const double shrink = o.compression == BagOutput::Compression::Lz4 ? 0.25 : 1.0;
+  return {shrink * (recordBytes(m.state) + (p.publish_tf ? recordBytes(m.tf) : 0.0)),
+          shrink * recordBytes(imu)};
+}
 
 /// attitude_state, imu/data and /tf as the node publishes them, into a bag.
 class BagWriter : public Writer {
@@ -178,17 +298,16 @@ class BagWriter : public Writer {
   BagWriter(const std::string& path, const Options& o, const Parameters& p,
             const AttitudeEngine& engine)
       : bag_(path, o.output, o.compression),
-        lz4_(o.compression == BagOutput::Compression::Lz4),
         publish_tf_(p.publish_tf),
-        reverse_tf_(p.reverse_tf) {
-    state_.header.frame_id = p.fixed_frame;
-    state_.child_frame_id = p.body_frame;
-    state_.model = engine.modelName();
-    state_.integrator = integratorName(engine.integrator());
-    tf_.transforms.resize(1);
-    auto& t = tf_.transforms[0];
-    t.header.frame_id = p.reverse_tf ? p.body_frame : p.fixed_frame;
-    t.child_frame_id = p.reverse_tf ? p.fixed_frame : p.body_frame;
+        reverse_tf_(p.reverse_tf),
+        state_topic_(o.state_out),
+        imu_topic_(o.imu_out),
+        tf_topic_(o.tf_out),
+        tf_static_topic_(o.tf_static_out) {
+    bag_.latch(tf_static_topic_);
+    const StateMessages m(p, engine);
+    state_ = m.state;
+    tf_ = m.tf;
   }
 
   void state(const EngineState& s, const ros::Time& record) override {
@@ -197,7 +316,7 @@ class BagWriter : public Writer {
       auto& t = tf_.transforms[0];
       t.header.stamp = stamp;
       toMsg(reverse_tf_ ? s.q_WB.conjugate() : s.q_WB, t.transform.rotation);
-      bag_.write("/tf", record, tf_);
+      bag_.write(tf_topic_, record, tf_);
     }
     state_.header.stamp = stamp;
     toMsg(s.q_WB, state_.orientation);
@@ -207,7 +326,7 @@ class BagWriter : public Writer {
     state_.kinetic_energy = s.kinetic_energy;
     state_.norm_error = s.norm_error;
     state_.steps = s.steps;
-    bag_.write("/attitude_state", record, state_);
+    bag_.write(state_topic_, record, state_);
   }
 
   void imu(const sensor_msgs::Imu& input, const EngineState& s, const Eigen::Quaterniond& q_BI,
@@ -218,34 +337,20 @@ class BagWriter : public Writer {
     toMsg(s.q_WB * q_BI, imu_.orientation);
     covarianceToMsg(rotateCovariance(s.P_B, q_BI.conjugate().toRotationMatrix()),
                     imu_.orientation_covariance);
-    bag_.write("/imu/data", record, imu_);
+    bag_.write(imu_topic_, record, imu_);
+  }
+
+  void mounts(const tf2_msgs::TFMessage& transforms, const ros::Time& record) override {
+    bag_.write(tf_static_topic_, record, transforms);
   }
 
   void close() override { bag_.close(); }
 
-  // A record is its header (op, conn and time fields: 38 bytes), two lengths and the message,
-  // plus a 12-byte index entry. LZ4 stores these streams about 5x smaller (README); a quarter
-  // is assumed.
-  double bytesPerState() const override {
-    const double bytes = record(state_) + (publish_tf_ ? record(tf_) : 0.0);
-    return lz4_ ? bytes / 4 : bytes;
-  }
-  double bytesPerImu() const override {
-    sensor_msgs::Imu imu;
-    imu.header.frame_id = "imu_link";
-    return lz4_ ? record(imu) / 4 : record(imu);
-  }
-
  private:
-  template <class M>
-  static double record(const M& msg) {
-    return 4 + 38 + 4 + ros::serialization::serializationLength(msg) + 12;
-  }
-
   BagOutput bag_;
-  bool lz4_;
   bool publish_tf_;
   bool reverse_tf_;
+  std::string state_topic_, imu_topic_, tf_topic_, tf_static_topic_;
   AttitudeState state_;
   tf2_msgs::TFMessage tf_;
   sensor_msgs::Imu imu_;
@@ -268,10 +373,11 @@ class CsvWriter : public Writer {
   }
   void imu(const sensor_msgs::Imu&, const EngineState&, const Eigen::Quaterniond&,
            const ros::Time&) override {}
+  void mounts(const tf2_msgs::TFMessage&, const ros::Time&) override {}
   void close() override { file_.close(); }
 
   /// A row of numbers as long as they print (negative, 17 digits, 3-digit exponents).
-  double bytesPerState() const override {
+  static double rowBytes() {
     EngineState s;
     const double x = -0.12345678901234567e-100;
     s.stamp = std::numeric_limits<Stamp>::max();
@@ -281,10 +387,9 @@ class CsvWriter : public Writer {
     s.M_B.setConstant(x);
     s.norm_error = s.kinetic_energy = x;
     s.steps = std::numeric_limits<decltype(s.steps)>::max();
-    char row[sizeof row_];
+    char row[kRowSize];
     return format(s, row, sizeof row);
   }
-  double bytesPerImu() const override { return 0.0; }
 
  private:
   static int format(const EngineState& s, char* row, std::size_t size) {
@@ -301,7 +406,8 @@ class CsvWriter : public Writer {
   }
 
   CsvFile file_;
-  char row_[1024];
+  static constexpr std::size_t kRowSize = 1024;
+  char row_[kRowSize];
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -316,13 +422,15 @@ struct ImuPayload {
 
 class BagPropagator : public EngineSink {
  public:
-  BagPropagator(const Options& o, rosbag::Bag& bag)
-      : o_(o), bag_(bag), config_(validateParameters(o.parameters)) {
+  BagPropagator(const Options& o, BagSet& bags)
+      : o_(o), bags_(bags), config_(validateParameters(o.parameters)) {
     engine_ = std::make_unique<AttitudeEngine>(engineConfig(config_), *this);
   }
 
   /// Checks the topics and the free space, then runs; writes into `path` (a temporary name).
   void run(const std::string& path);
+  /// Checks the topics and prints what run() would read, with which settings, and write.
+  void dryRun(std::FILE* out);
   /// Why the output holds nothing usable (nothing accepted, no state), or nothing.
   std::optional<std::string> nothingUsable() const;
   void summary(std::FILE* out, bool written) const;
@@ -341,6 +449,8 @@ class BagPropagator : public EngineSink {
 
  private:
   std::vector<std::string> checkTopics();
+  /// The output's estimated size in bytes (for the free-space check).
+  double estimatedBytes();
   void dispatch(const rosbag::MessageInstance& m);
   void onImu(const rosbag::MessageInstance& m);
   void onTwist(const rosbag::MessageInstance& m);
@@ -351,9 +461,11 @@ class BagPropagator : public EngineSink {
   const Eigen::Quaterniond* mountRotation(const std::string& frame_id);
   std::optional<Eigen::Quaterniond> staticRotation(const std::string& target,
                                                    const std::string& source);
+  void readStaticTransforms();
+  void recordMount(const std::string& target, const std::string& source);
 
   const Options& o_;
-  rosbag::Bag& bag_;
+  BagSet& bags_;
   NodeConfig config_;
   std::unique_ptr<AttitudeEngine> engine_;
   std::unique_ptr<Writer> writer_;
@@ -371,11 +483,15 @@ class BagPropagator : public EngineSink {
   rosgraph_msgs::Clock clock_msg_;
   std::vector<std::uint8_t> buffer_;
   std::unique_ptr<tf2::BufferCore> static_tf_;
+  std::map<std::string, geometry_msgs::TransformStamped> static_edges_;  // by child frame
+  std::map<std::string, geometry_msgs::TransformStamped> mounts_used_;   // by child frame
   std::map<std::string, std::optional<Eigen::Quaterniond>> mounts_;
   std::map<std::string, std::uint64_t> read_;  // messages read per role
   std::uint64_t messages_ = 0;
   std::uint64_t states_ = 0;
   std::uint64_t floor_accepted_ = 0;  // --io-floor: inputs passed straight to the outputs
+  std::uint64_t bias_used_ = 0;
+  std::uint64_t messages_total_ = 0;  // in the view, before reading
   double wall_ = 0.0;
   double bag_seconds_ = 0.0;
 };
@@ -384,62 +500,73 @@ std::vector<std::string> BagPropagator::checkTopics() {
   std::vector<std::string> topics;
   const bool dynamic = config_.model == Model::Dynamic;
   if (config_.rate_input == RateInput::Imu) {
-    requireTopic(bag_, o_.rates_topic, "rate", {typeOf<sensor_msgs::Imu>()});
+    requireTopic(bags_, o_.rates_topic, "rate", {typeOf<sensor_msgs::Imu>()});
   } else if (config_.rate_input == RateInput::Twist) {
-    requireTopic(bag_, o_.rates_topic, "rate",
+    requireTopic(bags_, o_.rates_topic, "rate",
                  {typeOf<geometry_msgs::Twist>(), typeOf<geometry_msgs::TwistStamped>()});
   }
   if (config_.rate_input != RateInput::None) {
-    rates_ = recordedName(bag_, o_.rates_topic);
+    rates_ = o_.rates_topic;
     topics.push_back(rates_);
   }
   if (dynamic && config_.torque_input) {
-    requireTopic(bag_, o_.torque_topic, "torque",
+    requireTopic(bags_, o_.torque_topic, "torque",
                  {typeOf<geometry_msgs::Wrench>(), typeOf<geometry_msgs::WrenchStamped>()});
-    torque_ = recordedName(bag_, o_.torque_topic);
+    torque_ = o_.torque_topic;
     topics.push_back(torque_);
   }
   if (topics.empty()) {
     throw ToolError("nothing to read: rate_input is none and torque_input is off");
   }
-  if (o_.use_clock && topicType(bag_, o_.clock_topic)) {
-    requireTopic(bag_, o_.clock_topic, "clock", {typeOf<rosgraph_msgs::Clock>()});
-    clock_ = recordedName(bag_, o_.clock_topic);
+  if (o_.use_clock && topicType(bags_, o_.clock_topic)) {
+    requireTopic(bags_, o_.clock_topic, "clock", {typeOf<rosgraph_msgs::Clock>()});
+    clock_ = o_.clock_topic;
     topics.push_back(clock_);
     clock_driven_ = true;
   }
-  if (config_.rate_input != RateInput::None && topicType(bag_, o_.bias_topic)) {
-    requireTopic(bag_, o_.bias_topic, "gyro bias", {typeOf<geometry_msgs::Vector3Stamped>()});
-    bias_ = recordedName(bag_, o_.bias_topic);
+  if (config_.rate_input != RateInput::None && topicType(bags_, o_.bias_topic)) {
+    requireTopic(bags_, o_.bias_topic, "gyro bias", {typeOf<geometry_msgs::Vector3Stamped>()});
+    bias_ = o_.bias_topic;
     topics.push_back(bias_);
   }
   return topics;
 }
 
+double BagPropagator::estimatedBytes() {
+  const RecordSizes sizes = o_.csv ? RecordSizes{CsvWriter::rowBytes(), 0.0}
+                                   : bagRecordSizes(o_, config_.parameters, *engine_);
+  // The output's size: a state per rate input (kinematic) or per grid stamp (dynamic), and
+  // each IMU input republished; the bag's header and index besides.
+  const std::uint64_t rates = rates_.empty() ? 0 : messageCount(bags_, {rates_});
+  const double states = config_.model == Model::Dynamic && !o_.io_floor
+                            ? config_.parameters.publish_rate * bag_seconds_ + 1.0
+                            : double(o_.io_floor ? messages_total_ : rates);
+  const double imu = config_.rate_input == RateInput::Imu && !o_.csv ? double(rates) : 0.0;
+  constexpr double kBagOverhead = 64 * 1024;
+  return std::min(states * sizes.per_state + imu * sizes.per_imu + kBagOverhead, 1e18);
+}
+
 void BagPropagator::run(const std::string& path) {
   const std::vector<std::string> topics = checkTopics();
+  for (const std::string& overlap : bags_.overlaps(topics)) {
+    std::fprintf(stderr,
+                 "propagate_bag: %s of record time: their messages are interleaved by record "
+                 "time (one recording given twice would send each input twice: dropped as "
+                 "stale)\n",
+                 overlap.c_str());
+  }
   if (o_.csv) {
     writer_ = std::make_unique<CsvWriter>(path, o_.output);
   } else {
     writer_ = std::make_unique<BagWriter>(path, o_, config_.parameters, *engine_);
   }
-  rosbag::View view(bag_, rosbag::TopicQuery(topics));
-  bag_seconds_ = (view.getEndTime() - view.getBeginTime()).toSec();
-  // The output's size: a state per rate input (kinematic) or per grid stamp (dynamic), and
-  // each IMU input republished; the bag's header and index besides.
-  const std::uint64_t rates =
-      rates_.empty() ? 0 : rosbag::View(bag_, rosbag::TopicQuery(rates_)).size();
-  const double states = config_.model == Model::Dynamic && !o_.io_floor
-                            ? config_.parameters.publish_rate * bag_seconds_ + 1.0
-                            : double(o_.io_floor ? view.size() : rates);
-  const double imu = config_.rate_input == RateInput::Imu && !o_.csv ? double(rates) : 0.0;
-  constexpr double kBagOverhead = 64 * 1024;
-  requireFreeSpace(
-      o_.output,
-      static_cast<std::uint64_t>(std::min(
-          states * writer_->bytesPerState() + imu * writer_->bytesPerImu() + kBagOverhead, 1e18)));
+  rosbag::View view;
+  bags_.addQuery(view, topics);
+  bag_seconds_ = view.size() > 0 ? (view.getEndTime() - view.getBeginTime()).toSec() : 0.0;
+  messages_total_ = view.size();
+  requireFreeSpace(o_.output, static_cast<std::uint64_t>(estimatedBytes()));
   Progress progress(view.size(), o_.progress);
-  visitMessages(view, o_.input, progress, messages_, [this](const rosbag::MessageInstance& m) {
+  visitMessages(view, bags_.name(), progress, messages_, [this](const rosbag::MessageInstance& m) {
     record_ = m.getTime();
     dispatch(m);
   });
@@ -451,18 +578,18 @@ void BagPropagator::run(const std::string& path) {
 void BagPropagator::dispatch(const rosbag::MessageInstance& m) {
   const std::string& topic = m.getTopic();
   ++read_[topic];
-  if (topic == rates_) {
+  if (!rates_.empty() && sameTopic(topic, rates_)) {
     if (config_.rate_input == RateInput::Imu) {
       onImu(m);
     } else {
       onTwist(m);
     }
-  } else if (topic == torque_) {
+  } else if (!torque_.empty() && sameTopic(topic, torque_)) {
     onTorque(m);
-  } else if (topic == clock_) {
+  } else if (!clock_.empty() && sameTopic(topic, clock_)) {
     decodeInto(m, buffer_, clock_msg_);
     if (!o_.io_floor) engine_->clockTick(toStamp(clock_msg_.clock));
-  } else if (topic == bias_) {
+  } else if (!bias_.empty() && sameTopic(topic, bias_)) {
     onBias(m);
   }
 }
@@ -558,7 +685,7 @@ void BagPropagator::onBias(const rosbag::MessageInstance& m) {
     return;
   }
   const Stamp stamp = stampOr(bias_msg_.header.stamp, record_);
-  if (!o_.io_floor) engine_->submitBias(stamp, *q_B * toEigen(bias_msg_.vector));
+  if (!o_.io_floor && engine_->submitBias(stamp, *q_B * toEigen(bias_msg_.vector))) ++bias_used_;
 }
 
 void BagPropagator::submit(Input& input) {
@@ -603,32 +730,71 @@ const Eigen::Quaterniond* BagPropagator::mountRotation(const std::string& frame_
   return &*it->second;
 }
 
-std::optional<Eigen::Quaterniond> BagPropagator::staticRotation(const std::string& target,
-                                                                const std::string& source) {
-  if (!static_tf_) {
-    // The bag's static transforms, read once (a handful of messages).
-    static_tf_ = std::make_unique<tf2::BufferCore>();
-    if (topicType(bag_, o_.static_tf_topic)) {
-      rosbag::View view(
-          bag_,
-          rosbag::TopicQuery(std::vector<std::string>{recordedName(bag_, o_.static_tf_topic)}));
-      for (const rosbag::MessageInstance& m : view) {
-        if (!isType<tf2_msgs::TFMessage>(m)) continue;
-        tf2_msgs::TFMessage tf;
-        decodeInto(m, buffer_, tf);
-        for (const auto& t : tf.transforms) static_tf_->setTransform(t, "bag", true);
-      }
+void BagPropagator::readStaticTransforms() {
+  // The bags' static transforms, read once (a handful of messages); a later one for the same
+  // child frame replaces an earlier one, as in tf2.
+  static_tf_ = std::make_unique<tf2::BufferCore>();
+  if (!topicType(bags_, o_.static_tf_topic)) return;
+  rosbag::View view;
+  bags_.addQuery(view, {o_.static_tf_topic});
+  for (const rosbag::MessageInstance& m : view) {
+    if (!isType<tf2_msgs::TFMessage>(m)) continue;
+    tf2_msgs::TFMessage tf;
+    decodeInto(m, buffer_, tf);
+    for (const auto& t : tf.transforms) {
+      static_tf_->setTransform(t, "bag", true);
+      static_edges_[t.child_frame_id] = t;
     }
   }
+}
+
+std::optional<Eigen::Quaterniond> BagPropagator::staticRotation(const std::string& target,
+                                                                const std::string& source) {
+  if (!static_tf_) readStaticTransforms();
+  std::optional<Eigen::Quaterniond> q;
   try {
-    return rotationOf(static_tf_->lookupTransform(target, source, ros::Time(0))).normalized();
+    q = rotationOf(static_tf_->lookupTransform(target, source, ros::Time(0))).normalized();
   } catch (const tf2::TransformException&) {
     std::fprintf(stderr,
                  "propagate_bag: no static transform %s -> %s in %s: its messages are "
                  "dropped\n",
-                 target.c_str(), source.c_str(), o_.input.c_str());
+                 target.c_str(), source.c_str(), bags_.name().c_str());
     return std::nullopt;
   }
+  recordMount(target, source);
+  return q;
+}
+
+void BagPropagator::recordMount(const std::string& target, const std::string& source) {
+  // The transforms as recorded, each edge of the tree between the two frames, rather than the
+  // one rotation composed of them: played next to the input, the output's /tf_static then
+  // agrees with the input's, where a shortcut would give a frame a second parent.
+  auto chain = [this](std::string frame) {
+    std::vector<std::string> frames{frame};
+    for (auto it = static_edges_.find(frame);
+         it != static_edges_.end() && frames.size() <= static_edges_.size();
+         it = static_edges_.find(frame)) {
+      frame = it->second.header.frame_id;
+      frames.push_back(frame);
+    }
+    return frames;
+  };
+  const std::vector<std::string> up_source = chain(source), up_target = chain(target);
+  bool added = false;
+  auto take = [&](const std::vector<std::string>& frames, const std::vector<std::string>& other) {
+    for (const std::string& frame : frames) {
+      if (std::find(other.begin(), other.end(), frame) != other.end()) break;  // common ancestor
+      const auto edge = static_edges_.find(frame);
+      if (edge == static_edges_.end()) break;
+      added = mounts_used_.emplace(frame, edge->second).second || added;
+    }
+  };
+  take(up_source, up_target);
+  take(up_target, up_source);
+  if (!added || !writer_) return;
+  tf2_msgs::TFMessage message;
+  for (const auto& [child, t] : mounts_used_) message.transforms.push_back(t);
+  writer_->mounts(message, record_);
 }
 
 std::optional<std::string> BagPropagator::nothingUsable() const {
@@ -645,13 +811,18 @@ void BagPropagator::summary(std::FILE* out, bool written) const {
     by_topic += (by_topic.empty() ? "" : ", ") + topic + " " + std::to_string(n);
   }
   std::string dropped;
-  auto add = [&dropped](const char* name, std::uint64_t n) {
+  std::uint64_t dropped_total = 0;
+  auto add = [&](const char* name, std::uint64_t n) {
+    dropped_total += n;
     if (n > 0)
       dropped += (dropped.empty() ? "" : ", ") + std::string(name) + " " + std::to_string(n);
   };
+  // Every way an input leaves the engine unused: with `accepted` and pending() these add up to
+  // `received` (each rate or torque message read is submitted or rejected exactly once).
   add("stale", c.dropped_stale);
   add("future", c.rejected_future);
   add("reset", c.dropped_on_reset);
+  add("queue-full", c.pending_overflow);
   add("non-finite", c.rejected_non_finite);
   add("out-of-range", c.rejected_out_of_range);
   add("no-rate", c.rejected_no_rate);
@@ -659,7 +830,6 @@ void BagPropagator::summary(std::FILE* out, bool written) const {
   add("covariance", c.rejected_covariance);
   add("no-tf", c.dropped_no_tf);
   add("no-time", c.dropped_no_time);
-  add("bias", c.rejected_bias);
   const std::uint64_t accepted = o_.io_floor ? floor_accepted_ : c.accepted;
   std::fprintf(
       out,
@@ -673,20 +843,130 @@ void BagPropagator::summary(std::FILE* out, bool written) const {
       static_cast<unsigned long long>(states_), written ? o_.output.c_str() : "nothing written",
       wall_, wall_ > 0 ? double(messages_) / wall_ : 0.0, wall_ > 0 ? bag_seconds_ / wall_ : 0.0,
       o_.io_floor ? " (I/O floor: no propagation)" : "");
+  if (o_.io_floor) return;
+  const auto pending = static_cast<std::uint64_t>(engine_->pending());
+  const std::uint64_t accounted = accepted + dropped_total + pending;
+  std::fprintf(
+      out, "  inputs: %llu = %llu accepted + %llu dropped + %llu pending at the end",
+      static_cast<unsigned long long>(c.received), static_cast<unsigned long long>(accepted),
+      static_cast<unsigned long long>(dropped_total), static_cast<unsigned long long>(pending));
+  if (accounted != c.received) {
+    std::fprintf(out, " (%lld not accounted for)",
+                 static_cast<long long>(c.received) - static_cast<long long>(accounted));
+  }
+  std::fputc('\n', out);
+  if (engine_->dynamicModel()) {
+    std::fprintf(out,
+                 "  dynamic: %llu failed steps, %llu inputs pending (stamped after the last "
+                 "clock tick), %llu deferred ticks\n",
+                 static_cast<unsigned long long>(c.failed_steps),
+                 static_cast<unsigned long long>(pending),
+                 static_cast<unsigned long long>(c.deferred_ticks));
+  }
+  if (!bias_.empty()) {
+    std::fprintf(out, "  gyro bias: %llu used, %llu refused (non-finite, too large, no tf)\n",
+                 static_cast<unsigned long long>(bias_used_),
+                 static_cast<unsigned long long>(c.rejected_bias));
+  }
+}
+
+std::string valueText(const std::string& v) { return v.empty() ? "''" : v; }
+std::string valueText(bool v) { return v ? "true" : "false"; }
+std::string valueText(double v) {
+  // The shortest digits that read back as v: 1e-09, not 1.0000000000000001e-09.
+  char text[32];
+  for (int digits = 6; digits <= 17; ++digits) {
+    std::snprintf(text, sizeof text, "%.*g", digits, v);
+    if (std::strtod(text, nullptr) == v) break;
+  }
+  return text;
+}
+std::string valueText(const std::vector<double>& v) {
+  std::string text = "[";
+  for (double x : v) text += (text.size() > 1 ? ", " : "") + valueText(x);
+  return text + "]";
+}
+
+void BagPropagator::dryRun(std::FILE* out) {
+  const std::vector<std::string> topics = checkTopics();
+  std::fprintf(out, "propagate_bag: dry run, nothing written\n");
+  std::map<std::string, std::string> roles{{rates_, "rates"},
+                                           {torque_, "torque"},
+                                           {clock_, "clock: drives the engine"},
+                                           {bias_, "gyro bias"},
+                                           {o_.static_tf_topic, "static transforms (mounts)"}};
+  for (std::size_t i = 0; i < bags_.size(); ++i) {
+    rosbag::View all(bags_.bag(i));
+    std::fprintf(out, "  %s: %u messages, %.3f s of record time\n", bags_.paths()[i].c_str(),
+                 all.size(),
+                 all.size() > 0 ? (all.getEndTime() - all.getBeginTime()).toSec() : 0.0);
+    std::map<std::string, std::pair<std::string, std::uint64_t>> by_topic;
+    for (const rosbag::ConnectionInfo* c : all.getConnections()) {
+      by_topic[c->topic].first = c->datatype;
+    }
+    for (auto& [topic, entry] : by_topic) {
+      entry.second = rosbag::View(bags_.bag(i), rosbag::TopicQuery(topic)).size();
+      std::string role = "not read";
+      for (const auto& [name, what] : roles) {
+        if (!name.empty() && sameTopic(topic, name)) role = what;
+      }
+      std::fprintf(out, "    %-24s %-32s %8llu  %s\n", topic.c_str(), entry.first.c_str(),
+                   static_cast<unsigned long long>(entry.second), role.c_str());
+    }
+  }
+  for (const std::string& overlap : bags_.overlaps(topics)) {
+    std::fprintf(out, "  warning: %s of record time: messages interleaved\n", overlap.c_str());
+  }
+  const auto& p = config_.parameters;
+  const std::string grid =
+      engine_->dynamicModel() ? ", publish_rate " + valueText(p.publish_rate) + " Hz" : "";
+  const std::string integrator = integratorName(engine_->integrator());
+  std::fprintf(out,
+               "  settings: model %s, integrator %s, rate_input %s, fixed_frame %s, body_frame "
+               "%s, max_dt %g s%s; time from %s\n",
+               engine_->modelName().c_str(), integrator.c_str(), p.rate_input.c_str(),
+               p.fixed_frame.c_str(), p.body_frame.c_str(), p.max_dt, grid.c_str(),
+               clock_driven_ ? clock_.c_str() : "the input stamps");
+  std::string all;
+  forEachParameter(p, [&all](const char* name, const auto& value, const char*, const char*) {
+    all += (all.empty() ? "" : ", ") + std::string(name) + "=" + valueText(value);
+  });
+  std::fprintf(out, "  parameters: %s\n", all.c_str());
+  rosbag::View view;
+  bags_.addQuery(view, topics);
+  bag_seconds_ = view.size() > 0 ? (view.getEndTime() - view.getBeginTime()).toSec() : 0.0;
+  messages_total_ = view.size();
+  std::string outputs;
+  if (o_.csv) {
+    outputs = "CSV";
+  } else {
+    outputs = "bag (" +
+              std::string(o_.compression == BagOutput::Compression::Lz4 ? "lz4" : "uncompressed") +
+              "): " + o_.state_out;
+    if (config_.rate_input == RateInput::Imu) outputs += ", " + o_.imu_out;
+    if (p.publish_tf) outputs += ", " + o_.tf_out;
+    outputs += ", " + o_.tf_static_out + " (mounts used, latched)";
+  }
+  const double bytes = estimatedBytes();
+  std::fprintf(out, "  output: %s, %s; about %.1f MB from %llu messages\n", o_.output.c_str(),
+               outputs.c_str(), bytes / 1e6, static_cast<unsigned long long>(messages_total_));
 }
 
 int run(int argc, char** argv) {
   catchInterrupts();
   const Options o = parseOptions(argc, argv);
-  rosbag::Bag bag;
-  openBag(bag, o.input);
+  BagSet bags(o.inputs);
+  if (o.dry_run) {
+    BagPropagator(o, bags).dryRun(stdout);
+    return kExitOk;
+  }
   PendingFile output(o.output);  // destroyed last: the writer closes before it is removed
-  BagPropagator propagator(o, bag);
+  BagPropagator propagator(o, bags);
   propagator.run(output.temporary());
   throwIfInterrupted();  // a signal after the last message: still no output
   if (const auto why = propagator.nothingUsable()) {
     propagator.summary(stdout, false);
-    throw ToolError(o.input + ": " + *why + "; no output written", kExitNothingUsable);
+    throw ToolError(bags.name() + ": " + *why + "; no output written", kExitNothingUsable);
   }
   output.commit();
   propagator.summary(stdout, true);

@@ -157,10 +157,6 @@ std::string megabytes(std::uint64_t bytes) {
   return text;
 }
 
-std::string withSlash(const std::string& topic) {
-  return !topic.empty() && topic[0] == '/' ? topic : "/" + topic;
-}
-
 }  // namespace
 
 void loadConfigFile(const std::string& path, Parameters& p) {
@@ -224,7 +220,13 @@ void openBag(rosbag::Bag& bag, const std::string& path) {
     throw ToolError(path + ": is a directory, not a bag");
   }
   std::ifstream probe(path, std::ios::binary);
-  if (!probe) throw ToolError(path + ": cannot open (" + std::strerror(errno) + ")");
+  if (!probe) {
+    const int error = errno;
+    // A shell passes a pattern that matches no file on as it is (bash without nullglob).
+    const bool pattern = error == ENOENT && path.find_first_of("*?[") != std::string::npos;
+    throw ToolError(path + ": cannot open (" + std::strerror(error) + ")" +
+                    (pattern ? "; a pattern that matched no file" : ""));
+  }
   probe.seekg(0, std::ios::end);
   const auto size = static_cast<std::uint64_t>(probe.tellg());
   probe.close();
@@ -244,63 +246,151 @@ void openBag(rosbag::Bag& bag, const std::string& path) {
   }
 }
 
-std::string describeTopics(rosbag::Bag& bag) {
-  rosbag::View view(bag);
-  std::set<std::string> topics;
-  for (const rosbag::ConnectionInfo* c : view.getConnections()) {
-    topics.insert(c->topic + " (" + c->datatype + ")");
-  }
-  std::string text;
-  for (const auto& t : topics) text += (text.empty() ? " " : ", ") + t;
-  return topics.empty() ? std::string(" no topics") : text;
-}
+namespace {
 
-std::optional<std::string> topicType(rosbag::Bag& bag, const std::string& topic) {
-  rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{recordedName(bag, topic)}));
-  std::optional<std::string> type;
-  for (const rosbag::ConnectionInfo* c : view.getConnections()) {
-    if (type && *type != c->datatype) {
-      throw ToolError(topic + ": carries more than one type (" + *type + ", " + c->datatype + ")");
-    }
-    type = c->datatype;
-  }
-  return type;
-}
-
+/// The topic's name as recorded in `bag` ("imu" may be recorded as "/imu").
 std::string recordedName(rosbag::Bag& bag, const std::string& topic) {
   rosbag::View view(bag);
   for (const rosbag::ConnectionInfo* c : view.getConnections()) {
     if (c->topic == topic) return topic;
   }
   for (const rosbag::ConnectionInfo* c : view.getConnections()) {
-    if (withSlash(c->topic) == withSlash(topic)) return c->topic;
+    if (sameTopic(c->topic, topic)) return c->topic;
   }
   return topic;
 }
 
-std::string requireTopic(rosbag::Bag& bag, const std::string& topic, const char* role,
+rosbag::TopicQuery queryIn(rosbag::Bag& bag, const std::vector<std::string>& topics) {
+  std::vector<std::string> names;
+  for (const auto& t : topics) names.push_back(recordedName(bag, t));
+  return rosbag::TopicQuery(names);
+}
+
+std::string seconds(double s) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f s", s);
+  return text;
+}
+
+}  // namespace
+
+BagSet::BagSet(const std::vector<std::string>& paths) : paths_(paths) {
+  for (std::size_t i = 0; i < paths.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      struct stat a {};
+      struct stat b {};
+      const bool same = ::stat(paths[i].c_str(), &a) == 0 && ::stat(paths[j].c_str(), &b) == 0 &&
+                        a.st_dev == b.st_dev && a.st_ino == b.st_ino;
+      if (same) {
+        throw UsageError(paths[i] + ": given twice (the same file as " + paths[j] +
+                         "); each input is read once");
+      }
+    }
+  }
+  for (const auto& path : paths) {
+    bags_.push_back(std::make_unique<rosbag::Bag>());
+    openBag(*bags_.back(), path);
+  }
+}
+
+std::string BagSet::name() const {
+  std::string text;
+  for (const auto& p : paths_) text += (text.empty() ? "" : ", ") + p;
+  return text;
+}
+
+void BagSet::addQuery(rosbag::View& view, const std::vector<std::string>& topics) {
+  for (auto& bag : bags_) view.addQuery(*bag, queryIn(*bag, topics));
+}
+
+std::vector<std::string> BagSet::overlaps(const std::vector<std::string>& topics) {
+  struct Span {
+    ros::Time begin, end;
+    bool any;
+  };
+  std::vector<Span> spans;
+  for (auto& bag : bags_) {
+    rosbag::View view(*bag, queryIn(*bag, topics));
+    spans.push_back({view.getBeginTime(), view.getEndTime(), view.size() > 0});
+  }
+  std::vector<std::string> found;
+  for (std::size_t i = 0; i < spans.size(); ++i) {
+    for (std::size_t j = i + 1; j < spans.size(); ++j) {
+      if (!spans[i].any || !spans[j].any) continue;
+      const ros::Time from = std::max(spans[i].begin, spans[j].begin);
+      const ros::Time to = std::min(spans[i].end, spans[j].end);
+      // Split parts touch at most at one record time (a message on each side of the cut).
+      if (to > from) {
+        found.push_back(paths_[i] + " and " + paths_[j] + " share " + seconds((to - from).toSec()));
+      }
+    }
+  }
+  return found;
+}
+
+std::string describeTopics(BagSet& bags) {
+  std::set<std::string> topics;
+  for (std::size_t i = 0; i < bags.size(); ++i) {
+    rosbag::View view(bags.bag(i));
+    for (const rosbag::ConnectionInfo* c : view.getConnections()) {
+      topics.insert(c->topic + " (" + c->datatype + ")");
+    }
+  }
+  std::string text;
+  for (const auto& t : topics) text += (text.empty() ? " " : ", ") + t;
+  return topics.empty() ? std::string(" no topics") : text;
+}
+
+std::optional<std::string> topicType(BagSet& bags, const std::string& topic) {
+  std::optional<std::string> type;
+  for (std::size_t i = 0; i < bags.size(); ++i) {
+    rosbag::View view(bags.bag(i), queryIn(bags.bag(i), {topic}));
+    for (const rosbag::ConnectionInfo* c : view.getConnections()) {
+      if (type && *type != c->datatype) {
+        throw ToolError(topic + ": carries more than one type (" + *type + ", " + c->datatype +
+                        ")");
+      }
+      type = c->datatype;
+    }
+  }
+  return type;
+}
+
+std::string requireTopic(BagSet& bags, const std::string& topic, const char* role,
                          const std::vector<std::pair<std::string, std::string>>& accepted) {
   std::string names;
   for (const auto& a : accepted) names += (names.empty() ? "" : " or ") + a.first;
-  const std::string in = recordedName(bag, topic);
-  rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{in}));
-  const auto connections = view.getConnections();
-  if (connections.empty()) {
-    throw ToolError(bag.getFileName() + ": no " + role + " topic '" + topic + "' (" + names +
-                    "); the bag has:" + describeTopics(bag));
-  }
-  for (const rosbag::ConnectionInfo* c : connections) {
-    const bool ok = std::any_of(accepted.begin(), accepted.end(), [c](const auto& a) {
-      return a.first == c->datatype && a.second == c->md5sum;
-    });
-    if (!ok) {
-      throw ToolError(bag.getFileName() + ": " + role + " topic '" + in + "' carries " +
-                      c->datatype + " (md5 " + c->md5sum + "); accepted: " + names);
+  std::optional<std::string> found;
+  for (std::size_t i = 0; i < bags.size(); ++i) {
+    rosbag::View view(bags.bag(i), queryIn(bags.bag(i), {topic}));
+    for (const rosbag::ConnectionInfo* c : view.getConnections()) {
+      const bool ok = std::any_of(accepted.begin(), accepted.end(), [c](const auto& a) {
+        return a.first == c->datatype && a.second == c->md5sum;
+      });
+      if (!ok) {
+        throw ToolError(bags.paths()[i] + ": " + role + " topic '" + c->topic + "' carries " +
+                        c->datatype + " (md5 " + c->md5sum + "); accepted: " + names);
+      }
+      found = c->datatype;
     }
   }
-  if (view.size() == 0)
-    throw ToolError(bag.getFileName() + ": " + role + " topic '" + in + "' has no messages");
-  return connections.front()->datatype;
+  if (!found) {
+    throw ToolError(bags.name() + ": no " + role + " topic '" + topic + "' (" + names +
+                    "); the bag" + (bags.size() > 1 ? "s have" : " has") + ":" +
+                    describeTopics(bags));
+  }
+  if (messageCount(bags, {topic}) == 0) {
+    throw ToolError(bags.name() + ": " + role + " topic '" + topic + "' has no messages");
+  }
+  return *found;
+}
+
+std::uint64_t messageCount(BagSet& bags, const std::vector<std::string>& topics) {
+  std::uint64_t n = 0;
+  for (std::size_t i = 0; i < bags.size(); ++i) {
+    n += rosbag::View(bags.bag(i), queryIn(bags.bag(i), topics)).size();
+  }
+  return n;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -524,10 +614,14 @@ void appendRecord(std::vector<std::uint8_t>& out, const Fields& header, const vo
 /// A connection record: topic and id in the header, the connection header as data.
 void appendConnection(std::vector<std::uint8_t>& out, std::uint32_t id, const std::string& topic,
                       const std::string& datatype, const std::string& md5sum,
-                      const std::string& definition) {
+                      const std::string& definition, bool latched) {
   Fields data;
   data.add("topic", topic).add("type", datatype).add("md5sum", md5sum);
   data.add("message_definition", definition);
+  // As `rosbag record` stores a latched publisher's connection header: `rosbag play` then
+  // latches the topic, so a node that subscribes later still receives it.
+  if (latched)
+    data.add("callerid", std::string("/propagate_bag")).add("latching", std::string("1"));
   appendRecord(out, Fields().add("op", Op::kConnection).add("conn", id).add("topic", topic),
                data.bytes().data(), data.bytes().size());
 }
@@ -555,10 +649,11 @@ std::uint32_t BagOutput::connection(const std::string& topic, const char* dataty
     if (connections_[id].topic == topic) return id;
   }
   const auto id = static_cast<std::uint32_t>(connections_.size());
-  connections_.push_back({topic, datatype, md5sum, definition, {}, 0});
+  connections_.push_back({topic, datatype, md5sum, definition, {}, 0, false});
   // Also inside the chunk where it first appears, as rosbag writes it (`rosbag reindex` needs it);
   // the message that follows opens the chunk.
-  appendConnection(chunk_, id, topic, datatype, md5sum, definition);
+  connections_.back().latched = latched_.count(topic) > 0;
+  appendConnection(chunk_, id, topic, datatype, md5sum, definition, connections_.back().latched);
   return id;
 }
 
@@ -660,7 +755,7 @@ void BagOutput::close() {
   out_.clear();
   for (std::uint32_t id = 0; id < connections_.size(); ++id) {
     const Connection& c = connections_[id];
-    appendConnection(out_, id, c.topic, c.datatype, c.md5sum, c.definition);
+    appendConnection(out_, id, c.topic, c.datatype, c.md5sum, c.definition, c.latched);
   }
   for (const ChunkInfo& info : chunks_) {
     std::vector<std::uint8_t> counts;

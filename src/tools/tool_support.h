@@ -8,7 +8,9 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -69,20 +71,56 @@ void applySetting(const std::string& assignment, Parameters& p);
 /// ever sees a well-formed bag.
 void openBag(rosbag::Bag& bag, const std::string& path);
 
-/// The bag's topics with their types, " /a (type), /b (type)", for one-line error messages.
-std::string describeTopics(rosbag::Bag& bag);
+/// The input bags, read as one stream: rosbag::View merges the messages of all of them by
+/// record time (a query per bag), so the parts of a split recording (`rosbag record --split`)
+/// read as the recording itself, in whatever order they are given.
+class BagSet {
+ public:
+  /// Opens every path with openBag, so each is checked before rosbag reads any. The same file
+  /// twice under any name (a symlink, a hard link, "./a.bag") is a UsageError: each of its
+  /// messages would arrive twice.
+  explicit BagSet(const std::vector<std::string>& paths);
+  BagSet(const BagSet&) = delete;
+  BagSet& operator=(const BagSet&) = delete;
 
-/// The datatype of `topic` in the bag (a leading '/' optional on either side), or nothing.
+  const std::vector<std::string>& paths() const { return paths_; }
+  std::size_t size() const { return bags_.size(); }
+  rosbag::Bag& bag(std::size_t i) { return *bags_[i]; }
+  /// The inputs for messages: "a.bag", or "a.bag, b.bag".
+  std::string name() const;
+  /// Adds to `view` a query for `topics` in every bag (each under its spelling in that bag).
+  void addQuery(rosbag::View& view, const std::vector<std::string>& topics);
+  /// Pairs of bags whose messages on `topics` overlap in record time, described for a warning
+  /// ("a.bag and b.bag share 10.0 s"); empty for the parts of one recording.
+  std::vector<std::string> overlaps(const std::vector<std::string>& topics);
+
+ private:
+  std::vector<std::string> paths_;
+  std::vector<std::unique_ptr<rosbag::Bag>> bags_;
+};
+
+/// The bags' topics with their types, " /a (type), /b (type)", for one-line error messages.
+std::string describeTopics(BagSet& bags);
+
+/// The datatype of `topic` in the bags (a leading '/' optional on either side), or nothing.
 /// Throws ToolError when the topic carries more than one type.
-std::optional<std::string> topicType(rosbag::Bag& bag, const std::string& topic);
+std::optional<std::string> topicType(BagSet& bags, const std::string& topic);
 
-/// The topic's name as recorded ("imu" may be recorded as "/imu").
-std::string recordedName(rosbag::Bag& bag, const std::string& topic);
+/// One topic under two spellings ("imu" and "/imu": rosbag records either), without copying.
+inline bool sameTopic(const std::string& a, const std::string& b) {
+  if (a == b) return true;
+  if (!a.empty() && a[0] == '/') return a.compare(1, std::string::npos, b) == 0;
+  return !b.empty() && b[0] == '/' && b.compare(1, std::string::npos, a) == 0;
+}
 
-/// Throws ToolError unless `topic` is in the bag with one of `accepted` (datatype and MD5).
+/// Throws ToolError unless `topic` is in the bags with one of `accepted` (datatype and MD5)
+/// and has messages in one of them at least (a part of a split recording may lack a topic).
 /// Returns the datatype found.
-std::string requireTopic(rosbag::Bag& bag, const std::string& topic, const char* role,
+std::string requireTopic(BagSet& bags, const std::string& topic, const char* role,
                          const std::vector<std::pair<std::string, std::string>>& accepted);
+
+/// Messages on `topics` in the bags.
+std::uint64_t messageCount(BagSet& bags, const std::vector<std::string>& topics);
 
 template <class M>
 std::pair<std::string, std::string> typeOf() {
@@ -289,6 +327,8 @@ class BagOutput {
     ros::serialization::serialize(out, msg);
     if (chunk_.size() > threshold_) writeChunk();
   }
+  /// Marks `topic` latched, as a latched publisher's topic is recorded; before its first write.
+  void latch(const std::string& topic) { latched_.insert(topic); }
   /// Writes the last chunk and the index. A failed write (full disk) throws ToolError at once,
   /// here or in write().
   void close();
@@ -298,6 +338,7 @@ class BagOutput {
     std::string topic, datatype, md5sum, definition;
     std::vector<std::uint8_t> index;  // this chunk's (time, offset) entries, as recorded
     std::uint32_t count = 0;          // messages in this chunk
+    bool latched = false;
   };
   struct ChunkInfo {
     std::uint64_t position;
@@ -325,6 +366,7 @@ class BagOutput {
   std::vector<char> compressed_;
   ros::Time chunk_start_, chunk_end_;
   std::vector<ChunkInfo> chunks_;
+  std::set<std::string> latched_;
 };
 
 /// A stamp as seconds with nanosecond digits ("1700000000.005000000"), exact.

@@ -573,10 +573,11 @@ TEST(EvaluateBagSafety, OffsetSearchIsInterruptible) {
   EXPECT_GE(interrupted, 4);
 }
 
-// max_dt below the sample period makes every sample a gap: the state is held, nothing is
-// integrated, and by the rule in --help (at least half of the compared samples, and at least
-// 100, integrated from the one before) no method is scored: exit 3, "no recommendation" and
-// why, the table still printed, no CSV. An offset beyond the data (nothing compared) too.
+// max_dt below the sample period (1e-6 s, the least accepted) makes every sample a gap: the state
+// is held, nothing is integrated, and by the rule in --help (at least half of the compared samples,
+// and at least 100, integrated from the one before) no method is scored: exit 3, "no
+// recommendation" and why, the table still printed, no CSV. An offset beyond the data (nothing
+// compared) too.
 TEST(EvaluateBagSafety, NoRecommendationWithoutEnoughTruth) {
   TempDir dir;
   SceneBag scene;

@@ -346,7 +346,7 @@ TEST(PropagateBag, BadParametersAreRefused) {
   expectRefused(dir, dir.file("good.bag") + " --set integrator=rk5", "integrator:", 2);
   expectRefused(dir, dir.file("good.bag") + " --compression zip", "--compression zip", 2);
   expectRefused(dir, dir.file("good.bag") + " --no-such-option", "unknown option", 2);
-  expectRefused(dir, dir.file("good.bag") + " " + dir.file("good.bag"), "one input bag only", 2);
+  expectRefused(dir, dir.file("good.bag") + " " + dir.file("good.bag"), "given twice", 2);
   expectRefused(dir, dir.file("good.bag") + " --set max_dt=1e300", "max_dt", 2);
   writeText(dir.file("bad.yaml"), "max_dt: [1, 2]\n");
   expectRefused(dir, dir.file("good.bag") + " --config " + dir.file("bad.yaml"),
