@@ -26,8 +26,8 @@ TOL = 1e-12  # exp and cf4 turn a constant rate exactly; only round-off remains
 W = (0.3, -0.2, 0.5)
 # What the launch file sets, per node (the rest must show the defaults).
 GIVEN = {
-    "kin": dict(integrator="cf4", angular_velocity_stddev=0.01, fixed_frame="world_k",
-                body_frame="body_k"),
+    "kin": dict(max_future=3600.0, integrator="cf4", angular_velocity_stddev=0.01,
+                fixed_frame="world_k", body_frame="body_k"),
     "trq": dict(rate_input="none", torque_input=True, inertia=[2.0, 3.0, 4.0], publish_rate=50.0,
                 fixed_frame="world_t", body_frame="body_t"),
     "big": dict(torque_input=True, inertia=[2.0, 3.0, 4.0], publish_rate=10.0,
