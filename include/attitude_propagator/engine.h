@@ -78,7 +78,7 @@ struct EngineCounters {
   std::uint64_t gaps = 0;        ///< longer than max_dt: state held
   std::uint64_t resets = 0;      ///< the state back to the initial one: time went back, reset()
   std::uint64_t jumps_back = 0;  ///< a source's stamps went back, and persisted
-  std::uint64_t rejected_future = 0;   ///< stamped more than max_future ahead of the clock
+  std::uint64_t rejected_future = 0;  ///< stamped more than max_future ahead of the clock
   /// Dynamic: queued inputs a reset dropped (reset(), ROS time jumping back).
   std::uint64_t dropped_on_reset = 0;
   std::uint64_t failed_steps = 0;      ///< the integrator could not complete an interval

@@ -15,6 +15,7 @@
 
 #include <roslz4/lz4s.h>
 
+#include "bag_format.h"
 #include "tool_support.h"
 
 namespace attitude_propagator {
@@ -22,18 +23,7 @@ namespace tools {
 
 namespace {
 
-// Bag format 2.0: "#ROSBAG V2.0\n", then records "<header length><header><data length><data>",
-// the header a list of "<field length>name=value"; integers little-endian (the host's here).
-const char kVersionLine[] = "#ROSBAG V2.0\n";
-constexpr std::size_t kVersionLength = sizeof kVersionLine - 1;
-enum Op : std::uint8_t {
-  kMessage = 0x02,
-  kBagHeader = 0x03,
-  kIndex = 0x04,
-  kChunk = 0x05,
-  kChunkInfo = 0x06,
-  kConnection = 0x07
-};
+using namespace bag_format;  // NOLINT: the format's names are this file's vocabulary
 // Limits that keep a damaged length from asking for an absurd amount of memory. rosbag closes
 // a chunk once it passes its threshold (768 KiB unless the recorder was told otherwise), so a
 // chunk is that plus one message; record headers hold a few short fields.

@@ -18,6 +18,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "bag_check.h"
+#include "bag_format.h"
 
 namespace attitude_propagator {
 namespace tools {
@@ -546,18 +547,10 @@ void CsvFile::close() {
 
 namespace {
 
-enum Op : std::uint8_t {
-  kMessage = 0x02,
-  kBagHeader = 0x03,
-  kIndex = 0x04,
-  kChunk = 0x05,
-  kChunkInfo = 0x06,
-  kConnection = 0x07
-};
+using namespace bag_format;  // NOLINT: the format's names are this file's vocabulary
 constexpr std::uint32_t kIndexVersion = 1;
 constexpr std::size_t kBagHeaderLength = 4096;  // header and padding, as rosbag writes it
-const char kVersionLine[] = "#ROSBAG V2.0\n";
-constexpr int kLz4BlockSizeId = 6;  // rosbag's
+constexpr int kLz4BlockSizeId = 6;              // rosbag's
 
 void appendBytes(std::vector<std::uint8_t>& out, const void* data, std::size_t size) {
   const auto* p = static_cast<const std::uint8_t*>(data);
@@ -633,7 +626,7 @@ BagOutput::BagOutput(const std::string& path, const std::string& name, Compressi
     : name_(name), compression_(compression), threshold_(chunk_threshold) {
   file_ = std::fopen(path.c_str(), "wb");
   if (!file_) throw ToolError(name + ": cannot write (" + std::strerror(errno) + ")");
-  out_.assign(kVersionLine, kVersionLine + sizeof kVersionLine - 1);
+  out_.assign(kVersionLine, kVersionLine + kVersionLength);
   put(out_);
   writeHeader(0);  // rewritten by close()
   chunk_.reserve(threshold_ + (64u << 10));
@@ -774,7 +767,7 @@ void BagOutput::close() {
                  counts.data(), counts.size());
   }
   put(out_);
-  if (std::fseek(file_, sizeof kVersionLine - 1, SEEK_SET) != 0) fail(errno);
+  if (std::fseek(file_, kVersionLength, SEEK_SET) != 0) fail(errno);
   writeHeader(index_position);
   const int closed = std::fclose(file_);
   const int error = errno;

@@ -104,6 +104,11 @@ class TempDir {
   std::string path_;
 };
 
+/// The programs under test, as built (their paths come from CMake).
+inline const std::string kPropagate = PROPAGATE_BAG;
+inline const std::string kEvaluateCore = EVALUATE_BAG_CORE;
+inline const std::string kEvaluate = EVALUATE_BAG;
+
 /// No temporary output (".partial") left in the directory.
 bool noPartialFiles(const TempDir& dir);
 

@@ -27,10 +27,6 @@ using namespace bagtest;
 
 namespace {
 
-const std::string kPropagate = PROPAGATE_BAG;
-const std::string kEvaluateCore = EVALUATE_BAG_CORE;
-const std::string kEvaluate = EVALUATE_BAG;
-
 int lines(const std::string& text) { return int(std::count(text.begin(), text.end(), '\n')); }
 
 bool exists(const std::string& path) {

@@ -29,10 +29,6 @@ using namespace bagtest;
 
 namespace {
 
-const std::string kPropagate = PROPAGATE_BAG;
-const std::string kEvaluateCore = EVALUATE_BAG_CORE;
-const std::string kEvaluate = EVALUATE_BAG;
-
 ros::Time rosTime(Stamp stamp) {
   ros::Time t;
   t.fromNSec(static_cast<std::uint64_t>(stamp));

@@ -31,10 +31,6 @@ using namespace bagtest;
 
 namespace {
 
-const std::string kPropagate = PROPAGATE_BAG;
-const std::string kEvaluateCore = EVALUATE_BAG_CORE;
-const std::string kEvaluate = EVALUATE_BAG;
-
 Eigen::Quaterniond toEigen(const geometry_msgs::Quaternion& q) {
   return Eigen::Quaterniond(q.w, q.x, q.y, q.z);
 }
