@@ -1,6 +1,6 @@
 // Where in its interval an averaged rate sample is stamped (`average_stamp`), and the one rule
 // that turns start- and mid-stamped means into the end-stamped ones the integrators read
-// (docs/numerics.md §7): a sample's interval ends where the next one's begins.
+// (docs/numerics.md §3): a sample's interval ends where the next one's begins.
 #pragma once
 
 #include <array>
