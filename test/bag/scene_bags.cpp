@@ -20,6 +20,7 @@
 #include <geometry_msgs/WrenchStamped.h>
 #include <nav_msgs/Odometry.h>
 #include <rosbag/bag.h>
+#include <rosbag/view.h>
 #include <rosgraph_msgs/Clock.h>
 #include <sensor_msgs/Imu.h>
 #include <tf2_msgs/TFMessage.h>
@@ -34,13 +35,25 @@ namespace ap = attitude_propagator;
 
 namespace bagtest {
 
-namespace {
-
 ros::Time rosTime(Stamp stamp) {
   ros::Time t;
   t.fromNSec(static_cast<std::uint64_t>(stamp));
   return t;
 }
+
+std::vector<Recorded> readRecorded(const std::string& path) {
+  rosbag::Bag bag(path, rosbag::bagmode::Read);
+  std::vector<Recorded> all;
+  for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
+    Recorded r{m.getTopic(), m.getTime(), std::vector<std::uint8_t>(m.size())};
+    ros::serialization::OStream out(r.bytes.data(), m.size());
+    m.write(out);
+    all.push_back(std::move(r));
+  }
+  return all;
+}
+
+namespace {
 
 void toMsg(const Eigen::Quaterniond& q, geometry_msgs::Quaternion& m) {
   m.x = q.x(), m.y = q.y(), m.z = q.z(), m.w = q.w();

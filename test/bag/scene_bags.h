@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include <ros/time.h>
 #include <Eigen/Geometry>
 
 namespace bagtest {
@@ -17,8 +18,9 @@ using Stamp = std::int64_t;
 /// Physical time 0 of every scene: a stamp near today's epoch, so that the tools meet
 /// stamps as real bags have them.
 constexpr Stamp kStart = 1700000000LL * 1000000000LL;
-Stamp stampAt(double t);        ///< kStart + t seconds, rounded to the nanosecond
-double secondsOf(Stamp stamp);  ///< (stamp - kStart) in seconds
+Stamp stampAt(double t);         ///< kStart + t seconds, rounded to the nanosecond
+ros::Time rosTime(Stamp stamp);  ///< the same instant as a ros::Time
+double secondsOf(Stamp stamp);   ///< (stamp - kStart) in seconds
 
 /// A motion: the sensor's attitude q_WS(t) and the body rate w_S(t) that generates it.
 struct Motion {
@@ -108,6 +110,17 @@ class TempDir {
 inline const std::string kPropagate = PROPAGATE_BAG;
 inline const std::string kEvaluateCore = EVALUATE_BAG_CORE;
 inline const std::string kEvaluate = EVALUATE_BAG;
+
+/// Every message of a bag: topic, record time and serialised bytes, in rosbag's time order.
+struct Recorded {
+  std::string topic;
+  ros::Time time;
+  std::vector<std::uint8_t> bytes;
+  bool operator==(const Recorded& o) const {
+    return topic == o.topic && time == o.time && bytes == o.bytes;
+  }
+};
+std::vector<Recorded> readRecorded(const std::string& path);
 
 /// No temporary output (".partial") left in the directory.
 bool noPartialFiles(const TempDir& dir);

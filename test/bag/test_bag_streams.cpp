@@ -29,12 +29,6 @@ using namespace bagtest;
 
 namespace {
 
-ros::Time rosTime(Stamp stamp) {
-  ros::Time t;
-  t.fromNSec(static_cast<std::uint64_t>(stamp));
-  return t;
-}
-
 void toMsg(const Eigen::Vector3d& v, geometry_msgs::Vector3& m) {
   m.x = v.x();
   m.y = v.y();
@@ -122,28 +116,6 @@ std::vector<std::string> split(const std::string& in, const std::vector<double>&
   }
   for (auto& p : parts) p->close();
   return paths;
-}
-
-/// Every message of a bag: topic, record time and serialised bytes, in rosbag's time order.
-struct Recorded {
-  std::string topic;
-  ros::Time time;
-  std::vector<std::uint8_t> bytes;
-  bool operator==(const Recorded& o) const {
-    return topic == o.topic && time == o.time && bytes == o.bytes;
-  }
-};
-
-std::vector<Recorded> readRecorded(const std::string& path) {
-  rosbag::Bag bag(path, rosbag::bagmode::Read);
-  std::vector<Recorded> all;
-  for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
-    Recorded r{m.getTopic(), m.getTime(), std::vector<std::uint8_t>(m.size())};
-    ros::serialization::OStream out(r.bytes.data(), m.size());
-    m.write(out);
-    all.push_back(std::move(r));
-  }
-  return all;
 }
 
 std::map<std::string, std::size_t> topicCounts(const std::string& path) {
