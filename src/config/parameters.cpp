@@ -156,6 +156,7 @@ void checkScalars(const Parameters& p) {
   }
   requireFrameName("fixed_frame", p.fixed_frame);
   requireFrameName("body_frame", p.body_frame);
+  requireOneOf("world_frame", p.world_frame, {"enu", "nwu", "ned"});
   if (p.fixed_frame == p.body_frame) {
     fail("body_frame", "equals fixed_frame '" + p.fixed_frame +
                            "'; accepted: a frame id different from fixed_frame");
@@ -257,7 +258,10 @@ NodeConfig validateParameters(const Parameters& p) {
                                                 : RateInput::None;
   config.torque_input = p.torque_input;
   config.torque_frame = p.torque_frame == "fixed" ? TorqueFrame::Fixed : TorqueFrame::Body;
-  const Eigen::Quaterniond q0_WB = initialOrientation(p.initial_orientation);
+  config.world = worldConventionFromName(p.world_frame);
+  // The propagators work in REP-103's axes; the initial state is given in world_frame's.
+  const Eigen::Quaterniond q0_WB =
+      attitudeFromConvention(config.world, initialOrientation(p.initial_orientation));
 
   TimePolicy policy;
   policy.max_dt = p.max_dt;
@@ -306,7 +310,7 @@ NodeConfig validateParameters(const Parameters& p) {
   dynamic.time_policy = policy;
   dynamic.initial.q_WB = q0_WB;
   const auto& w = p.initial_angular_velocity;
-  dynamic.initial.w_B = Eigen::Vector3d(w[0], w[1], w[2]);
+  dynamic.initial.w_B = bodyVectorFromConvention(config.world, Eigen::Vector3d(w[0], w[1], w[2]));
   try {
     // What the propagator refuses at construction (an initial state its exact motion cannot
     // be evaluated from) is refused here, before the node starts.

@@ -9,9 +9,9 @@
 
 #include "attitude_propagator/AttitudeState.h"
 #include "attitude_propagator/limits.h"
+#include "attitude_propagator/messages/conversions.h"
+#include "attitude_propagator/messages/imu_input.h"
 #include "attitude_propagator/orientation_covariance.h"
-#include "attitude_propagator/ros/conversions.h"
-#include "attitude_propagator/ros/imu_input.h"
 #include "attitude_propagator/ros/log_text.h"
 #include "attitude_propagator/ros/parameter_loader.h"
 
@@ -66,14 +66,6 @@ void decodeInto(const topic_tools::ShapeShifter& message, std::vector<std::uint8
   ros::serialization::deserialize(read, out);
 }
 
-Stamp toStamp(const ros::Time& time) { return static_cast<Stamp>(time.toNSec()); }
-
-ros::Time toRosTime(Stamp stamp) {
-  ros::Time time;
-  time.fromNSec(static_cast<std::uint64_t>(stamp));
-  return time;
-}
-
 /// An IMU message kept with an input until the engine applies it, and its sensor mount.
 struct ImuPayload {
   sensor_msgs::Imu::ConstPtr msg;
@@ -89,8 +81,10 @@ AttitudePropagatorRos::AttitudePropagatorRos(ros::NodeHandle nh, ros::NodeHandle
       config_(loadParameters(pnh)),
       updater_(nh, pnh, pnh.getNamespace()) {
   engine_ = std::make_unique<AttitudeEngine>(engineConfig(config_), *this);
+  rebuildEncoder();
   sim_time_ = ros::Time::isSimTime();
   advertise();
+  publishConventionFrames();
   subscribe();
   updater_.setHardwareID(config_.parameters.body_frame + " from " +
                          (config_.rate_input == RateInput::Imu     ? imu_nh_.resolveName("data_raw")
@@ -118,6 +112,9 @@ void AttitudePropagatorRos::advertise() {
   // Published as shared pointers so subscribers in the same nodelet manager get them without
   // a copy. The tf publisher is our own (tf2_ros::TransformBroadcaster publishes by value).
   tf_pub_ = nh_.advertise<tf2_msgs::TFMessage>("/tf", kOutputQueueSize);
+  if (config_.world != WorldConvention::Enu) {
+    tf_static_pub_ = nh_.advertise<tf2_msgs::TFMessage>("/tf_static", 1, true);
+  }
   imu_pub_ = imu_nh_.advertise<sensor_msgs::Imu>("data", kOutputQueueSize);
   state_pub_ = nh_.advertise<AttitudeState>("attitude_state", kOutputQueueSize);
   reset_srv_ = pnh_.advertiseService("reset", &AttitudePropagatorRos::onReset, this);
@@ -165,6 +162,18 @@ void AttitudePropagatorRos::watchTf() {
   tf_static_watch_sub_ = nh_.subscribe<tf2_msgs::TFMessage, const TfEvent&>(
       "/tf_static", kSparseQueueSize,
       boost::function<void(const TfEvent&)>([this](const TfEvent& e) { onTfSeen(e, true); }));
+}
+
+void AttitudePropagatorRos::rebuildEncoder() {
+  encoder_.emplace(config_, engine_->modelName(), integratorName(engine_->integrator()));
+}
+
+void AttitudePropagatorRos::publishConventionFrames() {
+  if (!tf_static_pub_) return;
+  auto msg = boost::make_shared<tf2_msgs::TFMessage>();
+  // Stamped now, as tf2_ros's static broadcaster does: a static transform holds at every time.
+  msg->transforms = encoder_->conventionFrames(ros::Time::now());
+  tf_static_pub_.publish(msg);
 }
 
 void AttitudePropagatorRos::writeResolved() const {
@@ -472,24 +481,10 @@ void AttitudePropagatorRos::onWatchdog(const ros::WallTimerEvent&) {
 // ---------------------------------------------------------------------------------------------
 
 void AttitudePropagatorRos::publishState(const EngineState& state) {
-  const ros::Time stamp = toRosTime(state.stamp);
-  if (config_.parameters.publish_tf) publishTf(stamp, state.q_WB);
+  if (config_.parameters.publish_tf) publishTf(state);
   if (state_pub_.getNumSubscribers() == 0) return;
-
-  const auto& p = config_.parameters;
   auto msg = boost::make_shared<AttitudeState>();
-  msg->header.stamp = stamp;
-  msg->header.frame_id = p.fixed_frame;
-  msg->child_frame_id = p.body_frame;
-  toMsg(state.q_WB, msg->orientation);
-  covarianceToMsg(state.P_B, msg->orientation_covariance);
-  toMsg(state.w_B, msg->angular_velocity);
-  toMsg(state.M_B, msg->angular_momentum);
-  msg->kinetic_energy = state.kinetic_energy;
-  msg->norm_error = state.norm_error;
-  msg->model = engine_->modelName();
-  msg->integrator = integratorName(engine_->integrator());
-  msg->steps = state.steps;
+  encoder_->state(state, *msg);
   state_pub_.publish(msg);
 }
 
@@ -622,34 +617,19 @@ void AttitudePropagatorRos::resumeTf(const char* why) {
            (p.reverse_tf ? p.fixed_frame : p.body_frame).c_str());
 }
 
-void AttitudePropagatorRos::publishTf(const ros::Time& stamp, const Eigen::Quaterniond& q_WB) {
+void AttitudePropagatorRos::publishTf(const EngineState& state) {
   if (tf_stopped_) return;
-  const auto& p = config_.parameters;
   auto msg = boost::make_shared<tf2_msgs::TFMessage>();
   msg->transforms.resize(1);
-  geometry_msgs::TransformStamped& t = msg->transforms[0];
-  t.header.stamp = stamp;
-  if (p.reverse_tf) {
-    t.header.frame_id = p.body_frame;
-    t.child_frame_id = p.fixed_frame;
-    toMsg(q_WB.conjugate(), t.transform.rotation);
-  } else {
-    t.header.frame_id = p.fixed_frame;
-    t.child_frame_id = p.body_frame;
-    toMsg(q_WB, t.transform.rotation);
-  }
+  encoder_->transform(state, msg->transforms[0]);
   tf_pub_.publish(msg);
 }
 
 void AttitudePropagatorRos::publishImu(const sensor_msgs::Imu& input, const EngineState& state,
                                        const Eigen::Quaterniond& q_BS) {
   if (imu_pub_.getNumSubscribers() == 0) return;
-  auto msg = boost::make_shared<sensor_msgs::Imu>(input);
-  msg->header.stamp = toRosTime(state.stamp);
-  // REP-145: the orientation of the IMU's own frame; its error covariance in that frame.
-  toMsg(state.q_WB * q_BS, msg->orientation);
-  const Eigen::Matrix3d C_SB = q_BS.conjugate().toRotationMatrix();
-  covarianceToMsg(rotateCovariance(state.P_B, C_SB), msg->orientation_covariance);
+  auto msg = boost::make_shared<sensor_msgs::Imu>();
+  encoder_->imu(input, state, q_BS, *msg);
   imu_pub_.publish(msg);
 }
 
@@ -677,8 +657,10 @@ bool AttitudePropagatorRos::onSetState(SetState::Request& request, SetState::Res
       response.message = "no ROS time yet (use_sim_time without /clock): give header.stamp";
       return;
     }
-    const std::string error = engine_->setState(toStamp(stamp), toEigen(request.orientation),
-                                                toEigen(request.angular_velocity));
+    // Given in world_frame's axes, as the state is published.
+    const std::string error = engine_->setState(
+        toStamp(stamp), attitudeFromConvention(config_.world, toEigen(request.orientation)),
+        bodyVectorFromConvention(config_.world, toEigen(request.angular_velocity)));
     response.success = error.empty();
     response.message =
         error.empty() ? "state set at " + std::to_string(stamp.toSec()) + " s" : error;
@@ -705,7 +687,10 @@ void AttitudePropagatorRos::onReconfigure(AttitudePropagatorConfig& live, std::u
     try {
       NodeConfig next = validateParameters(p);
       if (engine_changes) error = engine_->reconfigure(engineConfig(next));
-      if (error.empty()) config_ = std::move(next);
+      if (error.empty()) {
+        config_ = std::move(next);
+        rebuildEncoder();
+      }
     } catch (const std::invalid_argument& e) {
       error = e.what();
     }

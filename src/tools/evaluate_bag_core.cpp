@@ -32,7 +32,7 @@
 #include "alignment.h"
 #include "attitude_propagator/engine.h"
 #include "attitude_propagator/quaternion.h"
-#include "attitude_propagator/ros/conversions.h"
+#include "attitude_propagator/messages/conversions.h"
 #include "tool_support.h"
 
 namespace attitude_propagator {

@@ -19,6 +19,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <geometry_msgs/Twist.h>
@@ -35,9 +36,9 @@
 
 #include "attitude_propagator/AttitudeState.h"
 #include "attitude_propagator/engine.h"
-#include "attitude_propagator/orientation_covariance.h"
-#include "attitude_propagator/ros/conversions.h"
-#include "attitude_propagator/ros/imu_input.h"
+#include "attitude_propagator/messages/conversions.h"
+#include "attitude_propagator/messages/imu_input.h"
+#include "attitude_propagator/messages/outputs.h"
 #include "tool_support.h"
 
 namespace attitude_propagator {
@@ -252,21 +253,10 @@ class Writer {
   virtual void close() = 0;
 };
 
-/// The state and tf messages as written, but for stamp and values: frames, model, integrator.
-struct StateMessages {
-  AttitudeState state;
-  tf2_msgs::TFMessage tf;
-  StateMessages(const Parameters& p, const AttitudeEngine& engine) {
-    state.header.frame_id = p.fixed_frame;
-    state.child_frame_id = p.body_frame;
-    state.model = engine.modelName();
-    state.integrator = integratorName(engine.integrator());
-    tf.transforms.resize(1);
-    auto& t = tf.transforms[0];
-    t.header.frame_id = p.reverse_tf ? p.body_frame : p.fixed_frame;
-    t.child_frame_id = p.reverse_tf ? p.fixed_frame : p.body_frame;
-  }
-};
+/// The node's output encoding for this run's configuration and integrator.
+OutputEncoder outputEncoder(const NodeConfig& config, const AttitudeEngine& engine) {
+  return OutputEncoder(config, engine.modelName(), integratorName(engine.integrator()));
+}
 
 /// Bytes the output takes per state and per republished IMU message (an estimate for the
 /// free-space check: the messages as they will be written, with their frame names).
@@ -283,73 +273,70 @@ double recordBytes(const M& msg) {
   return 4 + 38 + 4 + ros::serialization::serializationLength(msg) + 12;
 }
 
-RecordSizes bagRecordSizes(const Options& o, const Parameters& p, const AttitudeEngine& engine) {
-  const StateMessages m(p, engine);
+RecordSizes bagRecordSizes(const Options& o, const NodeConfig& config,
+                           const AttitudeEngine& engine) {
+  const OutputEncoder encoder = outputEncoder(config, engine);
+  AttitudeState state;
+  encoder.state(EngineState{}, state);
+  tf2_msgs::TFMessage tf;
+  tf.transforms.resize(1);
+  encoder.transform(EngineState{}, tf.transforms[0]);
   sensor_msgs::Imu imu;
   imu.header.frame_id = "imu_link";
   const double shrink = o.compression == BagOutput::Compression::Lz4 ? 0.25 : 1.0;
-  return {shrink * (recordBytes(m.state) + (p.publish_tf ? recordBytes(m.tf) : 0.0)),
+  return {shrink * (recordBytes(state) + (config.parameters.publish_tf ? recordBytes(tf) : 0.0)),
           shrink * recordBytes(imu)};
 }
 
 /// attitude_state, imu/data and /tf as the node publishes them, into a bag.
 class BagWriter : public Writer {
  public:
-  BagWriter(const std::string& path, const Options& o, const Parameters& p,
+  BagWriter(const std::string& path, const Options& o, const NodeConfig& config,
             const AttitudeEngine& engine)
       : bag_(path, o.output, o.compression),
-        publish_tf_(p.publish_tf),
-        reverse_tf_(p.reverse_tf),
+        encoder_(outputEncoder(config, engine)),
+        publish_tf_(config.parameters.publish_tf),
         state_topic_(o.state_out),
         imu_topic_(o.imu_out),
         tf_topic_(o.tf_out),
         tf_static_topic_(o.tf_static_out) {
     bag_.latch(tf_static_topic_);
-    const StateMessages m(p, engine);
-    state_ = m.state;
-    tf_ = m.tf;
+    tf_.transforms.resize(1);
   }
 
   void state(const EngineState& s, const ros::Time& record) override {
-    const ros::Time stamp = toRosTime(s.stamp);
+    if (!static_written_ && !encoder_.conventionFrames(record).empty()) {
+      mounts(tf2_msgs::TFMessage(), record);
+    }
     if (publish_tf_) {
-      auto& t = tf_.transforms[0];
-      t.header.stamp = stamp;
-      toMsg(reverse_tf_ ? s.q_WB.conjugate() : s.q_WB, t.transform.rotation);
+      encoder_.transform(s, tf_.transforms[0]);
       bag_.write(tf_topic_, record, tf_);
     }
-    state_.header.stamp = stamp;
-    toMsg(s.q_WB, state_.orientation);
-    covarianceToMsg(s.P_B, state_.orientation_covariance);
-    toMsg(s.w_B, state_.angular_velocity);
-    toMsg(s.M_B, state_.angular_momentum);
-    state_.kinetic_energy = s.kinetic_energy;
-    state_.norm_error = s.norm_error;
-    state_.steps = s.steps;
+    encoder_.state(s, state_);
     bag_.write(state_topic_, record, state_);
   }
 
   void imu(const sensor_msgs::Imu& input, const EngineState& s, const Eigen::Quaterniond& q_BI,
            const ros::Time& record) override {
-    // As the node: the input with the orientation of the IMU's own frame and its covariance.
-    imu_ = input;
-    imu_.header.stamp = toRosTime(s.stamp);
-    toMsg(s.q_WB * q_BI, imu_.orientation);
-    covarianceToMsg(rotateCovariance(s.P_B, q_BI.conjugate().toRotationMatrix()),
-                    imu_.orientation_covariance);
+    encoder_.imu(input, s, q_BI, imu_);
     bag_.write(imu_topic_, record, imu_);
   }
 
+  /// The mounts, with world_frame's named axes: a latched topic keeps only its last message.
   void mounts(const tf2_msgs::TFMessage& transforms, const ros::Time& record) override {
-    bag_.write(tf_static_topic_, record, transforms);
+    tf2_msgs::TFMessage all = transforms;
+    for (const auto& t : encoder_.conventionFrames(record)) all.transforms.push_back(t);
+    bag_.write(tf_static_topic_, record, all);
+    static_written_ = true;
   }
 
   void close() override { bag_.close(); }
 
  private:
   BagOutput bag_;
+  OutputEncoder encoder_;
   bool publish_tf_;
-  bool reverse_tf_;
+  bool static_written_ = false;
   std::string state_topic_, imu_topic_, tf_topic_, tf_static_topic_;
   AttitudeState state_;
   tf2_msgs::TFMessage tf_;
@@ -359,7 +346,8 @@ class BagWriter : public Writer {
 /// One line per state.
 class CsvWriter : public Writer {
  public:
-  CsvWriter(const std::string& path, const std::string& name) : file_(path, name) {
+  CsvWriter(const std::string& path, const std::string& name, OutputEncoder encoder)
+      : file_(path, name), encoder_(std::move(encoder)) {
     std::fputs(
         "stamp,qx,qy,qz,qw,wx,wy,wz,P_xx,P_xy,P_xz,P_yx,P_yy,P_yz,P_zx,P_zy,P_zz,norm_error,"
         "steps,Mx,My,Mz,kinetic_energy\n",
@@ -367,7 +355,7 @@ class CsvWriter : public Writer {
   }
 
   void state(const EngineState& s, const ros::Time&) override {
-    const int n = format(s, row_, sizeof row_);
+    const int n = format(encoder_.inWorldAxes(s), row_, sizeof row_);
     std::fwrite(row_, 1, static_cast<std::size_t>(std::min<int>(n, sizeof row_ - 1)), file_.get());
     file_.check();
   }
@@ -406,6 +394,7 @@ class CsvWriter : public Writer {
   }
 
   CsvFile file_;
+  OutputEncoder encoder_;
   static constexpr std::size_t kRowSize = 1024;
   char row_[kRowSize];
 };
@@ -533,8 +522,8 @@ std::vector<std::string> BagPropagator::checkTopics() {
 }
 
 double BagPropagator::estimatedBytes() {
-  const RecordSizes sizes = o_.csv ? RecordSizes{CsvWriter::rowBytes(), 0.0}
-                                   : bagRecordSizes(o_, config_.parameters, *engine_);
+  const RecordSizes sizes =
+      o_.csv ? RecordSizes{CsvWriter::rowBytes(), 0.0} : bagRecordSizes(o_, config_, *engine_);
   // The output's size: a state per rate input (kinematic) or per grid stamp (dynamic), and
   // each IMU input republished; the bag's header and index besides.
   const std::uint64_t rates = rates_.empty() ? 0 : messageCount(bags_, {rates_});
@@ -556,9 +545,9 @@ void BagPropagator::run(const std::string& path) {
                  overlap.c_str());
   }
   if (o_.csv) {
-    writer_ = std::make_unique<CsvWriter>(path, o_.output);
+    writer_ = std::make_unique<CsvWriter>(path, o_.output, outputEncoder(config_, *engine_));
   } else {
-    writer_ = std::make_unique<BagWriter>(path, o_, config_.parameters, *engine_);
+    writer_ = std::make_unique<BagWriter>(path, o_, config_, *engine_);
   }
   rosbag::View view;
   bags_.addQuery(view, topics);

@@ -22,6 +22,7 @@
 
 #include "attitude_propagator/config/parameters.h"
 #include "attitude_propagator/engine.h"
+#include "attitude_propagator/messages/conversions.h"
 
 namespace attitude_propagator {
 namespace tools {
@@ -167,12 +168,6 @@ inline void decodeInto(const rosbag::MessageInstance& m, std::vector<std::uint8_
   ros::serialization::deserialize(read, out);
 }
 
-inline Stamp toStamp(const ros::Time& time) { return static_cast<Stamp>(time.toNSec()); }
-inline ros::Time toRosTime(Stamp stamp) {
-  ros::Time time;
-  time.fromNSec(static_cast<std::uint64_t>(stamp));
-  return time;
-}
 /// A header stamp, or the record time for an unstamped message (the node's receipt time).
 inline Stamp stampOr(const ros::Time& header, const ros::Time& record) {
   return toStamp(header.isZero() ? record : header);

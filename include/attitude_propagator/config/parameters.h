@@ -16,6 +16,7 @@
 #include "attitude_propagator/integrator.h"
 #include "attitude_propagator/kinematic_propagator.h"
 #include "attitude_propagator/limits.h"
+#include "attitude_propagator/world_convention.h"
 
 namespace attitude_propagator {
 
@@ -38,6 +39,7 @@ struct Parameters {
   std::vector<double> initial_angular_velocity{0.0, 0.0, 0.0};
   std::string fixed_frame = "world";
   std::string body_frame = "base_link";
+  std::string world_frame = "enu";
   bool publish_tf = true;
   bool reverse_tf = false;
   double publish_rate = 100.0;
@@ -76,12 +78,17 @@ void forEachParameter(P& p, F&& f) {
     "3 principal moments, or 6 values Ixx Iyy Izz Ixy Ixz Iyz; moments in [1e-15, 1e15]; "
     "empty: none");
   f("initial_orientation", p.initial_orientation, "",
-    "q_WB at the first stamp and after a reset, [x, y, z, w] (normalised; any finite scale)");
+    "q_WB at the first stamp and after a reset, [x, y, z, w] in `world_frame`'s axes "
+    "(normalised; any finite scale)");
   f("initial_angular_velocity", p.initial_angular_velocity, "rad/s",
-    "body rate at the first stamp (dynamic model), [x, y, z] in the body frame; magnitude at most "
-    "1e5");
+    "body rate at the first stamp (dynamic model), [x, y, z] in `world_frame`'s body axes; "
+    "magnitude at most 1e5");
   f("fixed_frame", p.fixed_frame, "", "parent frame of the published transform");
   f("body_frame", p.body_frame, "", "child frame; IMU rates in another frame are rotated");
+  f("world_frame", p.world_frame, "",
+    "axes of the attitudes given and published: `enu` (REP-103, body FLU), `nwu` (body FLU) or "
+    "`ned` (body FRD); other than enu, messages name `<fixed_frame>_nwu`/`_ned` and "
+    "`<body_frame>_frd`, joined to the REP-103 frames on /tf_static");
   f("publish_tf", p.publish_tf, "", "publish the transform on /tf");
   f("reverse_tf", p.reverse_tf, "",
     "publish `body_frame → fixed_frame` instead (for a tree rooted at the body)");
@@ -141,9 +148,10 @@ struct NodeConfig {
   RateInput rate_input = RateInput::Imu;
   bool torque_input = false;
   TorqueFrame torque_frame = TorqueFrame::Body;
-  KinematicConfig kinematic;             ///< when model == Kinematic
-  std::optional<DynamicConfig> dynamic;  ///< when model == Dynamic
-  Parameters parameters;                 ///< the values as given (frames, rates, flags)
+  WorldConvention world = WorldConvention::Enu;  ///< the axes of the attitudes given and published
+  KinematicConfig kinematic;                     ///< when model == Kinematic
+  std::optional<DynamicConfig> dynamic;          ///< when model == Dynamic
+  Parameters parameters;                         ///< the values as given (frames, rates, flags)
 };
 
 /// Checks every parameter and resolves `model` (auto: dynamic when inertia is given).

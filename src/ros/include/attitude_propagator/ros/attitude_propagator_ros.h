@@ -42,6 +42,7 @@
 #include "attitude_propagator/SetState.h"
 #include "attitude_propagator/config/parameters.h"
 #include "attitude_propagator/engine.h"
+#include "attitude_propagator/messages/outputs.h"
 
 namespace attitude_propagator {
 
@@ -137,7 +138,11 @@ class AttitudePropagatorRos : public EngineSink {
   void resumeTf(const char* why);
 
   // Outputs.
-  void publishTf(const ros::Time& stamp, const Eigen::Quaterniond& q_WB);
+  void publishTf(const EngineState& state);
+  /// The encoder for the configuration and integrator in force.
+  void rebuildEncoder();
+  /// world_frame's named axes on /tf_static (none for enu).
+  void publishConventionFrames();
   void publishImu(const sensor_msgs::Imu& input, const EngineState& state,
                   const Eigen::Quaterniond& q_BS);
 
@@ -160,6 +165,7 @@ class AttitudePropagatorRos : public EngineSink {
   ros::NodeHandle imu_nh_;  // "imu" under nh_: `imu:=other` moves imu/data_raw and imu/data
   NodeConfig config_;
   std::unique_ptr<AttitudeEngine> engine_;
+  std::optional<OutputEncoder> encoder_;  // rebuilt when the frames or the integrator change
   bool sim_time_ = false;
 
   // Sensor mount (frame of the rate messages -> body), cached.
@@ -190,6 +196,7 @@ class AttitudePropagatorRos : public EngineSink {
   ros::WallTime last_tf_conflict_;    // the latest other parent of our child frame seen on /tf
   std::uint64_t tf_resumes_ = 0;
   ros::Publisher tf_pub_;
+  ros::Publisher tf_static_pub_;
   ros::Publisher imu_pub_;
   ros::Publisher state_pub_;
   ros::ServiceServer reset_srv_;

@@ -1,4 +1,4 @@
-#include "attitude_propagator/ros/conversions.h"
+#include "attitude_propagator/messages/conversions.h"
 
 #include <cmath>
 

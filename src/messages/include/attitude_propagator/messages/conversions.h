@@ -4,10 +4,14 @@
 
 #include <boost/array.hpp>
 
+#include <ros/time.h>
+
 #include <geometry_msgs/Quaternion.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <geometry_msgs/Vector3.h>
 #include <Eigen/Geometry>
+
+#include "attitude_propagator/source_timeline.h"
 
 namespace attitude_propagator {
 
@@ -26,5 +30,13 @@ void covarianceToMsg(const Eigen::Matrix3d& P, boost::array<double, 9>& out);
 
 bool allFinite(const geometry_msgs::Vector3& v);
 bool allFinite(const boost::array<double, 9>& c);
+
+/// ROS time and the engine's stamps (integer nanoseconds).
+inline Stamp toStamp(const ros::Time& time) { return static_cast<Stamp>(time.toNSec()); }
+inline ros::Time toRosTime(Stamp stamp) {
+  ros::Time time;
+  time.fromNSec(static_cast<std::uint64_t>(stamp));
+  return time;
+}
 
 }  // namespace attitude_propagator

@@ -1,6 +1,6 @@
-#include "attitude_propagator/ros/imu_input.h"
+#include "attitude_propagator/messages/imu_input.h"
 
-#include "attitude_propagator/ros/conversions.h"
+#include "attitude_propagator/messages/conversions.h"
 
 namespace attitude_propagator {
 

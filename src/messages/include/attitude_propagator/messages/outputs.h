@@ -1,0 +1,56 @@
+// The node's outputs as messages: the one encoding of AttitudeState, the republished
+// sensor_msgs/Imu and the transform, shared by the node and propagate_bag, with the frames
+// and axes `world_frame` chooses (docs/conventions.md §2.2).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <geometry_msgs/TransformStamped.h>
+#include <sensor_msgs/Imu.h>
+
+#include <Eigen/Geometry>
+
+#include "attitude_propagator/AttitudeState.h"
+#include "attitude_propagator/config/parameters.h"
+#include "attitude_propagator/engine.h"
+
+namespace attitude_propagator {
+
+class OutputEncoder {
+ public:
+  /// `model` and `integrator`: the names AttitudeState carries (resolved, never auto).
+  OutputEncoder(const NodeConfig& config, std::string model, std::string integrator);
+
+  /// The frame ids of AttitudeState: fixed_frame and body_frame, suffixed for the convention.
+  const std::string& stateFixedFrame() const { return state_fixed_; }
+  const std::string& stateBodyFrame() const { return state_body_; }
+
+  /// The engine's state (REP-103 axes) in world_frame's axes: what AttitudeState and
+  /// propagate_bag's CSV carry.
+  EngineState inWorldAxes(const EngineState& s) const;
+  /// The state in world_frame's axes, stamped at its own stamp.
+  void state(const EngineState& s, AttitudeState& out) const;
+  /// fixed_frame → body_frame (body_frame → fixed_frame with reverse_tf) in REP-103's axes:
+  /// tf's tree is ROS's, whatever the messages' axes.
+  void transform(const EngineState& s, geometry_msgs::TransformStamped& out) const;
+  /// The input message with the orientation of its own frame (REP-145) in world_frame's fixed
+  /// axes, its error covariance in that frame; `q_BS` is the mount it was rotated by.
+  void imu(const sensor_msgs::Imu& input, const EngineState& s, const Eigen::Quaterniond& q_BS,
+           sensor_msgs::Imu& out) const;
+  /// The static transforms that name the convention's axes in tf: fixed_frame →
+  /// fixed_frame_nwu or _ned, body_frame → body_frame_frd. None for enu.
+  std::vector<geometry_msgs::TransformStamped> conventionFrames(const ros::Time& stamp) const;
+
+ private:
+  WorldConvention world_;
+  std::string fixed_;
+  std::string body_;
+  bool reverse_tf_;
+  std::string state_fixed_;
+  std::string state_body_;
+  std::string model_;
+  std::string integrator_;
+};
+
+}  // namespace attitude_propagator
