@@ -133,6 +133,59 @@ TEST(PropagateBag, CsvHoldsTheSameStates) {
   }
 }
 
+// world_frame ned, as the node: the initial attitude given in NED/FRD, every state in NED/FRD
+// (frames world_ned, base_link_frd), /tf in REP-103's axes (world -> base_link, the closed
+// form itself), the named axes on /tf_static, the CSV in the states' axes. NED from ENU and FLU
+// from FRD written out as quaternions: a half turn about (x + y)/√2 and about x.
+TEST(PropagateBag, WorldFrameNedGivesEveryStateInNedAndFrd) {
+  TempDir dir;
+  SceneBag scene;
+  scene.motion = coning();
+  scene.duration = 3.0;
+  scene.truth = TruthType::None;
+  const Written w = writeSceneBag(dir.file("in.bag"), scene);
+  const Eigen::Quaterniond q_NE(0.0, std::sqrt(0.5), std::sqrt(0.5), 0.0);
+  const Eigen::Quaterniond q_FB(0.0, 1.0, 0.0, 0.0);
+  auto ned = [&](double t) { return q_NE * scene.motion.attitude(t) * q_FB; };
+  const std::string common = kPropagate + " " + dir.file("in.bag") +
+                             " --set integrator=cf4 --set world_frame=ned --no-progress" +
+                             setQuaternion("initial_orientation", ned(0.0));
+  const RunResult r = run(common + " -o " + dir.file("out.bag"));
+  ASSERT_EQ(r.status, 0) << r.output;
+  const Output out = readOutput(dir.file("out.bag"));
+  ASSERT_EQ(out.states.size(), w.rate_stamps.size());
+  EXPECT_EQ(out.states.front().header.frame_id, "world_ned");
+  EXPECT_EQ(out.states.front().child_frame_id, "base_link_frd");
+  EXPECT_LT(largestError(out.states, ned), 1e-6);
+  EXPECT_EQ(out.count.at("/tf_static"), 1u);
+  for (const auto& m : out.tf) {
+    const auto& t = m.transforms.at(0);
+    if (t.child_frame_id != "base_link") continue;  // the /tf_static message
+    EXPECT_EQ(t.header.frame_id, "world");
+    const double s = secondsOf(static_cast<Stamp>(t.header.stamp.toNSec()));
+    EXPECT_LT(ap::rotationAngle(toEigen(t.transform.rotation), scene.motion.attitude(s)), 1e-6);
+  }
+  rosbag::Bag bag(dir.file("out.bag"), rosbag::bagmode::Read);
+  const auto statics = (*rosbag::View(bag, rosbag::TopicQuery("/tf_static")).begin())
+                           .instantiate<tf2_msgs::TFMessage>();
+  ASSERT_TRUE(statics);
+  std::map<std::string, std::string> parent_of;
+  for (const auto& t : statics->transforms) parent_of[t.child_frame_id] = t.header.frame_id;
+  EXPECT_EQ(parent_of["world_ned"], "world");
+  EXPECT_EQ(parent_of["base_link_frd"], "base_link");
+  // The republished IMU message: its own frame's orientation in NED.
+  const double t0 = secondsOf(static_cast<Stamp>(out.imu.front().header.stamp.toNSec()));
+  EXPECT_LT(
+      ap::rotationAngle(toEigen(out.imu.front().orientation), q_NE * scene.motion.attitude(t0)),
+      1e-6);
+  const RunResult csv = run(common + " --csv " + dir.file("out.csv"));
+  ASSERT_EQ(csv.status, 0) << csv.output;
+  const auto rows = readCsv(dir.file("out.csv"));
+  ASSERT_EQ(rows.size(), out.states.size());
+  EXPECT_EQ(std::stod(field(rows.back(), "qw")), out.states.back().orientation.w);
+  EXPECT_EQ(std::stod(field(rows.back(), "qx")), out.states.back().orientation.x);
+}
+
 // Interval-averaged samples (means over the period each closes), stamps jittered by 10 us RMS
 // and 5 % of the samples lost: cf4 with rate_samples interval_average, its gap fill and the
 // sensor-clock stamp filter. Every state is compared with the closed form at its stamp; a

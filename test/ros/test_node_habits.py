@@ -3,7 +3,10 @@
 use next to the parameters as given (`auto`), also after a live change of the integrator;
 diagnostics turn WARN naming the cause when most rate samples of a second are lost (max_dt
 below the input period) and OK again when it is fixed; a message's strings reach the log cut
-to 64 bytes with their length, and without control characters."""
+to 64 bytes with their length, and without control characters; with world_frame ned the
+state comes in NED/FRD, ~set_state takes it so, and tf gives the same between the named
+frames."""
+import math
 import subprocess
 import threading
 import unittest
@@ -17,7 +20,8 @@ from geometry_msgs.msg import Vector3Stamped
 from rosgraph_msgs.msg import Log
 from sensor_msgs.msg import Imu
 
-from ap_test_util import (Node, NodeDiagnostics, RosoutLines, make_imu, wait_connected,
+from ap_test_util import (Node, NodeDiagnostics, RosoutLines, as_tuple, axis_angle, lookup,
+                          make_imu, make_tf_buffer, qmul, rotation_angle, wait_connected,
                           wait_for)
 
 HAB = "/hab/attitude_propagator"
@@ -59,7 +63,7 @@ class NodeHabitsTest(unittest.TestCase):
         rospy.init_node("test_node_habits")
         cls.rosout = RosoutLines()
         cls.status = NodeDiagnostics(HAB)
-        cls.nodes = {ns: Node(ns) for ns in ("hab", "habd")}
+        cls.nodes = {ns: Node(ns) for ns in ("hab", "habd", "habn")}
         for node in cls.nodes.values():
             node.wait_ready()
         cls.imu = rospy.Publisher("/hab/imu/data_raw", Imu, queue_size=1000)
@@ -67,6 +71,30 @@ class NodeHabitsTest(unittest.TestCase):
         wait_connected(cls.imu)
         wait_connected(cls.bias)
         cls.client = Client(HAB, timeout=30.0)
+        cls.imu_ned = rospy.Publisher("/habn/imu/data_raw", Imu, queue_size=1000)
+        wait_connected(cls.imu_ned)
+        cls.tf_buffer, cls.tf_listener = make_tf_buffer()
+
+    def test_world_frame_ned_publishes_ned_frd_and_tf_agrees(self):
+        node = self.nodes["habn"]
+        t0 = rospy.Time.now()
+        # The state pinned in NED: level, heading 30 deg (z down: clockwise from north).
+        heading = axis_angle((0.0, 0.0, 1.0), math.radians(30.0))
+        self.assertTrue(node.set_state(t0, heading).success)
+        # A constant yaw rate to the left in the FLU frame body_n for 1 s: an FRD rate of
+        # -0.5 rad/s about down, so the heading falls to 30 deg - 0.5 rad.
+        stamps = [t0 + rospy.Duration(0.01 * k) for k in range(1, 101)]
+        for stamp in stamps:
+            self.imu_ned.publish(make_imu(stamp, (0.0, 0.0, 0.5), frame_id="body_n"))
+        last = node.state.wait_at(stamps[-1])
+        self.assertEqual(last.header.frame_id, "world_n_ned")
+        self.assertEqual(last.child_frame_id, "body_n_frd")
+        expected = qmul(heading, axis_angle((0.0, 0.0, 1.0), -0.5))
+        self.assertLess(rotation_angle(as_tuple(last.orientation), expected), 1e-9)
+        self.assertAlmostEqual(last.angular_velocity.z, -0.5, places=12)
+        # tf: REP-103 world_n -> body_n, with world_n_ned and body_n_frd on /tf_static.
+        from_tf = lookup(self.tf_buffer, "world_n_ned", "body_n_frd", stamps[-1])
+        self.assertLess(rotation_angle(from_tf, as_tuple(last.orientation)), 1e-9)
 
     def test_resolved_model_and_integrator_on_the_parameter_server(self):
         self.assertEqual(rosparam_get(HAB + "/model"), "auto")
