@@ -1,11 +1,12 @@
 #!/usr/bin/python3
 """Turns the benchmark CSV files into the charts and the results table (docs/design.md §8).
 
-Usage: plot.py DATA_DIR DOCS_DIR [README]
+Usage: plot.py DATA_DIR DOCS_DIR [PAGE]
 
 Reads DATA_DIR/sweep.csv, stability.csv, invariants.csv, step_costs.json and, when present,
-node_bench.csv and real_streams.csv; writes DOCS_DIR/*.png and DOCS_DIR/results.md, and, given README, replaces the
-text between its `<!-- >>> results -->` and `<!-- <<< results -->` markers.
+node_bench.csv and real_streams.csv; writes DOCS_DIR/*.png and DOCS_DIR/results.md, and, given
+PAGE (docs/benchmarks.md), replaces the text between its `<!-- >>> results -->` and
+`<!-- <<< results -->` markers, with the charts' paths relative to PAGE's folder.
 
 Runs with Debian's /usr/bin/python3 and python3-matplotlib; no other dependency.
 """
@@ -727,7 +728,7 @@ def invariant_lines(sweep, invariants):
 
 def verdict(sweep, invariants):
     """`auto`'s choices against the measurements: every claim computed from the rows."""
-    lines = ["#### `auto` against the measurements", "",
+    lines = ["### `auto` against the measurements", "",
              f"`auto` holds in a (scene, tolerance) cell of the table above when its method is "
              f"the cheapest there or within {AUTO_SLACK:g}× of it.", ""]
     by_choice = defaultdict(list)
@@ -794,7 +795,7 @@ NODE_QUEUE = 10000  # messages: the node's input queue (attitude_propagator_ros)
 def results_markdown(sweep, medians, node, has_node_chart, machine, invariants=(),
                      spreads=None):
     parts = [
-        "### Benchmarks: speed against accuracy",
+        "## Benchmarks: speed against accuracy",
         "",
         "Regenerate everything below with one command (the build, the sweep, Google Benchmark, "
         "the node benchmark, the charts):",
@@ -808,7 +809,7 @@ def results_markdown(sweep, medians, node, has_node_chart, machine, invariants=(
         f"{spread_sentence(spreads)}"
         "Raw data: `docs/data/*.csv`, `docs/data/step_costs.json`.",
         "",
-        "#### Which integrator: cheapest method within a tolerance",
+        "### Which integrator: cheapest method within a tolerance",
         "",
         "For each scene, the cheapest (step, method) of the sweep whose largest attitude error "
         "along the whole path stays within 1e-6, 1e-9 and 1e-12 rad; cost in µs of CPU per "
@@ -818,11 +819,11 @@ def results_markdown(sweep, medians, node, has_node_chart, machine, invariants=(
         cheapest_table(sweep),
         "",
         verdict(sweep, invariants),
-        "#### Targets",
+        "### Targets",
         "",
         targets_table(sweep, medians, node),
         "",
-        "#### Charts",
+        "### Charts",
         "",
         "![work-precision](docs/work_precision.png)",
         "",
@@ -832,11 +833,11 @@ def results_markdown(sweep, medians, node, has_node_chart, machine, invariants=(
         "",
         "![stability](docs/stability.png)",
         "",
-        "#### Cost of one step (Google Benchmark, median CPU time of 7 repetitions)",
+        "### Cost of one step (Google Benchmark, median CPU time of 7 repetitions)",
         "",
         cost_table(medians) if medians else "Not measured.",
         "",
-        "#### Node throughput and latency",
+        "### Node throughput and latency",
         "",
         "`bash bench/node_bench.sh` (run by `bench/run_all.sh`): a load generator publishes "
         "`sensor_msgs/Imu` on `imu/data_raw` at each offered rate for 3 s, header stamped at "
@@ -857,13 +858,23 @@ def results_markdown(sweep, medians, node, has_node_chart, machine, invariants=(
     return "\n".join(parts) + "\n"
 
 
-def splice_readme(readme, text):
+def charts_relative_to(text, docs_dir, folder):
+    """TEXT names the charts as docs/NAME.png (from the repository root); this names them
+    from FOLDER instead."""
+    rel = os.path.relpath(os.path.abspath(docs_dir), os.path.abspath(folder))
+    return text.replace("](docs/", "](" if rel == os.curdir else "](" + rel + "/")
+
+
+def splice_page(page, text, docs_dir):
     begin, end = "<!-- >>> results -->", "<!-- <<< results -->"
-    with open(readme) as f:
+    with open(page) as f:
         content = f.read()
+    if content.count(begin) != 1 or content.count(end) != 1:
+        raise SystemExit(f"plot.py: {page} needs one {begin} and one {end} marker")
     head, rest = content.split(begin, 1)
     _, tail = rest.split(end, 1)
-    with open(readme, "w") as f:
+    text = charts_relative_to(text, docs_dir, os.path.dirname(os.path.abspath(page)))
+    with open(page, "w") as f:
         f.write(head + begin + "\n" + text + end + tail)
 
 
@@ -911,7 +922,7 @@ def real_streams_chart(rows, path):
 
 def main(argv):
     data_dir, docs_dir = argv[1], argv[2]
-    readme = argv[3] if len(argv) > 3 else None
+    page = argv[3] if len(argv) > 3 else None
     sweep = read_csv(os.path.join(data_dir, "sweep.csv"))
     invariants = read_csv(os.path.join(data_dir, "invariants.csv"))
     assign_styles(sweep, invariants)
@@ -933,9 +944,9 @@ def main(argv):
     text = results_markdown(sweep, medians, node, bool(node), machine_line(data_dir), invariants,
                             spreads)
     with open(os.path.join(docs_dir, "results.md"), "w") as f:
-        f.write(text.replace("](docs/", "]("))  # results.md sits next to the charts
-    if readme:
-        splice_readme(readme, text)
+        f.write(charts_relative_to(text, docs_dir, docs_dir))  # results.md sits by the charts
+    if page:
+        splice_page(page, text, docs_dir)
 
 
 if __name__ == "__main__":

@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
-# Regenerates every benchmark figure of the README with one command:
+# Regenerates every benchmark figure of docs/benchmarks.md with one command:
 #   bash bench/run_all.sh [--no-node]
 # 1. builds the package in Release (scripts/build.sh, workspace $AP_WORKSPACE as elsewhere),
 # 2. runs bench_sweep (work-precision sweep, stability map, invariants -> docs/data/*.csv),
 # 3. runs bench_step_costs (Google Benchmark -> docs/data/step_costs.json),
 # 4. runs the node benchmark (bench/node_bench.sh -> docs/data/node_bench.csv) unless --no-node,
 # 5. draws the charts and the results table with Debian's python3-matplotlib (bench/plot.py ->
-#    docs/*.png, docs/results.md, and the README section between the results markers).
+#    docs/*.png, docs/results.md, and the section of docs/benchmarks.md between the results
+#    markers).
 # Not part of scripts/test.sh: it takes minutes and its figures are timings, not verdicts.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/../scripts/common.sh"
@@ -51,5 +52,5 @@ if [ "$run_node" = 1 ]; then
 fi
 
 echo "== charts"
-/usr/bin/python3 "$REPO_DIR/bench/plot.py" "$DATA" "$REPO_DIR/docs" "$REPO_DIR/README.md"
-echo "bench: charts in docs/, table in docs/results.md and the README results section"
+/usr/bin/python3 "$REPO_DIR/bench/plot.py" "$DATA" "$REPO_DIR/docs" "$REPO_DIR/docs/benchmarks.md"
+echo "bench: charts in docs/, tables in docs/results.md and docs/benchmarks.md"

@@ -12,7 +12,7 @@
 # RATE_HZ defaults to 1000, --out to docs/data/soak.csv, --every (the sampling period) to 10 s.
 # --slow-subscriber adds a subscriber in another process to every output (imu/data,
 # attitude_state, /tf) that takes 10 ms per message: its sockets back up, and the node's
-# outgoing queues fill to their bound (README: Queues). With a dynamic configuration whose
+# outgoing queues fill to their bound (docs/node.md, Queues). With a dynamic configuration whose
 # rate_input is none (config/spinning_top.yaml) the node runs on its publish timer and the IMU
 # stream is not subscribed. Builds the two executables if they are missing.
 set -euo pipefail

@@ -57,7 +57,7 @@ the next, as over the unsplit recording.
   --csv OUT.csv          write the states as CSV instead of a bag
   --compression none|lz4 output bag chunks stored as they are (default) or LZ4-compressed:
                          about 5x smaller for about 20 % more CPU; faster in wall time only
-                         where the disk, not the CPU, limits the run (see the README)
+                         where the disk, not the CPU, limits the run (docs/bag_tools.md)
   --config FILE.yaml     node parameters (the keys of config/default.yaml)
   --set name=value       one node parameter (YAML value), after --config; repeatable
   --rates TOPIC          rate topic (default /imu/data_raw, or /body_twist for rate_input twist)
@@ -266,8 +266,8 @@ struct RecordSizes {
 };
 
 // A record is its header (op, conn and time fields: 38 bytes), two lengths and the message,
-// plus a 12-byte index entry. LZ4 stores these streams about 5x smaller (README); a quarter is
-// assumed.
+// plus a 12-byte index entry. LZ4 stores these streams about 5x smaller (docs/bag_tools.md); a
+// quarter is assumed.
 template <class M>
 double recordBytes(const M& msg) {
   return 4 + 38 + 4 + ros::serialization::serializationLength(msg) + 12;

@@ -27,7 +27,7 @@
 namespace attitude_propagator {
 namespace tools {
 
-/// The tools' exit codes (their --help and the README list them). A signal that stops a run
+/// The tools' exit codes (their --help and docs/bag_tools.md list them). A signal that stops a run
 /// exits with 128 + its number, as a shell reports a process the signal killed (130: Ctrl-C).
 enum ExitCode : int {
   kExitOk = 0,             ///< the inputs were used and every output is complete

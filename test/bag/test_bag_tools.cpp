@@ -78,7 +78,7 @@ double largestError(const std::vector<ap::AttitudeState>& states, Attitude attit
 
 // cf4 over a 200 Hz coning IMU stream, started at the cone's attitude: one state per message
 // at its stamp, within 1e-6 rad of the closed form (a second-order method is at 1e-4 here:
-// README, kinematic model), imu/data and /tf carrying the same orientation.
+// docs/numerics.md §10.1), imu/data and /tf carrying the same orientation.
 TEST(PropagateBag, ConingImuFollowsTheClosedForm) {
   TempDir dir;
   SceneBag scene;
@@ -416,7 +416,7 @@ Evaluation evaluate(const TempDir& dir, const std::string& arguments) {
 // Point samples of the coning motion against a PoseStamped truth at the same stamps, in a
 // fixed frame turned by an arbitrary rotation: with the offset and mount given, cf4 on
 // instantaneous samples stays within 1e-6 rad of the truth, the second-order methods within
-// 1e-3 rad but above 1e-6 (README, kinematic model: 1.4e-4 and 2.7e-4 at 200 Hz), and cf4 is
+// 1e-3 rad but above 1e-6 (docs/numerics.md §10.1: 1.4e-4 and 2.7e-4 at 200 Hz), and cf4 is
 // recommended: nothing cheaper comes within 10 % of it.
 TEST(EvaluateBag, ConingPointSamples) {
   TempDir dir;

@@ -191,8 +191,8 @@ TEST(KinematicConfig, AutoIsCf4) {
 
 namespace {
 
-// The integrator names as the README's parameter table documents them, with the models each
-// drives there, written out here rather than read from the core's table.
+// The integrator names as the parameter table of docs/parameters.md documents them, with the
+// models each drives there, written out here rather than read from the core's table.
 struct DocumentedIntegrator {
   ap::Integrator id;
   const char* name;
@@ -236,7 +236,8 @@ TEST(IntegratorNames, MatchTheDocumentedNamesBothWays) {
   EXPECT_EQ(ap::integratorNames(ap::integratorsFor(ap::Model::Dynamic)),
             (std::vector<std::string>{"rk4", "implicit_midpoint", "splitting", "splitting4",
                                       "dopri5", "exact"}));
-  // What `auto` resolves to (README): cf4 kinematic, exact torque-free, rk4 with torque.
+  // What `auto` resolves to (docs/parameters.md): cf4 kinematic, exact torque-free, rk4 with
+  // torque.
   EXPECT_EQ(ap::autoIntegrator(ap::Model::Kinematic, false), ap::Integrator::Cf4);
   EXPECT_EQ(ap::autoIntegrator(ap::Model::Dynamic, false), ap::Integrator::Exact);
   EXPECT_EQ(ap::autoIntegrator(ap::Model::Dynamic, true), ap::Integrator::Rk4);

@@ -1,5 +1,5 @@
 // The parameter struct, its validator, and the places its defaults are written down (the
-// README table, config/default.yaml): they must agree with the struct.
+// table in docs/parameters.md, config/default.yaml): they must agree with the struct.
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -127,8 +127,8 @@ TEST(Parameters, DynamicValuesReachTheEngineUnchanged) {
   EXPECT_EQ(engine.kinematic.gyro_bias_B, Eigen::Vector3d::Zero());  // subtracted once only
 }
 
-// The defaults reach the dynamic configuration as the README's table gives them: torque held
-// (timeout 0), tolerance 1e-9, at rest, torques in the body frame, max_dt 1 s.
+// The defaults reach the dynamic configuration as docs/parameters.md's table gives them: torque
+// held (timeout 0), tolerance 1e-9, at rest, torques in the body frame, max_dt 1 s.
 TEST(Parameters, DynamicDefaultsAreTheDocumentedOnes) {
   ap::Parameters p;
   p.inertia = {1.0, 2.0, 2.5};
@@ -149,8 +149,8 @@ TEST(Parameters, DynamicDefaultsAreTheDocumentedOnes) {
 }
 
 // The kinematic model takes the integrator, max_dt and the initial orientation, and ignores
-// the dynamic model's parameters (README: publish_rate, max_step, tolerance, torque_*,
-// initial_angular_velocity) without refusing them.
+// the dynamic model's parameters (docs/parameters.md: publish_rate, max_step, tolerance,
+// torque_*, initial_angular_velocity) without refusing them.
 TEST(Parameters, KinematicValuesReachTheEngineUnchanged) {
   ap::Parameters p;
   p.integrator = "exp2";
@@ -174,7 +174,7 @@ TEST(Parameters, KinematicValuesReachTheEngineUnchanged) {
   EXPECT_EQ(engine.rate_stddev, 0.5);
 }
 
-// max_step: 0 means 1/publish_rate; otherwise the README's range [1e-5, 60] s, and at least
+// max_step: 0 means 1/publish_rate; otherwise docs/parameters.md's range [1e-5, 60] s, and at least
 // max_dt / 1e5 (one call crosses max_dt in at most 1e5 steps), the automatic value included.
 TEST(Parameters, MaxStepFollowsTheDocumentedRules) {
   auto dynamic = [](double max_step, double max_dt, double publish_rate) {
@@ -292,13 +292,15 @@ TEST(Parameters, FormatsAsYaml) {
   EXPECT_EQ(ap::formatParameter(true), "true");
 }
 
-// The README's table is generated from the struct; this fails when they drift apart and
-// prints the table to paste.
-TEST(Parameters, ReadmeTableMatchesTheStruct) {
-  const std::string readme = readFile(packageRoot() / "README.md");
+// The table in docs/parameters.md is generated from the struct; this fails when they drift
+// apart and prints the table to paste.
+TEST(Parameters, DocsTableMatchesTheStruct) {
+  const fs::path page = packageRoot() / "docs" / "parameters.md";
+  ASSERT_TRUE(fs::is_regular_file(page)) << page << " is missing";
+  const std::string text = readFile(page);
   const std::string table = ap::parameterTableMarkdown();
-  EXPECT_NE(readme.find(table), std::string::npos)
-      << "README.md's parameter table differs from the Parameters struct; expected:\n"
+  EXPECT_NE(text.find(table), std::string::npos)
+      << "docs/parameters.md's parameter table differs from the Parameters struct; expected:\n"
       << table;
 }
 

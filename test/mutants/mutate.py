@@ -35,9 +35,10 @@ KEYS = ("id", "file", "bug", "original", "mutant")
 # Where a mutant may live: a source file compiled into the core or config library.
 MUTABLE = re.compile(r"^src/(core|config)/[A-Za-z0-9_]+\.cpp$")
 # What the build and the core suite read: the sources, the headers, the suite, this folder,
-# and the files the parameter tests compare against (README table, config/*.yaml).
+# and the files the parameter tests compare against (the table in docs/parameters.md,
+# config/*.yaml).
 SYNCED = ("src/core", "src/config", "include", "test/core", "test/mutants", "config")
-SYNCED_FILES = ("README.md",)
+SYNCED_FILES = ("docs/parameters.md",)
 
 
 class ListError(Exception):

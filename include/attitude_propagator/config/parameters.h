@@ -3,8 +3,8 @@
 // the engine's configuration. They live in the config library (attitude_propagator_config), not
 // in the numerics core: frames, tf and topic choices are the node's, and the node and the bag
 // tools share them. No ROS here: the ROS loader (src/ros/parameter_loader.cpp) only reads values
-// into this struct, and the README table and config/default.yaml are checked against it
-// (test/core/test_parameters.cpp).
+// into this struct, and the table in docs/parameters.md and config/default.yaml are checked
+// against it (test/core/test_parameters.cpp).
 #pragma once
 
 #include <optional>
@@ -61,9 +61,10 @@ struct Parameters {
 /// model and what `auto` picks.
 const char* integratorParameterDoc();
 
-/// Calls f(name, field, unit, description) for every parameter, in the README's order.
-/// Works on a const or a mutable Parameters: the loader reads into the fields, the README
-/// table and the YAML check format them. Adding a parameter = one member above, one line here.
+/// Calls f(name, field, unit, description) for every parameter, in the order of the table in
+/// docs/parameters.md. Works on a const or a mutable Parameters: the loader reads into the
+/// fields, the table and the YAML check format them. Adding a parameter = one member above,
+/// one line here.
 template <class P, class F>
 void forEachParameter(P& p, F&& f) {
   f("model", p.model, "", "`auto` (dynamic when `inertia` is set), `kinematic` or `dynamic`");
@@ -131,13 +132,13 @@ void forEachParameter(P& p, F&& f) {
 std::vector<std::string> parameterNames();
 
 /// A parameter's value as YAML flow text (`auto`, `true`, `0.5`, `[0, 0, 0, 1]`), the format
-/// of config/default.yaml and of the README table.
+/// of config/default.yaml and of the table in docs/parameters.md.
 std::string formatParameter(const std::string& value);
 std::string formatParameter(bool value);
 std::string formatParameter(double value);
 std::string formatParameter(const std::vector<double>& value);
 
-/// The README's parameter table (Markdown), generated from the defaults above.
+/// The parameter table of docs/parameters.md (Markdown), generated from the defaults above.
 std::string parameterTableMarkdown();
 
 enum class RateInput { Imu, Twist, None };
