@@ -78,11 +78,12 @@ class NodeHabitsTest(unittest.TestCase):
     def test_world_frame_ned_publishes_ned_frd_and_tf_agrees(self):
         node = self.nodes["habn"]
         t0 = rospy.Time.now()
-        # The state pinned in NED: level, heading 30 deg (z down: clockwise from north).
+        # The state pinned in NED/FRD: level, heading 30 deg (z down: clockwise from north),
+        # turning at -0.5 rad/s about down; then that yaw rate to the left measured in the FLU
+        # frame body_n, (0, 0, 0.5), for 1 s: the heading falls by 0.5 rad. Had ~set_state's
+        # rate not been read in FRD, the first intervals would show it.
         heading = axis_angle((0.0, 0.0, 1.0), math.radians(30.0))
-        self.assertTrue(node.set_state(t0, heading).success)
-        # A constant yaw rate to the left in the FLU frame body_n for 1 s: an FRD rate of
-        # -0.5 rad/s about down, so the heading falls to 30 deg - 0.5 rad.
+        self.assertTrue(node.set_state(t0, heading, (0.0, 0.0, -0.5)).success)
         stamps = [t0 + rospy.Duration(0.01 * k) for k in range(1, 101)]
         for stamp in stamps:
             self.imu_ned.publish(make_imu(stamp, (0.0, 0.0, 0.5), frame_id="body_n"))
@@ -123,7 +124,7 @@ class NodeHabitsTest(unittest.TestCase):
                               and self.status.get(), 10.0, "diagnostics WARN")
             level, message, _ = status
             self.assertIn("most rate samples of the last second were lost", message)
-            self.assertIn("max_dt 1e-06 s is below the input period 0.00", message)
+            self.assertIn("max_dt 1e-06 s is below the input period ", message)
             period = float(message.split("input period ")[1].split(" s")[0])
             # The period of arrival in the window: the feed's, slower on a loaded machine.
             self.assertTrue(0.5 / RATE_HZ < period < 4.0 / RATE_HZ, message)
