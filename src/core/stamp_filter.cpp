@@ -80,13 +80,16 @@ SensorClockFilter::Result SensorClockFilter::filter(double t_receipt) {
   // (the driver subtracted whole periods). Anything else starts a new batch.
   const bool repeat = have_previous_ && t_receipt == previous_receipt_;
   bool spaced = false;
-  if (have_previous_ && !repeat) {
+  if (repeat) {
+    previous_interval_ = 0.0;  // a read of repeated stamps ends at the next stamp, however spaced
+  } else if (have_previous_) {
     const double interval = t_receipt - previous_receipt_;
     const double tolerance = spacingTolerance(t_receipt);
     if (interval > 0.0 && std::abs(interval - previous_interval_) <= tolerance) {
       exact_interval_ = interval;
     }
-    spaced = exact_interval_ > 0.0 && std::abs(interval - exact_interval_) <= tolerance;
+    spaced =
+        !run_repeats_ && exact_interval_ > 0.0 && std::abs(interval - exact_interval_) <= tolerance;
     previous_interval_ = interval;
   }
   const bool boundary = !repeat && !spaced;
@@ -125,7 +128,12 @@ SensorClockFilter::Result SensorClockFilter::filter(double t_receipt) {
   const double dt = (t_receipt - base_t_) - origin_t_;
   // Index advance: the nearest whole number of periods, at least one (the sensor never repeats
   // an index, so a stamp that arrives early still belongs to the next sample).
-  const double periods = slope_ > 0.0 ? std::round(dt / slope_) : 1.0;
+  // (Before the period is known, a read of repeated stamps spans as many periods as the read
+  // before brought samples.)
+  const bool as_batch = boundary && repeated_;
+  const double periods = slope_ > 0.0 ? std::round(dt / slope_)
+                         : as_batch   ? static_cast<double>(batch_)
+                                      : 1.0;
   if (std::abs(dt) > options_.restart_jump + std::max(periods, 1.0) * slope_ ||
       periods > kMaxSkip) {
     ++restarts_;
@@ -136,7 +144,6 @@ SensorClockFilter::Result SensorClockFilter::filter(double t_receipt) {
   // After batches of repeated stamps a new stamp is the oldest sample of the next batch, whose
   // newest the stamp belongs to: m periods on is the newest, this sample the one after the
   // last returned. Samples a batch was short of are counted lost here.
-  const bool as_batch = boundary && repeated_;
   const std::uint64_t short_of = index_ > sample_index_ ? index_ - sample_index_ : 0;
   const std::uint64_t own = index_ + (as_batch ? 1 : m);
   const std::uint64_t lost = as_batch ? short_of : short_of + m - 1;
