@@ -10,6 +10,13 @@
 // A stamp is returned when its sample arrives, from the line known then; the line keeps
 // improving afterwards. RestampCorrection carries the later, better stamps of the samples
 // already integrated into the orientation, to first order.
+//
+// FIFO batches (docs/numerics.md §3): a driver that reads several samples at once gives them
+// either the same receipt stamp (repeated stamps) or the receipt stamp less k periods for the
+// k-th newest (stamps exactly a period apart). Either way a batch is one draw of the latency:
+// the filter recognises a batch from the stamps alone, gives every sample its own index, fits
+// the batch's stamp once (a repeated stamp belongs to the batch's newest sample) and measures
+// the jitter only at batch boundaries.
 #pragma once
 
 #include <array>
@@ -35,9 +42,13 @@ class SensorClockFilter {
   struct Options {
     double memory = 1000.0;      ///< samples: forgetting factor 1 - 1/memory
     double reject_sigmas = 6.0;  ///< a stamp further than this many sigma from the line is rejected
-    int warm_up = 10;            ///< samples after a (re)start before stamps can be rejected
+    int warm_up = 10;            ///< batches (samples, when alone) after a (re)start before a
+                                 ///< stamp can be rejected
     int restart_after = 5;       ///< this many rejected stamps (or lost periods) in a row restart
     double restart_jump = 1.0;   ///< s: a stamp this far from the line restarts at once
+    /// Repeated stamps: a batch of more than this many leaves too few batches in the memory to
+    /// know the period; its stamps are then returned unfiltered (unfiltered()).
+    int max_batch = 100;
   };
 
   enum class Verdict {
@@ -48,6 +59,9 @@ class SensorClockFilter {
     /// The model started again from this stamp, which is returned as it is: after a jump; after
     /// a run of rejections or of lost periods (a new rate), no earlier than the last returned.
     Restarted,
+    /// A batch of repeated stamps too large to model (Options::max_batch): the stamp is
+    /// returned as it came, and the model starts again after the first batch of a usable size.
+    Unfiltered,
   };
 
   struct Result {
@@ -81,7 +95,14 @@ class SensorClockFilter {
   std::uint64_t rejected() const { return rejected_; }
   std::uint64_t missed() const { return missed_; }
   std::uint64_t restarts() const { return restarts_; }
-  std::uint64_t index() const { return index_; }
+  /// The sample index of the stamp last returned (since the last start).
+  std::uint64_t index() const { return sample_index_; }
+  /// Samples in the last FIFO batch the stamps showed (repeated stamps, or stamps exactly a
+  /// period apart); 1 while every sample comes on its own.
+  std::uint64_t batchSize() const { return batch_; }
+  /// True while batches of repeated stamps are too large to model (Options::max_batch): the
+  /// stamps are then returned unfiltered.
+  bool unfiltered() const { return unfiltered_; }
 
  private:
   void start(double t_receipt);
@@ -89,6 +110,9 @@ class SensorClockFilter {
   /// The smallest stamp after t: returned stamps increase strictly.
   static double after(double t);
   void shiftOrigin(std::uint64_t steps, double dt);
+  void moveNewest(std::uint64_t steps);
+  Result repeated();
+  double lineAt(std::uint64_t index) const;
   void add(double y);
   void refit();
   double medianRecentInterval() const;
@@ -103,13 +127,30 @@ class SensorClockFilter {
   double origin_t_ = 0.0;  // the line's stamp at index_, relative to base_t_
   double slope_ = 0.0;
   double last_output_ = 0.0;
-  std::uint64_t index_ = 0;
-  std::uint64_t samples_ = 0;  // since the last start
+  std::uint64_t index_ = 0;         // the newest point of the fit
+  std::uint64_t sample_index_ = 0;  // the sample last returned (behind index_ inside a batch)
+  double newest_y_ = 0.0;           // y of the newest point, at x = 0 until the origin moves on
+  std::uint64_t samples_ = 0;       // since the last start
+  std::uint64_t draws_ = 0;         // latency draws (batches) since the last start
+  bool warm_ = false;               // stamps can be rejected
   int rejected_in_a_row_ = 0;
   int skipped_in_a_row_ = 0;
   std::uint64_t rejected_ = 0, missed_ = 0, restarts_ = 0;
   std::array<double, 6> recent_{};  // the last receipt stamps, for a new period after a restart
   std::size_t recent_count_ = 0;
+  // FIFO batches: the stamps' own structure, kept across restarts (it belongs to the driver).
+  bool have_previous_ = false;
+  double previous_receipt_ = 0.0;
+  double previous_interval_ = 0.0;
+  double exact_interval_ = 0.0;        // the spacing seen twice in a row to round-off (0: none yet)
+  std::uint64_t run_ = 0;              // samples of the current batch so far
+  std::uint64_t batch_ = 1;            // samples of the last batch completed
+  bool run_repeats_ = false;           // the current batch has repeated stamps
+  bool repeated_ = false;              // the last batch completed had repeated stamps
+  bool boundary_as_batch_ = false;     // the current batch's first stamp was taken as a batch's
+  std::uint64_t boundary_missed_ = 0;  // periods it counted as lost otherwise
+  bool batch_rejected_ = false;        // the current batch's first stamp was rejected
+  bool unfiltered_ = false;
 };
 
 /// First-order correction of the orientation for stamps the clock model moved after they were

@@ -137,7 +137,10 @@ void KinematicPropagator::restamp(const SensorClockFilter::Result& clock,
                                   const Eigen::Vector3d& w_B, StampOutcome outcome) {
   const bool anchored = outcome == StampOutcome::Anchored || outcome == StampOutcome::HeldGap;
   if (!anchored && outcome != StampOutcome::Advanced) {  // not integrated
-    if (clock.verdict == SensorClockFilter::Verdict::Restarted) restamp_.reset();
+    if (clock.verdict == SensorClockFilter::Verdict::Restarted ||
+        clock.verdict == SensorClockFilter::Verdict::Unfiltered) {
+      restamp_.reset();
+    }
     return;
   }
   const Eigen::Quaterniond turn = expMap(restamp_.add(clock_, clock, w_B, q_WB_, anchored));

@@ -42,6 +42,11 @@ void SensorClockFilter::reset() {
   samples_ = 0;
   slope_ = 0.0;
   recent_count_ = 0;
+  have_previous_ = false;
+  exact_interval_ = previous_interval_ = 0.0;
+  run_ = 0;
+  batch_ = 1;
+  run_repeats_ = repeated_ = unfiltered_ = false;
 }
 
 double SensorClockFilter::jitter() const { return std::sqrt(variance_); }
@@ -56,18 +61,79 @@ double SensorClockFilter::lineMinus(std::uint64_t index, double t) const {
          (origin_t_ + slope_ * (static_cast<double>(index) - static_cast<double>(index_)));
 }
 
+namespace {
+
+// Two stamps are "exactly" a period apart when their intervals agree to the round-off of the
+// stamps: a few units in the last place of the stamp, and a nanosecond for stamps that were
+// integers of nanoseconds.
+double spacingTolerance(double t) {
+  const double a = std::abs(t);
+  return 4.0 * (std::nextafter(a, std::numeric_limits<double>::infinity()) - a) + 1e-9;
+}
+
+}  // namespace
+
 SensorClockFilter::Result SensorClockFilter::filter(double t_receipt) {
   recent_[recent_count_++ % recent_.size()] = t_receipt;
+  // FIFO batches, from the stamps alone: a stamp equal to the one before is the same read of
+  // the FIFO; a stamp exactly the batch spacing after the one before is the same read too
+  // (the driver subtracted whole periods). Anything else starts a new batch.
+  const bool repeat = have_previous_ && t_receipt == previous_receipt_;
+  bool spaced = false;
+  if (repeat) {
+    previous_interval_ = 0.0;  // a read of repeated stamps ends at the next stamp, however spaced
+  } else if (have_previous_) {
+    const double interval = t_receipt - previous_receipt_;
+    const double tolerance = spacingTolerance(t_receipt);
+    if (interval > 0.0 && std::abs(interval - previous_interval_) <= tolerance) {
+      exact_interval_ = interval;
+    }
+    spaced =
+        !run_repeats_ && exact_interval_ > 0.0 && std::abs(interval - exact_interval_) <= tolerance;
+    previous_interval_ = interval;
+  }
+  const bool boundary = !repeat && !spaced;
+  if (boundary) {
+    if (have_previous_) {
+      batch_ = run_;
+      repeated_ = run_repeats_;
+    }
+    run_ = 1;
+    run_repeats_ = false;
+  } else {
+    ++run_;
+    run_repeats_ = run_repeats_ || repeat;
+  }
+  have_previous_ = true;
+  previous_receipt_ = t_receipt;
+
+  if (repeat && run_ > static_cast<std::uint64_t>(options_.max_batch)) unfiltered_ = true;
+  if (unfiltered_) {
+    // Back to the model once a batch of a usable size has been seen whole.
+    if (!boundary || batch_ > static_cast<std::uint64_t>(options_.max_batch)) {
+      return {t_receipt, Verdict::Unfiltered, 0};
+    }
+    unfiltered_ = false;
+    ++restarts_;
+    start(t_receipt);
+    return {t_receipt, Verdict::Restarted, 0};
+  }
   if (samples_ == 0) {
     start(t_receipt);
     return {t_receipt, Verdict::Restarted, 0};
   }
+  if (repeat) return repeated();
   // Since the line's stamp at the newest index; t_receipt - base_t_ is exact, and origin_t_ is
   // kept relative to base_t_ so that epoch-sized stamps lose nothing step after step.
   const double dt = (t_receipt - base_t_) - origin_t_;
   // Index advance: the nearest whole number of periods, at least one (the sensor never repeats
   // an index, so a stamp that arrives early still belongs to the next sample).
-  const double periods = slope_ > 0.0 ? std::round(dt / slope_) : 1.0;
+  // (Before the period is known, a read of repeated stamps spans as many periods as the read
+  // before brought samples.)
+  const bool as_batch = boundary && repeated_;
+  const double periods = slope_ > 0.0 ? std::round(dt / slope_)
+                         : as_batch   ? static_cast<double>(batch_)
+                                      : 1.0;
   if (std::abs(dt) > options_.restart_jump + std::max(periods, 1.0) * slope_ ||
       periods > kMaxSkip) {
     ++restarts_;
@@ -75,38 +141,90 @@ SensorClockFilter::Result SensorClockFilter::filter(double t_receipt) {
     return {t_receipt, Verdict::Restarted, 0};
   }
   const std::uint64_t m = periods > 1.0 ? static_cast<std::uint64_t>(periods) : 1;
+  // After batches of repeated stamps a new stamp is the oldest sample of the next batch, whose
+  // newest the stamp belongs to: m periods on is the newest, this sample the one after the
+  // last returned. Samples a batch was short of are counted lost here.
+  const std::uint64_t short_of = index_ > sample_index_ ? index_ - sample_index_ : 0;
+  const std::uint64_t own = index_ + (as_batch ? 1 : m);
+  const std::uint64_t lost = as_batch ? short_of : short_of + m - 1;
   const double predicted = static_cast<double>(m) * slope_;
   const double r = dt - predicted;  // innovation
   const double sigma = std::max(jitter(), kJitterFloor * slope_);
-  if (samples_ >= static_cast<std::uint64_t>(options_.warm_up) &&
-      std::abs(r) > options_.reject_sigmas * sigma) {
+  if (boundary) {
+    // Warm after warm_up latency draws; or after warm_up samples once a run of exactly spaced
+    // stamps longer than max_batch has ended: a clean clock, whose jitter is nil.
+    const auto warm_up = static_cast<std::uint64_t>(options_.warm_up);
+    warm_ = warm_ || draws_ >= warm_up ||
+            (samples_ >= warm_up && batch_ > static_cast<std::uint64_t>(options_.max_batch));
+    batch_rejected_ = warm_ && std::abs(r) > options_.reject_sigmas * sigma;
+    boundary_as_batch_ = as_batch;
+    boundary_missed_ = as_batch || batch_rejected_ ? 0 : lost;
+  }
+  // A stamp exactly a period after an accepted one shares its latency: it is neither tested
+  // nor a new draw of the jitter, but it follows a rejected batch's verdict (and counts
+  // towards the restart: a clean clock whose rate changed is one endless batch).
+  if (batch_rejected_) {
     ++rejected_;
     if (++rejected_in_a_row_ >= options_.restart_after) return restartAfter(t_receipt);
     // Assume it is the next sample (a late stamp, not a drop) and keep the fit. An early stamp
     // (the rate went up) keeps its own: the line's would run ahead of the samples, and the
     // restart that follows would then have to go back.
     shiftOrigin(1, slope_);
+    sample_index_ = index_;
     last_output_ = std::max(std::min(base_t_ + origin_t_, t_receipt), after(last_output_));
     return {last_output_, Verdict::Rejected, 0};
   }
-  rejected_in_a_row_ = 0;
-  skipped_in_a_row_ = m > 1 ? skipped_in_a_row_ + 1 : 0;
+  if (boundary) rejected_in_a_row_ = 0;
+  skipped_in_a_row_ = lost > 0 ? skipped_in_a_row_ + 1 : 0;
   if (skipped_in_a_row_ >= options_.restart_after) {  // the rate fell: a new period
     return restartAfter(t_receipt);
   }
-  if (slope_ > 0.0) {
+  if (slope_ > 0.0 && boundary) {
     // Forgetting average once warm; the plain mean of the first innovations before.
-    const double weight = std::max(1.0 - forget_, 1.0 / static_cast<double>(samples_));
+    const double weight = std::max(1.0 - forget_, 1.0 / static_cast<double>(draws_));
     variance_ += weight * (r * r - variance_);
   }
-  missed_ += m - 1;
+  if (boundary) ++draws_;
+  missed_ += lost;
   shiftOrigin(m, predicted);
   add(r);
   refit();
+  sample_index_ = own;
   // The line through noisy stamps can move back by a hair while it learns; stamps must not.
-  const double out = std::max(base_t_ + origin_t_, last_output_ + 0.5 * slope_);
+  const double out = std::max(lineAt(sample_index_), last_output_ + 0.5 * slope_);
   last_output_ = out;
-  return {out, Verdict::Modelled, m - 1};
+  return {out, Verdict::Modelled, lost};
+}
+
+// A repeated stamp: the next sample of the same batch, at the next index. The batch's stamp
+// belongs to its newest sample, so when the batch turns out longer than the periods its stamp
+// counted, its point in the fit moves on with the samples. The line's value at the index is
+// returned: each sample its own stamp.
+SensorClockFilter::Result SensorClockFilter::repeated() {
+  if (run_ == 2 && !boundary_as_batch_) {
+    // The batch's first stamp was taken for a single sample after boundary_missed_ lost ones:
+    // it was the oldest of this batch. Its stamp stays (already returned); the count is undone.
+    missed_ -= boundary_missed_;
+    sample_index_ = index_ - boundary_missed_;
+    boundary_missed_ = 0;
+    skipped_in_a_row_ = 0;
+    boundary_as_batch_ = true;
+  }
+  ++sample_index_;
+  if (sample_index_ > index_) {
+    if (batch_rejected_) {
+      shiftOrigin(sample_index_ - index_, static_cast<double>(sample_index_ - index_) * slope_);
+    } else {
+      moveNewest(sample_index_ - index_);
+    }
+  }
+  last_output_ = std::max(lineAt(sample_index_), after(last_output_));
+  return {last_output_, Verdict::Modelled, 0};
+}
+
+double SensorClockFilter::lineAt(std::uint64_t index) const {
+  return base_t_ +
+         (origin_t_ + slope_ * (static_cast<double>(index) - static_cast<double>(index_)));
 }
 
 // A restart where the stamps went on (a new rate): the new line starts no earlier than the last
@@ -128,7 +246,14 @@ void SensorClockFilter::start(double t_receipt) {
   origin_t_ = 0.0;
   slope_ = guess;  // 0 when unknown: the second stamp is then taken as the next sample
   index_ = 0;
+  sample_index_ = 0;
+  newest_y_ = 0.0;
+  batch_rejected_ = false;
+  boundary_as_batch_ = repeated_;
+  boundary_missed_ = 0;
   samples_ = 1;
+  draws_ = 1;
+  warm_ = false;
   rejected_in_a_row_ = 0;
   skipped_in_a_row_ = 0;
   last_output_ = t_receipt;
@@ -143,6 +268,21 @@ void SensorClockFilter::shiftOrigin(std::uint64_t steps, double dt) {
   sy_ -= dt * s0_;
   index_ += steps;
   origin_t_ += dt;
+  newest_y_ -= dt;
+}
+
+// The newest point (weight 1, at x = 0) moves `steps` indices on with the origin, its stamp
+// unchanged: the points before it move back by as many.
+void SensorClockFilter::moveNewest(std::uint64_t steps) {
+  const double y = newest_y_;
+  const double dt = static_cast<double>(steps) * slope_;
+  s0_ -= 1.0;
+  sy_ -= y;
+  shiftOrigin(steps, dt);
+  s0_ += 1.0;
+  sy_ += y - dt;
+  newest_y_ = y - dt;
+  refit();
 }
 
 // Older samples lose weight by the forgetting factor; the new one sits at x = 0.
@@ -152,6 +292,7 @@ void SensorClockFilter::add(double y) {
   sxx_ *= forget_;
   sy_ = forget_ * sy_ + y;
   sxy_ *= forget_;
+  newest_y_ = y;
   ++samples_;
 }
 
@@ -162,6 +303,7 @@ void SensorClockFilter::refit() {
   const double a = (sy_ - slope_ * sx_) / s0_;
   sy_ -= a * s0_;
   sxy_ -= a * sx_;
+  newest_y_ -= a;
   origin_t_ += a;
 }
 
@@ -185,9 +327,11 @@ Eigen::Vector3d RestampCorrection::add(const SensorClockFilter& clock,
                                        const SensorClockFilter::Result& sample,
                                        const Eigen::Vector3d& w_B, const Eigen::Quaterniond& q_WB,
                                        bool anchor) {
-  if (!started_ || sample.verdict != SensorClockFilter::Verdict::Modelled) {
+  if (!started_ || sample.verdict != SensorClockFilter::Verdict::Modelled ||
+      clock.index() <= index_) {
     // A new line numbers the samples again, and a rejected stamp is not on the line: the
-    // earlier terms stay as last corrected.
+    // earlier terms stay as last corrected. (So too when a batch's first stamp, taken for one
+    // sample, is numbered again as the batch's oldest.)
     start(clock, sample.t, w_B, q_WB, anchor);
     return Eigen::Vector3d::Zero();
   }

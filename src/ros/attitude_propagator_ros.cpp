@@ -807,6 +807,8 @@ void AttitudePropagatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
       status.add("stamp_filter_rejected", f->rejected());
       status.add("stamp_filter_missed_periods", f->missed());
       status.add("stamp_filter_restarts", f->restarts());
+      status.add("stamp_batch", f->batchSize());
+      status.add("stamp_filter_unfiltered", f->unfiltered());
     }
   }
   status.add("norm_error", state.norm_error);

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <functional>
 #include <limits>
 #include <vector>
@@ -314,4 +315,106 @@ TEST(GyroBias, IsSubtractedBeforeIntegration) {
   EXPECT_EQ(propagator.gyroBias(), bias);
   config.gyro_bias_B.x() = INFINITY;
   EXPECT_THROW(ap::KinematicPropagator{config}, std::invalid_argument);
+}
+
+namespace {
+
+// FIFO batches: a driver reads the sensor's FIFO every `batch` samples, the read delayed by a
+// latency draw about its mean (the mean is no filter's to see). Repeated: every sample of the
+// read gets the receipt stamp. Spaced: the k-th newest gets the receipt stamp less k periods.
+// A batch of 1 is the per-sample stream with the same latency distribution. The anchor (k = 0)
+// comes alone with its exact stamp, as in coningStream.
+enum class Fifo { Repeated, Spaced };
+
+std::vector<Sample> fifoStream(double hz, int batch, Fifo form, double sigma, std::uint64_t seed,
+                               double duration) {
+  const ConingMotion cone;
+  std::uint64_t state = seed;
+  const long n = std::lround(duration * hz);
+  std::vector<Sample> samples{{0.0, cone.bodyRate(0.0)}};
+  for (long first = 1; first + batch - 1 <= n; first += batch) {
+    const long newest = first + batch - 1;
+    const double receipt = newest / hz + sigma * normalRandom(state);
+    for (long k = first; k <= newest; ++k) {
+      const double stamp = form == Fifo::Repeated ? receipt : receipt - (newest - k) / hz;
+      samples.push_back({stamp, cone.bodyRate(k / hz)});
+    }
+  }
+  return samples;
+}
+
+struct FifoRun {
+  double worst = 0.0;    // along the whole path
+  double settled = 0.0;  // of the rotation from the state after `settle` samples on
+  std::size_t advanced = 0;
+  std::uint64_t batch = 0, restarts = 0, rejected = 0;
+};
+
+// The error once settled is that of the rotation since the state after `settle` samples: the
+// start-up's error (the first batch of repeated stamps before any period is known) stays in
+// the attitude, and is measured along the whole path.
+FifoRun runFifo(const std::vector<Sample>& samples, std::size_t settle) {
+  const ConingMotion cone;
+  ap::KinematicConfig config;
+  config.initial_q_WB = cone.attitude(0.0);
+  config.stamp_filter = ap::StampFilter::SensorClock;
+  ap::KinematicPropagator propagator(config);
+  FifoRun run;
+  Eigen::Quaterniond q_settled = Eigen::Quaterniond::Identity(), truth_settled = q_settled;
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    const ap::StampOutcome outcome = propagator.addSample(samples[k].stamp, samples[k].w_B);
+    if (outcome == ap::StampOutcome::Advanced) ++run.advanced;
+    if (k < kStartUpSamples) continue;
+    const Eigen::Quaterniond q = propagator.orientation(), truth = cone.attitude(propagator.time());
+    run.worst = std::max(run.worst, ap::rotationAngle(q, truth));
+    if (k == settle) {
+      q_settled = q;
+      truth_settled = truth;
+    } else if (k > settle) {
+      run.settled = std::max(run.settled, ap::rotationAngle(q_settled.conjugate() * q,
+                                                            truth_settled.conjugate() * truth));
+    }
+  }
+  run.batch = propagator.stampFilter()->batchSize();
+  run.restarts = propagator.stampFilter()->restarts();
+  run.rejected = propagator.stampFilter()->rejected();
+  return run;
+}
+
+}  // namespace
+
+// FIFO batches of 10 and 20 at 200 and 400 Hz, stamps repeated or spaced by the period, 0.2 ms
+// of latency jitter per read: every sample is integrated (none stale), the filter neither
+// rejects nor restarts at the batch boundaries, and once settled (the filter's memory, 1000
+// samples) the error is within 2 sqrt(N) of the per-sample stream's with the same latency
+// distribution: a batch is one latency draw, so the line rests on N times fewer.
+TEST(FifoBatches, EverySampleIntegratedAndTheErrorWithinTwoRootNOfPerSampleJitter) {
+  const double sigma = 2e-4;
+  for (double hz : {200.0, 400.0}) {
+    for (int batch : {10, 20}) {
+      for (Fifo form : {Fifo::Repeated, Fifo::Spaced}) {
+        const char* name = form == Fifo::Repeated ? "repeated" : "spaced";
+        double log_ratio = 0.0;
+        const int seeds = 3;
+        for (std::uint64_t seed = 1; seed <= seeds; ++seed) {
+          const auto per_sample = fifoStream(hz, 1, form, sigma, seed, 30.0);
+          const auto fifo = fifoStream(hz, batch, form, sigma, seed, 30.0);
+          const FifoRun alone = runFifo(per_sample, 1000), batched = runFifo(fifo, 1000);
+          EXPECT_EQ(batched.advanced, fifo.size() - 1) << hz << " Hz, " << batch << " " << name;
+          EXPECT_EQ(batched.batch, static_cast<std::uint64_t>(batch));
+          EXPECT_EQ(batched.restarts, 0u) << hz << " Hz, " << batch << " " << name;
+          EXPECT_EQ(batched.rejected, 0u) << hz << " Hz, " << batch << " " << name;
+          EXPECT_EQ(alone.batch, 1u);
+          log_ratio += std::log(batched.settled / alone.settled);
+          std::printf(
+              "[ fifo     ] %3.0f Hz batch %2d %-8s seed %d: settled %.3g vs %.3g (x%.2f), "
+              "whole path %.3g vs %.3g\n",
+              hz, batch, name, static_cast<int>(seed), batched.settled, alone.settled,
+              batched.settled / alone.settled, batched.worst, alone.worst);
+        }
+        EXPECT_LE(std::exp(log_ratio / seeds), 2.0 * std::sqrt(batch))
+            << hz << " Hz, " << batch << " " << name;
+      }
+    }
+  }
 }

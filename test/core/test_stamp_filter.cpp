@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <vector>
 
@@ -337,4 +338,122 @@ TEST(SensorClockFilter, CarriesLaterStampsOnlyWithinOneModel) {
     }
     EXPECT_LT(worst[1], worst[0]) << seed;
   }
+}
+
+namespace {
+
+// A FIFO read every `batch` samples at the newest sample's time plus `latency(read)`: the
+// receipt stamps of the form given (repeated, or less k periods for the k-th newest).
+std::vector<double> fifoStamps(int reads, int batch, bool repeated,
+                               const std::function<double(int)>& latency) {
+  std::vector<double> stamps;
+  for (int read = 0; read < reads; ++read) {
+    const int newest = (read + 1) * batch - 1;
+    const double receipt = kT0 + kPeriod * newest + latency(read);
+    for (int k = newest - batch + 1; k <= newest; ++k) {
+      stamps.push_back(repeated ? receipt : receipt - kPeriod * (newest - k));
+    }
+  }
+  return stamps;
+}
+
+}  // namespace
+
+// Repeated stamps on a clock without latency jitter: from the second read on every sample gets
+// its own stamp, the sensor's (the batch's stamp belongs to its newest sample), none is
+// counted lost, and the filter sees the batch size.
+TEST(SensorClockFilter, GivesEachRepeatedStampItsOwnIndex) {
+  for (int batch : {2, 10, 20}) {
+    ap::SensorClockFilter filter;
+    const auto stamps = fifoStamps(200, batch, true, [](int) { return 0.0; });
+    const double ulp = std::nextafter(kT0, 2 * kT0) - kT0;
+    for (std::size_t n = 0; n < stamps.size(); ++n) {
+      const auto r = filter.filter(stamps[n]);
+      if (n >= static_cast<std::size_t>(batch)) {
+        EXPECT_NEAR(r.t, kT0 + kPeriod * n, 8 * ulp) << batch << ": " << n;
+        EXPECT_EQ(filter.index(), n) << batch << ": " << n;
+      }
+    }
+    EXPECT_EQ(filter.batchSize(), static_cast<std::uint64_t>(batch));
+    EXPECT_EQ(filter.missed(), 0u);
+    EXPECT_EQ(filter.rejected(), 0u);
+    EXPECT_EQ(filter.restarts(), 0u);
+    EXPECT_FALSE(filter.unfiltered());
+    EXPECT_NEAR(filter.period(), kPeriod, 1e-9);
+  }
+}
+
+// A read that brings fewer samples than the periods its stamp counts lost the rest.
+TEST(SensorClockFilter, CountsTheSamplesARepeatedBatchLacks) {
+  ap::SensorClockFilter filter;
+  auto stamps = fifoStamps(100, 10, true, [](int) { return 0.0; });
+  stamps.erase(stamps.begin() + 503, stamps.begin() + 506);  // three of read 50
+  for (double t : stamps) filter.filter(t);
+  EXPECT_EQ(filter.missed(), 3u);
+  EXPECT_EQ(filter.restarts(), 0u);
+}
+
+// Stamps exactly a period apart inside a read, 0.1 ms of latency jitter per read: the jitter is
+// measured at the reads (not collapsed by the exact spacing), no read is rejected, nothing
+// restarts, and the filtered stamps stay within the jitter of the sensor clock.
+TEST(SensorClockFilter, KeepsItsJitterOnStampsAPeriodApart) {
+  for (int batch : {10, 20}) {
+    ap::SensorClockFilter filter;
+    std::uint64_t state = 9;
+    const double sigma = 1e-4;
+    const auto stamps =
+        fifoStamps(6000 / batch, batch, false, [&](int) { return sigma * normalRandom(state); });
+    for (std::size_t n = 0; n < stamps.size(); ++n) {
+      const auto r = filter.filter(stamps[n]);
+      if (n > 2000) {
+        EXPECT_NEAR(r.t, kT0 + kPeriod * n, 3 * sigma) << n;
+      }
+    }
+    EXPECT_EQ(filter.batchSize(), static_cast<std::uint64_t>(batch));
+    EXPECT_GT(filter.jitter(), 0.5 * sigma) << batch;
+    EXPECT_LT(filter.jitter(), 2.0 * sigma) << batch;
+    EXPECT_EQ(filter.rejected(), 0u) << batch;
+    EXPECT_EQ(filter.restarts(), 0u) << batch;
+  }
+}
+
+// The boundary: a batch of max_batch repeated stamps is modelled; one more sample and the
+// stamps are returned unfiltered and flagged, until a batch of a usable size has been seen
+// whole, after which the model starts again.
+TEST(SensorClockFilter, FallsBackToUnfilteredStampsOnBatchesTooLarge) {
+  ap::SensorClockFilter::Options options;
+  options.max_batch = 20;
+  for (int batch : {20, 21}) {
+    ap::SensorClockFilter filter(options);
+    const auto stamps = fifoStamps(10, batch, true, [](int) { return 0.0; });
+    std::uint64_t unfiltered = 0;
+    for (double t : stamps) {
+      const auto r = filter.filter(t);
+      if (r.verdict == Verdict::Unfiltered) {
+        ++unfiltered;
+        EXPECT_EQ(r.t, t);
+      }
+    }
+    EXPECT_EQ(filter.unfiltered(), batch > 20) << batch;
+    // The first read's 21st sample, then every sample of the nine reads after it.
+    EXPECT_EQ(unfiltered, batch > 20 ? 1u + 9u * 21u : 0u) << batch;
+    // Smaller batches again: back to the model after the first one seen whole.
+    const double t0 = stamps.back() + 0.5;
+    for (int read = 0; read < 5; ++read) {
+      for (int k = 0; k < 10; ++k) filter.filter(t0 + read * 10 * kPeriod);
+    }
+    EXPECT_FALSE(filter.unfiltered()) << batch;
+    EXPECT_EQ(filter.batchSize(), 10u);
+  }
+}
+
+// reset() forgets the batches with the model: single samples after it are batches of one.
+TEST(SensorClockFilter, ResetForgetsTheBatchSize) {
+  ap::SensorClockFilter filter;
+  for (double t : fifoStamps(20, 10, true, [](int) { return 0.0; })) filter.filter(t);
+  EXPECT_EQ(filter.batchSize(), 10u);
+  filter.reset();
+  EXPECT_EQ(filter.batchSize(), 1u);
+  for (int n = 0; n < 5; ++n) filter.filter(100.0 + kPeriod * n + (n % 2) * 1e-5);
+  EXPECT_EQ(filter.batchSize(), 1u);
 }
