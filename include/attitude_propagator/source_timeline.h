@@ -35,6 +35,9 @@ class SourceTimeline {
 
   /// Judges `stamp` and remembers it when it is used (InOrder or JumpedBack).
   Verdict judge(Stamp stamp, const TimePolicy& policy);
+  /// With the sensor-clock stamp filter, a stamp equal to the newest is in order: a FIFO read
+  /// stamps its samples alike, and the filter gives each its own stamp (docs/numerics.md §3).
+  void allowRepeatedStamps(bool allow) { repeats_ = allow; }
 
   /// Records how far behind `clock` an input stamped `stamp` arrived (negative: ahead).
   void observeLag(Stamp clock, Stamp stamp);
@@ -43,14 +46,20 @@ class SourceTimeline {
 
   /// The newest stamp used, empty before the first.
   std::optional<Stamp> newest() const { return newest_; }
-  /// Forgets everything: time itself went back (the clock), so every stamp starts afresh.
-  void forget() { *this = SourceTimeline(); }
+  /// Forgets every stamp: time itself went back (the clock), so every stamp starts afresh.
+  void forget() {
+    newest_.reset();
+    run_last_.reset();
+    run_ = 0;
+    lag_.reset();
+  }
 
  private:
   std::optional<Stamp> newest_;
   std::optional<Stamp> run_last_;  // the last stamp of the run from an earlier time
   int run_ = 0;
   std::optional<double> lag_;
+  bool repeats_ = false;
 };
 
 }  // namespace attitude_propagator

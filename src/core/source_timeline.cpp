@@ -7,7 +7,7 @@ double seconds(Stamp ns) { return static_cast<double>(ns) * 1e-9; }
 }  // namespace
 
 SourceTimeline::Verdict SourceTimeline::judge(Stamp stamp, const TimePolicy& policy) {
-  if (!newest_ || stamp > *newest_) {
+  if (!newest_ || stamp > *newest_ || (repeats_ && stamp == *newest_)) {
     newest_ = stamp;
     run_ = 0;
     run_last_.reset();
