@@ -12,13 +12,9 @@
 
 #include "attitude_propagator/dynamic_propagator.h"
 #include "attitude_propagator/propagator.h"
+#include "attitude_propagator/publish_grid.h"
 
 namespace attitude_propagator {
-
-/// The grid stamp with index k: round(k / publish_rate) in ns.
-Stamp gridStamp(std::int64_t k, double publish_rate);
-/// The largest k with gridStamp(k, publish_rate) <= now.
-std::int64_t gridIndexAtOrBefore(Stamp now, double publish_rate);
 
 class DynamicScheduler final : public Propagator {
  public:

@@ -1,7 +1,6 @@
 #include "attitude_propagator/dynamic_scheduler.h"
 
 #include <algorithm>
-#include <cmath>
 #include <exception>
 #include <iterator>
 #include <stdexcept>
@@ -19,21 +18,6 @@ const DynamicConfig& dynamicConfig(const EngineConfig& config) {
 }
 
 }  // namespace
-
-Stamp gridStamp(std::int64_t k, double publish_rate) {
-  // long double holds nanoseconds since the epoch exactly (64-bit mantissa on x86).
-  return static_cast<Stamp>(
-      std::llround(static_cast<long double>(k) * 1e9L / static_cast<long double>(publish_rate)));
-}
-
-std::int64_t gridIndexAtOrBefore(Stamp now, double publish_rate) {
-  auto k = static_cast<std::int64_t>(
-      std::floor(static_cast<long double>(now) * static_cast<long double>(publish_rate) / 1e9L));
-  // The rounding of the grid stamps themselves moves k by one at most.
-  if (gridStamp(k, publish_rate) > now) --k;
-  if (gridStamp(k + 1, publish_rate) <= now) ++k;
-  return k;
-}
 
 DynamicScheduler::DynamicScheduler(const EngineConfig& config, PropagatorHost& host)
     : host_(host),

@@ -5,9 +5,9 @@
 #include <exception>
 #include <stdexcept>
 
-#include "attitude_propagator/dynamic_scheduler.h"
 #include "attitude_propagator/limits.h"
 #include "attitude_propagator/orientation_covariance.h"
+#include "attitude_propagator/publish_grid.h"
 
 namespace attitude_propagator {
 
