@@ -1,9 +1,9 @@
 // The propagation engine: everything between a decoded input and a state to publish, with no
-// ROS in it. It owns the choice of propagator (kinematic or dynamic), the time origin, the
-// dynamic model's queue of inputs stamped ahead of the clock and its publish grid, the
-// orientation covariance, the time policy (each source's stamps judged against its own: a
-// straggler is dropped, a backward jump is recognised when it persists; an input too far ahead
-// of the clock is refused; a clock that jumps back resets, one that jumps ahead is a gap) and
+// ROS in it. It owns the model (one Propagator, propagator.h: kinematic, or dynamic with its
+// queue of inputs stamped ahead of the clock and its publish grid), the time origin, the
+// orientation covariance, the gyro bias, the time policy (each source's stamps judged against its
+// own: a straggler is dropped, a backward jump is recognised when it persists; an input too far
+// ahead of the clock is refused; a clock that jumps back resets, one that jumps ahead is a gap) and
 // the counters shown in diagnostics. The node decodes messages,
 // submits them here, tells the engine what time it is, and publishes what the engine hands to
 // its sink. See docs/design.md for the data flow.
@@ -23,88 +23,13 @@
 #include "attitude_propagator/dynamic_propagator.h"
 #include "attitude_propagator/integrator.h"
 #include "attitude_propagator/kinematic_propagator.h"
+#include "attitude_propagator/propagator.h"
 #include "attitude_propagator/source_timeline.h"
 
 namespace attitude_propagator {
 
-/// Where an input came from; chooses what it means and how it is logged.
-enum class Source { Imu, Twist, Torque };
-const char* sourceName(Source source);
-
-/// A decoded input: a body rate w_B (rad/s) from Imu or Twist, or a torque (N m) in `frame`.
-struct Input {
-  Source source = Source::Imu;
-  Stamp stamp = 0;
-  Eigen::Vector3d value = Eigen::Vector3d::Zero();
-  TorqueFrame frame = TorqueFrame::Body;
-  /// Rate noise covariance in the body frame (rad²/s²); zero: the configured default.
-  Eigen::Matrix3d rate_covariance_B = Eigen::Matrix3d::Zero();
-  /// Carried through untouched and handed back with the applied input (the node keeps the
-  /// IMU message here, to republish it with the orientation at its stamp).
-  std::shared_ptr<const void> payload;
-};
-
-/// The state to publish at a stamp.
-struct EngineState {
-  Stamp stamp = 0;
-  Eigen::Quaterniond q_WB = Eigen::Quaterniond::Identity();
-  Eigen::Vector3d w_B = Eigen::Vector3d::Zero();
-  Eigen::Matrix3d P_B = Eigen::Matrix3d::Zero();  ///< orientation error covariance, body frame
-  double norm_error = 0.0;
-  std::uint64_t steps = 0;
-  // Dynamic model only (zero in the kinematic model).
-  Eigen::Vector3d M_B = Eigen::Vector3d::Zero();  ///< angular momentum, body frame
-  double kinetic_energy = 0.0;
-};
-
 /// Inputs the node turned away before they reached the engine, counted here with the rest.
 enum class Rejection { NoRate, WrongType, NoTransform, NoTime, BadCovariance };
-
-/// What happened to input and time, for diagnostics. Every counter only grows.
-struct EngineCounters {
-  std::uint64_t received = 0;  ///< every input submitted or rejected
-  std::uint64_t accepted = 0;
-  std::uint64_t rejected_non_finite = 0;
-  std::uint64_t rejected_out_of_range = 0;
-  std::uint64_t rejected_no_rate = 0;     ///< REP-145: angular_velocity_covariance[0] == -1
-  std::uint64_t rejected_type = 0;        ///< a message type the topic does not take
-  std::uint64_t rejected_covariance = 0;  ///< not symmetric, negative or huge
-  /// At or before the newest input of its source (a straggler, by any amount; the first
-  /// inputs of a backward jump before it is recognised; a rate older than a set_state).
-  std::uint64_t dropped_stale = 0;
-  std::uint64_t dropped_no_tf = 0;
-  std::uint64_t dropped_no_time = 0;
-  std::uint64_t late = 0;        ///< dynamic: arrived after the clock passed its stamp
-  std::uint64_t gaps = 0;        ///< longer than max_dt: state held
-  std::uint64_t resets = 0;      ///< the state back to the initial one: time went back, reset()
-  std::uint64_t jumps_back = 0;  ///< a source's stamps went back, and persisted
-  std::uint64_t rejected_future = 0;  ///< stamped more than max_future ahead of the clock
-  /// Dynamic: queued inputs a reset dropped (reset(), ROS time jumping back).
-  std::uint64_t dropped_on_reset = 0;
-  std::uint64_t failed_steps = 0;      ///< the integrator could not complete an interval
-  std::uint64_t pending_overflow = 0;  ///< dynamic: queue full, the furthest ahead dropped
-  std::uint64_t deferred_ticks = 0;    ///< dynamic: grid stamps left for the next call (budget)
-  std::uint64_t rejected_bias = 0;     ///< gyro bias samples: non-finite, too large or bad frame
-};
-
-/// Something the node should log (throttled per kind).
-struct EngineNote {
-  enum Kind {
-    Gap,               ///< an input or the clock moved on by more than max_dt: state held
-    StampsJumpedBack,  ///< a source's stamps went back by more than the threshold, and persisted
-    Future,            ///< an input stamped more than max_future ahead of the clock: refused
-    ClockJumpedBack,   ///< ROS time went back by more than the threshold: reset
-    Stale,
-    NonFinite,
-    OutOfRange,
-    FailedStep,
-    PendingFull,
-    Deferred,
-  };
-  Kind kind = Gap;
-  std::optional<Source> source;  ///< empty: the clock
-  Stamp stamp = 0;
-};
 
 /// Receives what the engine produces. Called synchronously from the engine's methods.
 class EngineSink {
@@ -151,7 +76,7 @@ struct EngineConfig {
 /// transport that queues.
 constexpr double kInputLagWarning = 0.5;
 
-class AttitudeEngine {
+class AttitudeEngine : private PropagatorHost {
  public:
   /// Throws std::invalid_argument (from the propagators) for an invalid configuration.
   AttitudeEngine(const EngineConfig& config, EngineSink& sink);
@@ -179,7 +104,7 @@ class AttitudeEngine {
   /// The bias subtracted from the latest rate input.
   const Eigen::Vector3d& gyroBias() const { return gyro_bias_B_; }
   /// The kinematic propagator (nullptr in the dynamic model), for its diagnostics.
-  const KinematicPropagator* kinematic() const { return kinematic_ ? &*kinematic_ : nullptr; }
+  const KinematicPropagator* kinematic() const { return propagator_->kinematic(); }
 
   /// One tick of a complete clock record (every /clock message under sim time): a jump back
   /// by more than the threshold resets; a jump ahead by more than max_dt is a gap, so the grid
@@ -212,16 +137,16 @@ class AttitudeEngine {
   /// Mean seconds by which the inputs of `source` arrive behind the clock (negative: ahead);
   /// empty before one arrived with a clock known.
   std::optional<double> inputLag(Source source) const;
-  std::size_t pending() const { return pending_.size(); }
-  bool dynamicModel() const { return dynamic_.has_value(); }
+  std::size_t pending() const { return propagator_->pending(); }
+  bool dynamicModel() const { return propagator_->model() == Model::Dynamic; }
   /// "kinematic" or the dynamic propagator's model name.
-  const std::string& modelName() const { return model_name_; }
-  Integrator integrator() const;
+  const std::string& modelName() const { return propagator_->modelName(); }
+  Integrator integrator() const { return propagator_->integrator(); }
   /// The current state (at the propagator's own time).
   EngineState state() const;
   /// Relative drifts of energy and |M| since the anchor (dynamic model; 0 otherwise).
-  double energyDrift() const;
-  double momentumDrift() const;
+  double energyDrift() const { return propagator_->energyDrift(); }
+  double momentumDrift() const { return propagator_->momentumDrift(); }
 
   /// The grid stamp with index k: round(k / publish_rate) in ns.
   Stamp gridStamp(std::int64_t k) const;
@@ -229,10 +154,22 @@ class AttitudeEngine {
   std::int64_t gridIndexAtOrBefore(Stamp now) const;
 
  private:
-  double coreTime(Stamp stamp);
-  void rebaseIfFar(Stamp stamp);
+  // PropagatorHost: what the model calls back.
+  double coreTime(Stamp stamp) override;
+  std::optional<Stamp> stampAt(double t) const override;
   /// Counts and notes a propagator outcome; true when the state holds at the stamp.
-  bool handleOutcome(StampOutcome outcome, std::optional<Source> source, Stamp stamp);
+  bool handleOutcome(StampOutcome outcome, std::optional<Source> source, Stamp stamp) override;
+  void emitState(Stamp stamp) override;
+  void inputApplied(const Input& input, Stamp stamp) override;
+  void note(const EngineNote& note) override { sink_.note(note); }
+  EngineCounters& mutableCounters() override { return counters_; }
+  std::optional<Stamp> clock() const override { return clock_; }
+  std::optional<Stamp> lastPublished() const override { return last_published_; }
+  void propagateCovariance(double h, const Eigen::Vector3d& w_step,
+                           const Eigen::Matrix3d& rate_covariance_B) override;
+  void anchorCovariance() override { P_B_ = initialCovariance(); }
+
+  void rebaseIfFar(Stamp stamp);
   bool clockWentBack(Stamp now);
   bool tooFarAhead(Stamp stamp) const;
   /// Judges an input against its source's timeline; false when it is dropped.
@@ -242,27 +179,16 @@ class AttitudeEngine {
   void advanceClock(Stamp now, bool went_back);
   void resetState(bool forget_time);
   Eigen::Matrix3d initialCovariance() const;
-  void emitState(Stamp stamp);
   EngineState stateAt(Stamp stamp) const;
 
   /// The bias in force at `stamp` (bias samples up to it take effect).
   const Eigen::Vector3d& biasAt(Stamp stamp);
-  void submitKinematic(const Input& input);
-  void submitDynamic(const Input& input);
-  void applyDynamic(const Input& input);
-  void applyPendingUpTo(Stamp stamp);
-  void publishDue(bool skip_intermediate);
-  void publishGridStamp(Stamp stamp);
 
   EngineConfig config_;
   EngineSink& sink_;
-  std::optional<KinematicPropagator> kinematic_;
-  std::optional<DynamicPropagator> dynamic_;
-  std::string model_name_;
+  std::unique_ptr<Propagator> propagator_;
   Eigen::Matrix3d default_R_B_;
   Eigen::Matrix3d P_B_ = Eigen::Matrix3d::Zero();
-  std::vector<Input> pending_;        // sorted by stamp
-  std::optional<Input> held_torque_;  // the last torque applied, for reconfigure()
   Eigen::Vector3d gyro_bias_B_ = Eigen::Vector3d::Zero();
   std::vector<std::pair<Stamp, Eigen::Vector3d>> pending_gyro_bias_;  // sorted by stamp, bounded
 

@@ -1,0 +1,189 @@
+// The model behind the engine: one interface, Propagator, implemented by the kinematic model
+// (KinematicModel, kinematic_model.h) and the dynamic one (DynamicScheduler,
+// dynamic_scheduler.h), and the types an input and a state travel in. The engine judges an
+// input against its source and the clock, subtracts the bias and moves rate stamps by
+// rate_delay; what the input then does to the state, when a state is published and at which
+// stamp, is the model's, which reports back through PropagatorHost (the engine: core time,
+// the counters, the sink). See docs/design.md §2 and §5.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "attitude_propagator/dynamic_state.h"
+#include "attitude_propagator/integrator.h"
+#include "attitude_propagator/source_timeline.h"
+#include "attitude_propagator/time_policy.h"
+
+namespace attitude_propagator {
+
+class KinematicPropagator;
+struct EngineConfig;
+
+/// Where an input came from; chooses what it means and how it is logged.
+enum class Source { Imu, Twist, Torque };
+const char* sourceName(Source source);
+
+/// A decoded input: a body rate w_B (rad/s) from Imu or Twist, or a torque (N m) in `frame`.
+struct Input {
+  Source source = Source::Imu;
+  Stamp stamp = 0;
+  Eigen::Vector3d value = Eigen::Vector3d::Zero();
+  TorqueFrame frame = TorqueFrame::Body;
+  /// Rate noise covariance in the body frame (rad²/s²); zero: the configured default.
+  Eigen::Matrix3d rate_covariance_B = Eigen::Matrix3d::Zero();
+  /// Carried through untouched and handed back with the applied input (the node keeps the
+  /// IMU message here, to republish it with the orientation at its stamp).
+  std::shared_ptr<const void> payload;
+};
+
+/// The state to publish at a stamp.
+struct EngineState {
+  Stamp stamp = 0;
+  Eigen::Quaterniond q_WB = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d w_B = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d P_B = Eigen::Matrix3d::Zero();  ///< orientation error covariance, body frame
+  double norm_error = 0.0;
+  std::uint64_t steps = 0;
+  // Dynamic model only (zero in the kinematic model).
+  Eigen::Vector3d M_B = Eigen::Vector3d::Zero();  ///< angular momentum, body frame
+  double kinetic_energy = 0.0;
+};
+
+/// What happened to input and time, for diagnostics. Every counter only grows.
+struct EngineCounters {
+  std::uint64_t received = 0;  ///< every input submitted or rejected
+  std::uint64_t accepted = 0;
+  std::uint64_t rejected_non_finite = 0;
+  std::uint64_t rejected_out_of_range = 0;
+  std::uint64_t rejected_no_rate = 0;     ///< REP-145: angular_velocity_covariance[0] == -1
+  std::uint64_t rejected_type = 0;        ///< a message type the topic does not take
+  std::uint64_t rejected_covariance = 0;  ///< not symmetric, negative or huge
+  /// At or before the newest input of its source (a straggler, by any amount; the first
+  /// inputs of a backward jump before it is recognised; a rate older than a set_state).
+  std::uint64_t dropped_stale = 0;
+  std::uint64_t dropped_no_tf = 0;
+  std::uint64_t dropped_no_time = 0;
+  std::uint64_t late = 0;        ///< dynamic: arrived after the clock passed its stamp
+  std::uint64_t gaps = 0;        ///< longer than max_dt: state held
+  std::uint64_t resets = 0;      ///< the state back to the initial one: time went back, reset()
+  std::uint64_t jumps_back = 0;  ///< a source's stamps went back, and persisted
+  std::uint64_t rejected_future = 0;  ///< stamped more than max_future ahead of the clock
+  /// Dynamic: queued inputs a reset dropped (reset(), ROS time jumping back).
+  std::uint64_t dropped_on_reset = 0;
+  std::uint64_t failed_steps = 0;      ///< the integrator could not complete an interval
+  std::uint64_t pending_overflow = 0;  ///< dynamic: queue full, the furthest ahead dropped
+  std::uint64_t deferred_ticks = 0;    ///< dynamic: grid stamps left for the next call (budget)
+  std::uint64_t rejected_bias = 0;     ///< gyro bias samples: non-finite, too large or bad frame
+};
+
+/// Something the node should log (throttled per kind).
+struct EngineNote {
+  enum Kind {
+    Gap,               ///< an input or the clock moved on by more than max_dt: state held
+    StampsJumpedBack,  ///< a source's stamps went back by more than the threshold, and persisted
+    Future,            ///< an input stamped more than max_future ahead of the clock: refused
+    ClockJumpedBack,   ///< ROS time went back by more than the threshold: reset
+    Stale,
+    NonFinite,
+    OutOfRange,
+    FailedStep,
+    PendingFull,
+    Deferred,
+  };
+  Kind kind = Gap;
+  std::optional<Source> source;  ///< empty: the clock
+  Stamp stamp = 0;
+};
+
+/// What a model needs from the engine that drives it. Implemented by AttitudeEngine; called
+/// synchronously from the model's methods (and may call back into the model: a gap far from
+/// the origin re-pins the state, a non-finite state resets it).
+class PropagatorHost {
+ public:
+  /// Seconds since the origin (whole seconds; the first stamp sets it).
+  virtual double coreTime(Stamp stamp) = 0;
+  /// The stamp of core time t; empty while no origin is set.
+  virtual std::optional<Stamp> stampAt(double t) const = 0;
+  /// Counts and notes a propagator outcome (source empty: the clock); true when the state
+  /// holds at the stamp.
+  virtual bool handleOutcome(StampOutcome outcome, std::optional<Source> source, Stamp stamp) = 0;
+  /// Publishes the state at `stamp` (once per stamp, increasing).
+  virtual void emitState(Stamp stamp) = 0;
+  /// Hands an applied input on with the state at `stamp`.
+  virtual void inputApplied(const Input& input, Stamp stamp) = 0;
+  virtual void note(const EngineNote& note) = 0;
+  virtual EngineCounters& mutableCounters() = 0;
+  /// The latest ROS time seen; empty before the first.
+  virtual std::optional<Stamp> clock() const = 0;
+  /// The stamp of the last state published; empty before one (or after time was forgotten).
+  virtual std::optional<Stamp> lastPublished() const = 0;
+  /// The orientation covariance: propagated over a step of length h with the step's rate
+  /// w_step and the input's rate covariance (zero: the configured one), or back to the
+  /// initial one (an anchor).
+  virtual void propagateCovariance(double h, const Eigen::Vector3d& w_step,
+                                   const Eigen::Matrix3d& rate_covariance_B) = 0;
+  virtual void anchorCovariance() = 0;
+
+ protected:
+  ~PropagatorHost() = default;
+};
+
+/// A model: what an input does to the state and when states are published. Every call but
+/// setState and reconfigure never throws.
+class Propagator {
+ public:
+  virtual ~Propagator() = default;
+
+  /// An input in order for its source, not ahead of the clock by more than max_future, bias
+  /// subtracted, rate stamps moved by rate_delay. Kinematic: integrated now, the state at its
+  /// stamp published. Dynamic: applied when the clock reaches its stamp (at once when the
+  /// propagator has already passed it).
+  virtual void submit(const Input& input) = 0;
+  /// Publishes what is due up to the clock (host clock()): the dynamic model's grid stamps,
+  /// within the budgets; skip_intermediate: only the newest (the clock jumped by a gap).
+  /// Kinematic: nothing (its states follow the inputs).
+  virtual void publishDue(bool skip_intermediate) = 0;
+
+  /// Pins the state at core time t (a new anchor). Throws std::invalid_argument, leaving the
+  /// state unchanged, for a state the propagator refuses.
+  virtual void setState(double t, const Eigen::Quaterniond& q_WB, const Eigen::Vector3d& w_B) = 0;
+  /// Back to the initial state, waiting for an anchor; queued inputs are dropped (counted).
+  virtual void reset() = 0;
+  /// A source's stamps went back, and persisted. True when the model's time is the inputs'
+  /// (kinematic: the engine starts time again, from the initial state); otherwise the model
+  /// goes on, the source's inputs acting late.
+  virtual bool restartInputOrder(Source source) = 0;
+  /// A new propagator from `next` (same model), started from the current state at the current
+  /// time; queued inputs and a held torque stay. Throws std::invalid_argument, leaving
+  /// everything unchanged, when `next` is refused.
+  virtual void reconfigure(const EngineConfig& next) = 0;
+
+  /// The state at the propagator's newest stamp (stamp and P_B left to the engine).
+  virtual EngineState state() const = 0;
+  /// Inputs waiting for the clock (dynamic model).
+  virtual std::size_t pending() const = 0;
+  virtual Model model() const = 0;
+  /// "kinematic" or the dynamic propagator's model name.
+  virtual const std::string& modelName() const = 0;
+  virtual Integrator integrator() const = 0;
+  /// Relative drifts of energy and |M| since the anchor (dynamic model; 0 otherwise).
+  virtual double energyDrift() const = 0;
+  virtual double momentumDrift() const = 0;
+  /// The kinematic propagator, for its diagnostics; nullptr in the dynamic model.
+  virtual const KinematicPropagator* kinematic() const { return nullptr; }
+};
+
+/// The time policy of the model `config` asks for.
+const TimePolicy& timePolicyOf(const EngineConfig& config);
+
+/// The model `config` asks for. Throws std::invalid_argument (from the propagators) for an
+/// invalid configuration.
+std::unique_ptr<Propagator> makePropagator(const EngineConfig& config, PropagatorHost& host);
+
+}  // namespace attitude_propagator
