@@ -29,6 +29,7 @@ class KinematicModel final : public Propagator {
   EngineState state() const override;
   std::size_t pending() const override { return 0; }
   Model model() const override { return Model::Kinematic; }
+  bool takesRepeatedRateStamps() const override { return kinematic_.stampFilter() != nullptr; }
   const std::string& modelName() const override { return model_name_; }
   Integrator integrator() const override { return kinematic_.integrator(); }
   double energyDrift() const override { return 0.0; }

@@ -175,6 +175,9 @@ class Propagator {
   /// Relative drifts of energy and |M| since the anchor (dynamic model; 0 otherwise).
   virtual double energyDrift() const = 0;
   virtual double momentumDrift() const = 0;
+  /// True when the model gives each of several rate samples stamped alike its own stamp (the
+  /// sensor-clock filter's FIFO reads): the engine then lets a repeated stamp through.
+  virtual bool takesRepeatedRateStamps() const { return false; }
   /// The kinematic propagator, for its diagnostics; nullptr in the dynamic model.
   virtual const KinematicPropagator* kinematic() const { return nullptr; }
 };

@@ -52,8 +52,7 @@ AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink)
   }
   gyro_bias_B_ = config_.gyro_bias_B;
   // A FIFO read stamps its samples alike; the sensor-clock filter gives each its own stamp.
-  const bool fifo_reads = config_.model == Model::Kinematic &&
-                          config_.kinematic.stamp_filter == StampFilter::SensorClock;
+  const bool fifo_reads = propagator_->takesRepeatedRateStamps();
   for (Source s : {Source::Imu, Source::Twist}) timeline(s).allowRepeatedStamps(fifo_reads);
   default_R_B_ = config_.rate_stddev * config_.rate_stddev * Eigen::Matrix3d::Identity();
   P_B_ = initialCovariance();
