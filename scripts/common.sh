@@ -76,3 +76,23 @@ source_workspace() {
   source "${WORKSPACE}/devel/setup.bash"
   set -u
 }
+
+# The one sanitizer build (test/sanitize) of scripts/sanitize.sh and scripts/fuzz.sh: with clang
+# and libFuzzer it holds the sanitized suite and the fuzz targets; otherwise the suite alone,
+# built with ${CXX:-g++}. Configures BUILD_DIR (afresh when its source or compiler changed);
+# logs to BUILD_DIR/cmake.log.
+#   configure_sanitize_build BUILD_DIR
+configure_sanitize_build() {
+  local build="$1" compiler cached
+  if have_libfuzzer; then compiler=clang++; else compiler="${CXX:-g++}"; fi
+  mkdir -p "$build"
+  forget_other_source "$build" "$REPO_DIR/test/sanitize"
+  if [ -f "$build/CMakeCache.txt" ]; then
+    cached="$(sed -n 's/^CMAKE_CXX_COMPILER:[A-Z]*=//p' "$build/CMakeCache.txt")"
+    if [ "$(basename "$cached")" != "$(basename "$(command -v "$compiler" || echo "$compiler")")" ]; then
+      rm -rf "$build/CMakeCache.txt" "$build/CMakeFiles"
+    fi
+  fi
+  cmake -S "$REPO_DIR/test/sanitize" -B "$build" -DCMAKE_CXX_COMPILER="$compiler" \
+    >"$build/cmake.log" 2>&1
+}

@@ -1,14 +1,18 @@
 #!/usr/bin/env bash
-# Fuzzes the core library with libFuzzer (clang, ASan + UBSan): targets in test/fuzz/.
-#   bash scripts/fuzz.sh [seconds_per_target]   build, then fuzz each target (default 60 s)
-#   bash scripts/fuzz.sh --regressions          build, then run each target over the inputs in
-#                                               test/fuzz/regressions/<target>/ only
+# Fuzzes the core library with libFuzzer (clang, ASan + UBSan): targets in test/fuzz/, built in
+# the one sanitizer build of the core (test/sanitize, shared with scripts/sanitize.sh).
+#   bash scripts/fuzz.sh [seconds]        build, then fuzz every target at once for `seconds`
+#                                         of wall time (default 60), each from its own seed
+#   bash scripts/fuzz.sh --regressions    build, then run each target over the inputs in
+#                                         test/fuzz/regressions/<target>/ only
 # Options (before the seconds): --junit DIR writes one JUnit XML per run into DIR (one test
 # case per fuzzed target, one per regression input), as scripts/test.sh counts them.
 # Environment: FUZZ_TARGETS (default "kinematic dynamic parameters"), FUZZ_TIMEOUT (seconds
-# one input may take, default 10), FUZZ_BUILD_DIR (default $AP_WORKSPACE/fuzz).
-# A finding is saved under test/fuzz/findings/ (not committed) with the command that
-# reproduces it; copy it into test/fuzz/regressions/<target>/ to keep it as a regression input.
+# one input may take, default 30), FUZZ_SEED (default: drawn anew each run and printed; give it
+# to repeat a run), SANITIZE_BUILD_DIR (default $AP_WORKSPACE/sanitize).
+# A finding fails the run and is kept as a regression input: copied to
+# test/fuzz/regressions/<target>/ (commit it with the fix), with the command that reproduces
+# it printed; libFuzzer's own copy stays under test/fuzz/findings/ (not committed).
 # Exit status: 0 nothing found, 1 a finding or a failing regression input, 2 no build.
 set -uo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
@@ -20,7 +24,7 @@ while [ $# -gt 0 ]; do
   case "$1" in
     --regressions) mode=regressions ;;
     --junit) junit_dir="$2"; shift ;;
-    -h | --help) sed -n '2,13p' "$0"; exit 0 ;;
+    -h | --help) sed -n '2,17p' "$0"; exit 0 ;;
     *) seconds="$1" ;;
   esac
   shift
@@ -28,7 +32,7 @@ done
 targets=(${FUZZ_TARGETS:-kinematic dynamic parameters})
 # Per input: the sanitizers slow the core 10-20x, and the machine may be shared.
 timeout_s="${FUZZ_TIMEOUT:-30}"
-build="${FUZZ_BUILD_DIR:-$WORKSPACE/fuzz}"
+build="${SANITIZE_BUILD_DIR:-$WORKSPACE/sanitize}"
 fuzz_dir="$REPO_DIR/test/fuzz"
 findings="$fuzz_dir/findings"
 
@@ -37,10 +41,11 @@ if ! have_libfuzzer; then
   exit 2
 fi
 mkdir -p "$build" "$findings"
-forget_other_source "$build" "$fuzz_dir"
 echo "fuzz: building the targets in $build"
-if ! { cmake -S "$fuzz_dir" -B "$build" -DCMAKE_CXX_COMPILER=clang++ >"$build/cmake.log" 2>&1 &&
-  cmake --build "$build" -j 2 >"$build/build.log" 2>&1; }; then
+fuzz_bins=()
+for target in "${targets[@]}"; do fuzz_bins+=("fuzz_$target"); done
+if ! { configure_sanitize_build "$build" &&
+  cmake --build "$build" -j "$(nproc)" --target "${fuzz_bins[@]}" >"$build/build.log" 2>&1; }; then
   echo "fuzz: build failed; see $build/cmake.log and $build/build.log"
   tail -n 30 "$build/build.log" 2>/dev/null
   exit 2
@@ -48,12 +53,11 @@ fi
 
 export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=0}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
-# A fixed seed and a fresh working corpus (the committed seeds only) make a run repeatable: the
-# test command explores the same inputs on every machine, a faster one just further along.
-# FUZZ_SEED=0 draws a random seed, FUZZ_KEEP_CORPUS=1 grows the working corpus across runs
-# (for longer exploration by hand).
-seed="${FUZZ_SEED:-1}"
-flags=(-timeout="$timeout_s" -rss_limit_mb=2048 -max_len=2048 -print_final_stats=1 -seed="$seed")
+# A seed drawn anew each run (and printed), so that every run of the test command explores
+# other inputs; FUZZ_SEED repeats a run. The working corpus starts from the committed seeds
+# each time; FUZZ_KEEP_CORPUS=1 grows it across runs (for longer exploration by hand).
+seed="${FUZZ_SEED:-$(( (RANDOM << 15 | RANDOM) + 1 ))}"
+flags=(-timeout="$timeout_s" -rss_limit_mb=2048 -max_len=2048 -print_final_stats=1)
 
 xml_escape() { sed -e 's/&/\&amp;/g' -e 's/</\&lt;/g' -e 's/>/\&gt;/g' -e 's/"/\&quot;/g'; }
 
@@ -75,6 +79,8 @@ finding_summary() {
 
 failed=0
 cases=()
+pids=()
+fuzzed=()
 for target in "${targets[@]}"; do
   bin="$build/fuzz_$target"
   log="$build/$target.$mode.log"
@@ -84,7 +90,7 @@ for target in "${targets[@]}"; do
     for input in "${inputs[@]}"; do
       name="$target/regressions/$(basename "$input")"
       start=$SECONDS
-      if "$bin" "${flags[@]}" "$input" >"$log" 2>&1; then
+      if "$bin" "${flags[@]}" -seed=1 "$input" >"$log" 2>&1; then
         echo "fuzz: $name passed"
         cases+=("$(junit_case "$name" $((SECONDS - start)))")
       else
@@ -98,33 +104,50 @@ for target in "${targets[@]}"; do
     done
     continue
   fi
-  # New inputs go to the working corpus in the build dir; the committed seeds stay as they are.
+  # Fuzzing: every target at once (they share the cores for the same wall time), each from
+  # the run's seed plus its index.
   corpus="$build/corpus/$target"
   [ "${FUZZ_KEEP_CORPUS:-0}" = 1 ] || rm -rf "$corpus"
   mkdir -p "$corpus"
-  before=$(ls "$findings" | wc -l)
+  rm -f "$findings/$target"-*
+  index=${#pids[@]}
+  "$bin" "${flags[@]}" -seed=$((seed + index)) -max_total_time="$seconds" \
+    -artifact_prefix="$findings/$target-" "$corpus" "$fuzz_dir/corpus/$target" >"$log" 2>&1 &
+  pids+=($!)
+  fuzzed+=("$target")
+done
+
+if [ "$mode" = fuzz ]; then
+  echo "fuzz: ${fuzzed[*]} for ${seconds} s at once, seed $seed (FUZZ_SEED=$seed repeats this run)"
   start=$SECONDS
-  echo "fuzz: $target for ${seconds} s"
-  "$bin" "${flags[@]}" -max_total_time="$seconds" -artifact_prefix="$findings/$target-" \
-    "$corpus" "$fuzz_dir/corpus/$target" >"$log" 2>&1
-  status=$?
-  stats="$(grep -E '^stat::number_of_executed_units' "$log" | awk '{print $2}')"
-  if [ "$status" -eq 0 ]; then
-    echo "fuzz: $target passed (${stats:-?} inputs in $((SECONDS - start)) s)"
-    cases+=("$(junit_case "$target" $((SECONDS - start)))")
-  else
+  for i in "${!fuzzed[@]}"; do
+    target="${fuzzed[$i]}"
+    bin="$build/fuzz_$target"
+    log="$build/$target.$mode.log"
+    wait "${pids[$i]}"
+    status=$?
+    stats="$(grep -E '^stat::number_of_executed_units' "$log" | awk '{print $2}')"
+    if [ "$status" -eq 0 ]; then
+      echo "fuzz: $target passed (${stats:-?} inputs in $((SECONDS - start)) s, seed $((seed + i)))"
+      cases+=("$(junit_case "$target" $((SECONDS - start)))")
+      continue
+    fi
     failed=$((failed + 1))
     summary="$(finding_summary "$log")"
     artifact="$(ls -t "$findings"/"$target"-* 2>/dev/null | head -n 1)"
-    [ "$(ls "$findings" | wc -l)" -gt "$before" ] || artifact="(none written; log: $log)"
-    echo "fuzz: $target FAILED after $((SECONDS - start)) s:"
+    kept="(none written; log: $log)"
+    if [ -n "$artifact" ]; then
+      mkdir -p "$fuzz_dir/regressions/$target"
+      kept="$fuzz_dir/regressions/$target/found-$(sha1sum "$artifact" | cut -c1-12)"
+      cp "$artifact" "$kept"
+    fi
+    echo "fuzz: $target FAILED after $((SECONDS - start)) s (seed $((seed + i))):"
     echo "$summary" | sed 's/^/    /'
-    echo "    input: $artifact"
-    echo "    reproduce: $bin $artifact"
-    echo "    keep as a regression input: mkdir -p $fuzz_dir/regressions/$target && cp $artifact $fuzz_dir/regressions/$target/NAME"
-    cases+=("$(junit_case "$target" $((SECONDS - start)) "$summary (input: $artifact)")")
-  fi
-done
+    echo "    kept as a regression input: $kept"
+    echo "    reproduce: $bin $kept"
+    cases+=("$(junit_case "$target" $((SECONDS - start)) "$summary (input: $kept)")")
+  done
+fi
 
 if [ -n "$junit_dir" ]; then
   mkdir -p "$junit_dir"

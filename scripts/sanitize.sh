@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # Builds the core library and its gtest suite (test/core) with ASan + UBSan in a build
-# directory of their own (plain CMake, test/sanitize/CMakeLists.txt) and runs the suite.
+# directory of their own (plain CMake, test/sanitize/CMakeLists.txt) and runs the suite. The
+# same build holds the fuzz targets when clang has libFuzzer (scripts/fuzz.sh): built here with
+# clang++ then, otherwise with ${CXX:-g++}.
 #   bash scripts/sanitize.sh [results_dir]   gtest XML goes to results_dir (default BUILD/results)
-# Environment: SANITIZE_BUILD_DIR (default $AP_WORKSPACE/sanitize), CXX (default g++).
+# Environment: SANITIZE_BUILD_DIR (default $AP_WORKSPACE/sanitize), CXX (without libFuzzer;
+# default g++).
 # Exit status: that of the suite (non-zero on a failed test or a sanitizer report), 2 when the
 # build fails.
 set -uo pipefail
@@ -11,13 +14,12 @@ source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 build="${SANITIZE_BUILD_DIR:-$WORKSPACE/sanitize}"
 results="${1:-$build/results}"
 mkdir -p "$build" "$results"
-forget_other_source "$build" "$REPO_DIR/test/sanitize"
 rm -f "$results/core_tests_sanitized.xml"
 
 echo "sanitize: building the core tests with ASan + UBSan in $build"
 start=$SECONDS
-if ! { cmake -S "$REPO_DIR/test/sanitize" -B "$build" -DCMAKE_CXX_COMPILER="${CXX:-g++}" \
-  >"$build/cmake.log" 2>&1 && cmake --build "$build" -j 2 >"$build/build.log" 2>&1; }; then
+if ! { configure_sanitize_build "$build" &&
+  cmake --build "$build" -j "$(nproc)" >"$build/build.log" 2>&1; }; then
   echo "sanitize: build failed; see $build/cmake.log and $build/build.log"
   tail -n 30 "$build/build.log" 2>/dev/null
   exit 2
