@@ -84,9 +84,9 @@ const char* fixOutcomeName(FixOutcome outcome);
 /// The error state beside the attitude: P_B, and with estimate_gyro_bias the bias estimate,
 /// its covariance and the cross-covariance with the attitude error (numerics.md §7.1).
 struct ErrorState {
-  Eigen::Matrix3d P_B = Eigen::Matrix3d::Zero();   ///< attitude error, body frame (rad^2)
-  Eigen::Matrix3d P_Bb = Eigen::Matrix3d::Zero();  ///< attitude error x bias error
-  Eigen::Matrix3d P_bb = Eigen::Matrix3d::Zero();  ///< bias error ((rad/s)^2)
+  Eigen::Matrix3d P_B = Eigen::Matrix3d::Zero();     ///< attitude error, body frame (rad^2)
+  Eigen::Matrix3d P_Bb = Eigen::Matrix3d::Zero();    ///< attitude error x bias error
+  Eigen::Matrix3d P_bb = Eigen::Matrix3d::Zero();    ///< bias error ((rad/s)^2)
   Eigen::Vector3d bias_B = Eigen::Vector3d::Zero();  ///< estimated bias (rad/s), body frame
 };
 

@@ -280,7 +280,8 @@ NodeConfig validateParameters(const Parameters& p) {
   policy.max_dt = p.max_dt;
 
   if (p.estimate_gyro_bias && config.model != Model::Kinematic) {
-    fail("estimate_gyro_bias", "true needs the kinematic model; accepted with model dynamic: false");
+    fail("estimate_gyro_bias",
+         "true needs the kinematic model; accepted with model dynamic: false");
   }
 
   if (config.model == Model::Kinematic) {

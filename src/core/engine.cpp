@@ -569,9 +569,9 @@ FixOutcome AttitudeEngine::submitFix(Stamp stamp, const Eigen::Quaterniond& q_WB
   }
   const double s = config_.fixes.stddev;
   PendingFix fix{stamp, q_WB.normalized(),
-                 covariance_B.isZero(0.0) ? Eigen::Matrix3d(s * s * Eigen::Matrix3d::Identity())
-                                          : Eigen::Matrix3d(0.5 * (covariance_B +
-                                                                   covariance_B.transpose()))};
+                 covariance_B.isZero(0.0)
+                     ? Eigen::Matrix3d(s * s * Eigen::Matrix3d::Identity())
+                     : Eigen::Matrix3d(0.5 * (covariance_B + covariance_B.transpose()))};
   if (!keep_history_) {
     // Nothing is kept until fixes arrive: the history starts at the newest state.
     keep_history_ = true;
@@ -583,17 +583,17 @@ FixOutcome AttitudeEngine::submitFix(Stamp stamp, const Eigen::Quaterniond& q_WB
     return outcome;
   }
   // Ahead of the newest rate (or before the first): it waits for the rates to reach it.
-  const auto at = std::upper_bound(
-      pending_fixes_.begin(), pending_fixes_.end(), stamp,
-      [](Stamp t, const PendingFix& other) { return t < other.stamp; });
+  const auto at =
+      std::upper_bound(pending_fixes_.begin(), pending_fixes_.end(), stamp,
+                       [](Stamp t, const PendingFix& other) { return t < other.stamp; });
   if (pending_fixes_.size() >= kMaxPendingFixes) {
     countFix(FixOutcome::QueueFull);
     if (at == pending_fixes_.end()) return FixOutcome::QueueFull;  // the furthest ahead
     pending_fixes_.pop_back();
   }
-  const auto where = std::upper_bound(
-      pending_fixes_.begin(), pending_fixes_.end(), stamp,
-      [](Stamp t, const PendingFix& other) { return t < other.stamp; });
+  const auto where =
+      std::upper_bound(pending_fixes_.begin(), pending_fixes_.end(), stamp,
+                       [](Stamp t, const PendingFix& other) { return t < other.stamp; });
   pending_fixes_.insert(where, fix);
   return FixOutcome::Waiting;
 }
