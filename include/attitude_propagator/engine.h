@@ -42,6 +42,67 @@ class EngineSink {
   virtual void note(const EngineNote& note) = 0;
 };
 
+/// What an absolute fix does at its stamp (docs/design.md §6.9).
+enum class FixMode {
+  Reset,  ///< the attitude at the fix's stamp is replaced, P_B becomes the fix's covariance
+  Fuse,   ///< a multiplicative EKF update at the fix's stamp, behind a chi-square gate
+};
+const char* fixModeName(FixMode mode);
+
+/// Absolute attitude fixes and the gyro bias estimate (docs/design.md §6.9, numerics.md §7.1).
+struct FixConfig {
+  FixMode mode = FixMode::Fuse;
+  /// Seconds of rate inputs kept to apply a late fix at its stamp, in (0, kMaxFixHistory];
+  /// kept only from the first fix on.
+  double history = 1.0;
+  /// Fuse: largest squared Mahalanobis distance r^T S^-1 r of an innovation accepted; the
+  /// default is the 99.9 % point of chi-square with 3 degrees of freedom.
+  double gate = 16.266;
+  /// rad per axis, for a fix that carries no covariance (all zero).
+  double stddev = 0.01;
+  /// The gyro bias joins the error state (6x6: attitude error, bias error).
+  bool estimate_gyro_bias = false;
+  double gyro_bias_random_walk = 1e-6;  ///< rad/s/sqrt(s): the bias' random walk
+  double gyro_bias_stddev = 2.424e-5;   ///< rad/s: prior standard deviation per axis (5 deg/h)
+};
+
+/// What became of a fix (the counters say the same: EngineCounters::fixes_*).
+enum class FixOutcome {
+  Accepted,        ///< fused at its stamp, the rates since replayed
+  Reset,           ///< the attitude replaced at its stamp, the rates since replayed
+  Waiting,         ///< stamped ahead of the newest rate: applied when the rates reach it
+  RejectedGate,    ///< fuse: the innovation is beyond the gate
+  TooOld,          ///< stamped before the history (or the last anchor)
+  BadQuaternion,   ///< non-finite, or |q| not 1 within kFixUnitTolerance
+  BadCovariance,   ///< non-finite, asymmetric, a negative variance, a variance above pi^2,
+                   ///< a correlation beyond one
+  QueueFull,       ///< waiting, and dropped: kMaxPendingFixes were stamped nearer
+  RefusedByModel,  ///< the dynamic model takes no fixes
+};
+const char* fixOutcomeName(FixOutcome outcome);
+
+/// The error state beside the attitude: P_B, and with estimate_gyro_bias the bias estimate,
+/// its covariance and the cross-covariance with the attitude error (numerics.md §7.1).
+struct ErrorState {
+  Eigen::Matrix3d P_B = Eigen::Matrix3d::Zero();     ///< attitude error, body frame (rad^2)
+  Eigen::Matrix3d P_Bb = Eigen::Matrix3d::Zero();    ///< attitude error x bias error
+  Eigen::Matrix3d P_bb = Eigen::Matrix3d::Zero();    ///< bias error ((rad/s)^2)
+  Eigen::Vector3d bias_B = Eigen::Vector3d::Zero();  ///< estimated bias (rad/s), body frame
+};
+
+/// One entry of the fix history: a rate input as the model received it (after rate_delay and
+/// the configured bias; the bias estimate is subtracted when it is applied), and the model and
+/// the error state after it, at the stamp the state then held at.
+struct FixHistoryEntry {
+  Input input;
+  KinematicPropagator model;
+  ErrorState error;
+  Stamp stamp = 0;
+  /// The state was not reached by an input (the newest one when the history started, a pinned
+  /// state): restored, never replayed.
+  bool base = false;
+};
+
 struct EngineConfig {
   Model model = Model::Kinematic;  ///< Kinematic or Dynamic (resolved)
   KinematicConfig kinematic;
@@ -68,6 +129,8 @@ struct EngineConfig {
   /// a second of CPU, so a starved node catching up still answers services and SIGINT. The
   /// rest waits for the next call.
   std::uint64_t work_budget = std::uint64_t{1} << 18;
+  /// Absolute attitude fixes and the gyro bias estimate.
+  FixConfig fixes;
 };
 
 /// Inputs arriving on average more than this many seconds away from the clock (behind, or
@@ -105,6 +168,22 @@ class AttitudeEngine : private PropagatorHost {
   const Eigen::Vector3d& gyroBias() const { return gyro_bias_B_; }
   /// The kinematic propagator (nullptr in the dynamic model), for its diagnostics.
   const KinematicPropagator* kinematic() const { return propagator_->kinematic(); }
+
+  /// An absolute attitude q_WB measured at `stamp` (usually in the past), with the covariance
+  /// (rad^2) of its rotation-vector error in the body frame, like P_B; all zero: fix_stddev^2 I.
+  /// Applied at its stamp (fix_mode: fuse or reset) and the rate inputs since replayed, so the
+  /// newest state is what it would have been had the fix arrived on time; the state is published
+  /// with the next output. Kinematic model only. Never throws. docs/design.md §6.9.
+  FixOutcome submitFix(Stamp stamp, const Eigen::Quaterniond& q_WB,
+                       const Eigen::Matrix3d& covariance_B);
+  /// Fixes waiting for the rates to reach their stamps.
+  std::size_t pendingFixes() const { return pending_fixes_.size(); }
+  /// Rate inputs kept for late fixes (0 before the first fix).
+  std::size_t fixHistorySize() const { return history_size_; }
+  /// estimate_gyro_bias: the estimated bias (rad/s, body frame), subtracted on top of
+  /// gyroBias(), and its standard deviation per axis; zero otherwise.
+  const Eigen::Vector3d& gyroBiasEstimate() const { return error_.bias_B; }
+  Eigen::Vector3d gyroBiasStddev() const;
 
   /// One tick of a complete clock record (every /clock message under sim time): a jump back
   /// by more than the threshold resets; a jump ahead by more than max_dt is a gap, so the grid
@@ -167,7 +246,7 @@ class AttitudeEngine : private PropagatorHost {
   std::optional<Stamp> lastPublished() const override { return last_published_; }
   void propagateCovariance(double h, const Eigen::Vector3d& w_step,
                            const Eigen::Matrix3d& rate_covariance_B) override;
-  void anchorCovariance() override { P_B_ = initialCovariance(); }
+  void anchorCovariance() override;
 
   void rebaseIfFar(Stamp stamp);
   bool clockWentBack(Stamp now);
@@ -184,11 +263,34 @@ class AttitudeEngine : private PropagatorHost {
   /// The bias in force at `stamp` (bias samples up to it take effect).
   const Eigen::Vector3d& biasAt(Stamp stamp);
 
+  // Fixes (docs/design.md §6.9).
+  struct PendingFix {
+    Stamp stamp;
+    Eigen::Quaterniond q_WB;
+    Eigen::Matrix3d R_B;
+  };
+  /// Hands a rate input to the model, the bias estimate subtracted.
+  void submitToModel(const Input& input);
+  /// Appends the model's state after `input` to the history, drops what is too old.
+  void recordHistory(const Input& input, bool base = false);
+  void clearHistory();
+  FixHistoryEntry& historyEntry(std::size_t i) {
+    return history_[(history_head_ + i) % history_.size()];
+  }
+  /// Applies a fix stamped at or before the newest entry.
+  FixOutcome applyFix(const PendingFix& fix);
+  /// Applies the waiting fixes the rates have reached.
+  void applyDueFixes();
+  void countFix(FixOutcome outcome);
+  /// The bias prior: estimate zero, covariance gyro_bias_stddev^2 I, no cross terms.
+  void resetBiasState();
+
   EngineConfig config_;
   EngineSink& sink_;
   std::unique_ptr<Propagator> propagator_;
   Eigen::Matrix3d default_R_B_;
-  Eigen::Matrix3d P_B_ = Eigen::Matrix3d::Zero();
+  ErrorState error_;  // P_B, and the bias estimate with its covariances
+  Eigen::Matrix3d& P_B_ = error_.P_B;
   Eigen::Vector3d gyro_bias_B_ = Eigen::Vector3d::Zero();
   std::vector<std::pair<Stamp, Eigen::Vector3d>> pending_gyro_bias_;  // sorted by stamp, bounded
 
@@ -198,6 +300,17 @@ class AttitudeEngine : private PropagatorHost {
   Stamp rate_delay_ns_ = 0;                  // config_.rate_delay
   std::array<SourceTimeline, 3> timelines_;  // per Source: Imu, Twist, Torque
   EngineCounters counters_;
+
+  // Fixes: the history (a ring, allocated as it grows, kept from the first fix on), the fixes
+  // waiting for the rates, the gate's run of rejections, and whether a replay is running (the
+  // model's calls back then neither count nor publish).
+  bool keep_history_ = false;
+  std::vector<FixHistoryEntry> history_;
+  std::size_t history_head_ = 0;
+  std::size_t history_size_ = 0;
+  std::vector<PendingFix> pending_fixes_;  // sorted by stamp, at most kMaxPendingFixes
+  int rejected_in_a_row_ = 0;
+  bool replaying_ = false;
 };
 
 }  // namespace attitude_propagator

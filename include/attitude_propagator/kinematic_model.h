@@ -35,6 +35,7 @@ class KinematicModel final : public Propagator {
   double energyDrift() const override { return 0.0; }
   double momentumDrift() const override { return 0.0; }
   const KinematicPropagator* kinematic() const override { return &kinematic_; }
+  KinematicPropagator* replayableState() override { return &kinematic_; }
 
  private:
   PropagatorHost& host_;

@@ -53,6 +53,13 @@ class KinematicPropagator {
   /// Back to the initial orientation, waiting for an anchoring sample.
   void reset();
 
+  /// Replaces the orientation at the newest stamp (an absolute fix) without anchoring: the
+  /// sample window, the time and the method's start-up stay, so the steps that follow are the
+  /// ones that would have followed anyway. A start-up re-integration from the anchor still to
+  /// come (cf4) starts from the anchor turned by the same world-side rotation. No-op before
+  /// the first sample or for a zero or non-finite q (normalised otherwise).
+  void correctOrientation(const Eigen::Quaterniond& q_WB);
+
   /// Pins the state: orientation q_WB (normalised at any finite scale) and body rate w_B hold
   /// at time t (a new anchor). Throws std::invalid_argument, leaving the state unchanged, for
   /// non-finite values, a zero quaternion or |w_B| > kMaxBodyRate.

@@ -13,6 +13,7 @@
 // double range (1.8e308).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 namespace attitude_propagator {
@@ -90,5 +91,27 @@ constexpr std::uint64_t kDefaultStepBudget = std::uint64_t{1} << 17;
 /// no knowledge of the orientation at all. propagateOrientationCovariance saturates there
 /// instead of growing without bound (and overflowing).
 constexpr double kMaxOrientationVariance = 3.14159265358979323846 * 3.14159265358979323846;
+
+// ---- Late absolute fixes (docs/design.md §6.9) ---------------------------------------------
+
+/// Largest `fix_history` (s): how far back a fix may be stamped and still be applied at its stamp.
+constexpr double kMaxFixHistory = 10.0;
+/// The history's memory bound: at most this many rate inputs are kept (the oldest dropped
+/// first, so at high rates the history is shorter than fix_history). One entry is the input as
+/// applied, the kinematic propagator after it and the error state, sizeof(FixHistoryEntry)
+/// bytes (1600 on x86-64, printed by test_fixes.cpp): 6.6 MB at most, 10 s at
+/// 400 Hz. Nothing is kept until the first fix is submitted.
+constexpr std::size_t kMaxFixHistorySamples = 4096;
+/// Fixes stamped ahead of the newest rate wait for the rates to reach them, at most this many;
+/// past it the one stamped furthest ahead is dropped (fixes_queue_full).
+constexpr std::size_t kMaxPendingFixes = 8;
+/// A fix's quaternion must have |q| within this of 1 (it is then normalised).
+constexpr double kFixUnitTolerance = 1e-5;
+/// Fuse mode: after this many fixes in a row rejected by the gate, the next one that fails the
+/// gate is applied as a reset: by then the estimate, not the fixes, is what is wrong.
+constexpr int kFixRejectionRun = 5;
+/// Floor (rad^2) on the innovation covariance's diagonal, so an exact fix of an exact estimate
+/// (P = R = 0 on an axis) still has an invertible S: 1 nrad.
+constexpr double kMinInnovationVariance = 1e-18;
 
 }  // namespace attitude_propagator

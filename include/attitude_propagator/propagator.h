@@ -53,6 +53,11 @@ struct EngineState {
   // Dynamic model only (zero in the kinematic model).
   Eigen::Vector3d M_B = Eigen::Vector3d::Zero();  ///< angular momentum, body frame
   double kinetic_energy = 0.0;
+  /// estimate_gyro_bias (kinematic model): the estimated gyro bias (rad/s, body frame),
+  /// subtracted from the rates on top of the configured one, and its standard deviation per
+  /// axis; zero when the bias is not estimated (docs/design.md §6.9).
+  Eigen::Vector3d gyro_bias_estimate_B = Eigen::Vector3d::Zero();
+  Eigen::Vector3d gyro_bias_stddev_B = Eigen::Vector3d::Zero();
 };
 
 /// What happened to input and time, for diagnostics. Every counter only grows.
@@ -80,6 +85,15 @@ struct EngineCounters {
   std::uint64_t pending_overflow = 0;  ///< dynamic: queue full, the furthest ahead dropped
   std::uint64_t deferred_ticks = 0;    ///< dynamic: grid stamps left for the next call (budget)
   std::uint64_t rejected_bias = 0;     ///< gyro bias samples: non-finite, too large or bad frame
+  // Absolute attitude fixes (AttitudeEngine::submitFix, docs/design.md §6.9).
+  std::uint64_t fixes_accepted = 0;  ///< applied (fused, or as a reset)
+  std::uint64_t fixes_reset = 0;     ///< of those, applied as a reset (fix_mode reset, or a run)
+  std::uint64_t fixes_rejected_gate = 0;   ///< fuse: the innovation beyond the chi-square gate
+  std::uint64_t fixes_too_old = 0;         ///< stamped before the history (or before the anchor)
+  std::uint64_t fixes_bad_quaternion = 0;  ///< non-finite, or not of unit norm
+  std::uint64_t fixes_bad_covariance = 0;  ///< non-finite, asymmetric, negative or above pi^2
+  std::uint64_t fixes_queue_full = 0;      ///< ahead of the newest rate, the queue full: dropped
+  std::uint64_t fixes_refused_model = 0;   ///< the dynamic model takes no fixes
 };
 
 /// Something the node should log (throttled per kind).
@@ -180,6 +194,10 @@ class Propagator {
   virtual bool takesRepeatedRateStamps() const { return false; }
   /// The kinematic propagator, for its diagnostics; nullptr in the dynamic model.
   virtual const KinematicPropagator* kinematic() const { return nullptr; }
+  /// The model's whole state when it can be saved and restored for a replay of late fixes
+  /// (kinematic: the KinematicPropagator is the model's state); nullptr when the model takes no
+  /// fixes (dynamic). docs/design.md §6.9.
+  virtual KinematicPropagator* replayableState() { return nullptr; }
 };
 
 /// The time policy of the model `config` asks for.

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <stdexcept>
 #include <type_traits>
 
@@ -147,6 +148,18 @@ void checkScalars(const Parameters& p) {
   requireFinite("initial_orientation_stddev", p.initial_orientation_stddev, 0.0, true, M_PI,
                 "a finite number in [0, pi] (rad)");
   requireOneOf("tf_conflict", p.tf_conflict, {"warn", "stop", "ignore"});
+  // Late fixes (docs/design.md §6.9): the history's memory bound is kMaxFixHistory seconds and
+  // kMaxFixHistorySamples inputs (limits.h).
+  requireOneOf("fix_mode", p.fix_mode, {"fuse", "reset"});
+  requireFinite("fix_history", p.fix_history, 0.0, false, kMaxFixHistory,
+                "a number > 0 and at most 10 (s)");
+  requireFinite("fix_gate", p.fix_gate, 0.0, false, std::numeric_limits<double>::max(),
+                "a finite number > 0");
+  requireFinite("fix_stddev", p.fix_stddev, 0.0, false, M_PI, "a number > 0 and at most pi (rad)");
+  requireFinite("gyro_bias_random_walk", p.gyro_bias_random_walk, 0.0, true, kMaxRateStddev,
+                "a finite number >= 0 and at most 1000 (rad/s/sqrt(s))");
+  requireFinite("gyro_bias_stddev", p.gyro_bias_stddev, 0.0, true, kMaxRateStddev,
+                "a finite number >= 0 and at most 1000 (rad/s)");
   const std::string rate_range = "[x, y, z], finite, |w| <= 1e5 (rad/s)";
   const auto& w = p.initial_angular_velocity;
   requireVector("initial_angular_velocity", w, 3, rate_range);
@@ -266,6 +279,11 @@ NodeConfig validateParameters(const Parameters& p) {
   TimePolicy policy;
   policy.max_dt = p.max_dt;
 
+  if (p.estimate_gyro_bias && config.model != Model::Kinematic) {
+    fail("estimate_gyro_bias",
+         "true needs the kinematic model; accepted with model dynamic: false");
+  }
+
   if (config.model == Model::Kinematic) {
     if (p.torque_input) {
       fail("torque_input",
@@ -337,6 +355,14 @@ EngineConfig engineConfig(const NodeConfig& node) {
   // The engine subtracts the bias (the parameter, then the bias topic) for both models.
   config.gyro_bias_B = node.kinematic.gyro_bias_B;
   config.kinematic.gyro_bias_B.setZero();
+  const Parameters& p = node.parameters;
+  config.fixes.mode = p.fix_mode == "reset" ? FixMode::Reset : FixMode::Fuse;
+  config.fixes.history = p.fix_history;
+  config.fixes.gate = p.fix_gate;
+  config.fixes.stddev = p.fix_stddev;
+  config.fixes.estimate_gyro_bias = p.estimate_gyro_bias;
+  config.fixes.gyro_bias_random_walk = p.gyro_bias_random_walk;
+  config.fixes.gyro_bias_stddev = p.gyro_bias_stddev;
   return config;
 }
 

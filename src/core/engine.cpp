@@ -5,9 +5,12 @@
 #include <exception>
 #include <stdexcept>
 
+#include <Eigen/Cholesky>
+
 #include "attitude_propagator/limits.h"
 #include "attitude_propagator/orientation_covariance.h"
 #include "attitude_propagator/publish_grid.h"
+#include "attitude_propagator/quaternion.h"
 
 namespace attitude_propagator {
 
@@ -36,7 +39,60 @@ Stamp checkedRateDelay(const EngineConfig& c) {
   return static_cast<Stamp>(std::llround(c.rate_delay * 1e9));
 }
 
+void checkFixConfig(const FixConfig& f) {
+  auto require = [](bool ok, const std::string& what) {
+    if (!ok) throw std::invalid_argument(what);
+  };
+  require(std::isfinite(f.history) && f.history > 0.0 && f.history <= kMaxFixHistory,
+          "fix_history: accepted: more than 0 and at most " + std::to_string(kMaxFixHistory) +
+              " s, got " + std::to_string(f.history));
+  require(std::isfinite(f.gate) && f.gate > 0.0,
+          "fix_gate: accepted: a finite number > 0, got " + std::to_string(f.gate));
+  require(std::isfinite(f.stddev) && f.stddev > 0.0 && f.stddev <= M_PI,
+          "fix_stddev: accepted: more than 0 and at most pi rad, got " + std::to_string(f.stddev));
+  require(std::isfinite(f.gyro_bias_random_walk) && f.gyro_bias_random_walk >= 0.0 &&
+              f.gyro_bias_random_walk <= kMaxRateStddev,
+          "gyro_bias_random_walk: accepted: 0 to 1000 rad/s/sqrt(s), got " +
+              std::to_string(f.gyro_bias_random_walk));
+  require(std::isfinite(f.gyro_bias_stddev) && f.gyro_bias_stddev >= 0.0 &&
+              f.gyro_bias_stddev <= kMaxRateStddev,
+          "gyro_bias_stddev: accepted: 0 to 1000 rad/s, got " + std::to_string(f.gyro_bias_stddev));
+}
+
+/// A fix's covariance: like a rate covariance from a message (finite, symmetric, variances at
+/// least 0, correlations at most one), with variances at most pi^2 (an orientation's ceiling).
+bool validFixCovariance(const Eigen::Matrix3d& R) {
+  return checkRateCovariance(R) == RateCovarianceCheck::Ok &&
+         R.diagonal().maxCoeff() <= kMaxOrientationVariance;
+}
+
 }  // namespace
+
+const char* fixModeName(FixMode mode) { return mode == FixMode::Reset ? "reset" : "fuse"; }
+
+const char* fixOutcomeName(FixOutcome outcome) {
+  switch (outcome) {
+    case FixOutcome::Accepted:
+      return "accepted";
+    case FixOutcome::Reset:
+      return "reset";
+    case FixOutcome::Waiting:
+      return "waiting";
+    case FixOutcome::RejectedGate:
+      return "rejected_gate";
+    case FixOutcome::TooOld:
+      return "too_old";
+    case FixOutcome::BadQuaternion:
+      return "bad_quaternion";
+    case FixOutcome::BadCovariance:
+      return "bad_covariance";
+    case FixOutcome::QueueFull:
+      return "queue_full";
+    case FixOutcome::RefusedByModel:
+      return "refused_by_model";
+  }
+  return "unknown";
+}
 
 AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink)
     : config_(config), sink_(sink), propagator_(makePropagator(config_, *this)) {
@@ -55,7 +111,29 @@ AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink)
   const bool fifo_reads = propagator_->takesRepeatedRateStamps();
   for (Source s : {Source::Imu, Source::Twist}) timeline(s).allowRepeatedStamps(fifo_reads);
   default_R_B_ = config_.rate_stddev * config_.rate_stddev * Eigen::Matrix3d::Identity();
+  checkFixConfig(config_.fixes);
+  if (config_.fixes.estimate_gyro_bias && config_.model != Model::Kinematic) {
+    throw std::invalid_argument("estimate_gyro_bias: accepted: true with the kinematic model only");
+  }
   P_B_ = initialCovariance();
+  resetBiasState();
+}
+
+void AttitudeEngine::resetBiasState() {
+  const double s = config_.fixes.estimate_gyro_bias ? config_.fixes.gyro_bias_stddev : 0.0;
+  error_.bias_B.setZero();
+  error_.P_bb = s * s * Eigen::Matrix3d::Identity();
+  error_.P_Bb.setZero();
+}
+
+Eigen::Vector3d AttitudeEngine::gyroBiasStddev() const {
+  if (!config_.fixes.estimate_gyro_bias) return Eigen::Vector3d::Zero();
+  return error_.P_bb.diagonal().cwiseMax(0.0).cwiseSqrt();
+}
+
+void AttitudeEngine::anchorCovariance() {
+  P_B_ = initialCovariance();
+  error_.P_Bb.setZero();  // the initial attitude's error owes nothing to the bias
 }
 
 Eigen::Matrix3d AttitudeEngine::initialCovariance() const {
@@ -86,6 +164,7 @@ void AttitudeEngine::rebaseIfFar(Stamp stamp) {
   // precise after a jump far ahead (a driver stamping in the year 2100).
   if (std::abs(coreTime(stamp)) < kFarFromOrigin) return;
   const EngineState held = state();
+  clearHistory();  // its stamps are in core time from the old origin
   origin_ = stamp - stamp % kNsPerSecond;
   const double t = coreTime(stamp);
   try {
@@ -184,6 +263,20 @@ void AttitudeEngine::submit(const Input& raw) {
   if (!inOrder(input.source, input.stamp)) return;
   // A bias stamped at or before the message's own stamp applies to it.
   if (input.source != Source::Torque) input.value -= biasAt(raw.stamp);
+  submitToModel(input);
+  if (keep_history_) {
+    recordHistory(input);
+    applyDueFixes();
+  }
+}
+
+void AttitudeEngine::submitToModel(const Input& input) {
+  if (config_.fixes.estimate_gyro_bias && input.source != Source::Torque) {
+    Input corrected = input;
+    corrected.value -= error_.bias_B;
+    propagator_->submit(corrected);
+    return;
+  }
   propagator_->submit(input);
 }
 
@@ -249,6 +342,11 @@ const Eigen::Vector3d& AttitudeEngine::biasAt(Stamp stamp) {
 
 bool AttitudeEngine::handleOutcome(StampOutcome outcome, std::optional<Source> source,
                                    Stamp stamp) {
+  if (replaying_) {
+    // A replay repeats what was counted and noted already: only whether the state holds.
+    return outcome == StampOutcome::Anchored || outcome == StampOutcome::Advanced ||
+           outcome == StampOutcome::HeldGap || outcome == StampOutcome::FailedStep;
+  }
   const bool input = source.has_value();
   switch (outcome) {
     case StampOutcome::Anchored:
@@ -292,6 +390,10 @@ bool AttitudeEngine::handleOutcome(StampOutcome outcome, std::optional<Source> s
 EngineState AttitudeEngine::state() const {
   EngineState s = propagator_->state();
   s.P_B = P_B_;
+  if (config_.fixes.estimate_gyro_bias) {
+    s.gyro_bias_estimate_B = error_.bias_B;
+    s.gyro_bias_stddev_B = gyroBiasStddev();
+  }
   return s;
 }
 
@@ -302,6 +404,7 @@ EngineState AttitudeEngine::stateAt(Stamp stamp) const {
 }
 
 void AttitudeEngine::emitState(Stamp stamp) {
+  if (replaying_) return;  // the replayed state is published with the next output (§6.9)
   if (last_published_ && stamp <= *last_published_) return;  // one per stamp
   EngineState s = stateAt(stamp);
   if (!s.q_WB.coeffs().allFinite() || !s.w_B.allFinite()) {
@@ -317,18 +420,44 @@ void AttitudeEngine::emitState(Stamp stamp) {
 }
 
 void AttitudeEngine::inputApplied(const Input& input, Stamp stamp) {
+  if (replaying_) return;
   sink_.inputApplied(input, stateAt(stamp));
 }
 
 void AttitudeEngine::propagateCovariance(double h, const Eigen::Vector3d& w_step,
                                          const Eigen::Matrix3d& rate_covariance_B) {
   const Eigen::Matrix3d& R_B = rate_covariance_B.isZero(0.0) ? default_R_B_ : rate_covariance_B;
-  P_B_ = propagateOrientationCovariance(P_B_, h, w_step, R_B);
+  if (!config_.fixes.estimate_gyro_bias) {
+    P_B_ = propagateOrientationCovariance(P_B_, h, w_step, R_B);
+    return;
+  }
+  // The error state (dtheta_B, db), numerics.md §7.1: the rate used is the measured one less
+  // the estimate, so an error db of the estimate turns the attitude by -h J_r db:
+  //   F = [Phi, -G; 0, I], G = h J_r(h w), Q = diag(G R G^T, sigma_rw^2 h I).
+  const Eigen::Vector3d phi = h * w_step;
+  const Eigen::Matrix3d Phi = expMap(phi).toRotationMatrix().transpose();
+  const Eigen::Matrix3d G = h * rightJacobian(phi);
+  ErrorState& e = error_;
+  const Eigen::Matrix3d PhiP_Bb = Phi * e.P_Bb;
+  const Eigen::Matrix3d GP_bb = G * e.P_bb;
+  const Eigen::Matrix3d cross = PhiP_Bb * G.transpose();
+  const Eigen::Matrix3d P_B = Phi * e.P_B * Phi.transpose() - cross - cross.transpose() +
+                              GP_bb * G.transpose() + G * R_B * G.transpose();
+  e.P_Bb = PhiP_Bb - GP_bb;
+  const double q = config_.fixes.gyro_bias_random_walk;
+  e.P_bb += q * q * h * Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d symmetric = 0.5 * (P_B + P_B.transpose());
+  e.P_B = clampOrientationCovariance(P_B);
+  if (e.P_B != symmetric) e.P_Bb.setZero();  // clamped: the correlations are lost with it
 }
 
 void AttitudeEngine::resetState(bool forget_time) {
   propagator_->reset();  // queued inputs dropped, counted
   P_B_ = initialCovariance();
+  error_.P_Bb.setZero();  // the bias estimate stays: it belongs to the gyro, not to the timeline
+  clearHistory();
+  counters_.dropped_on_reset += pending_fixes_.size();
+  pending_fixes_.clear();
   if (forget_time) {
     origin_.reset();
     last_published_.reset();
@@ -342,12 +471,20 @@ std::string AttitudeEngine::reconfigure(const EngineConfig& next) {
   try {
     checkMaxFuture(next.max_future);
     rate_delay_ns = checkedRateDelay(next);
+    checkFixConfig(next.fixes);
+    if (next.fixes.estimate_gyro_bias && next.model != Model::Kinematic) {
+      return "estimate_gyro_bias: accepted: true with the kinematic model only";
+    }
     propagator_->reconfigure(next);
   } catch (const std::exception& e) {
     return e.what();
   }
   const Eigen::Vector3d bias_B = config_.gyro_bias_B;  // the topic's bias stays in force
+  const bool estimate_changed = next.fixes.estimate_gyro_bias != config_.fixes.estimate_gyro_bias;
   config_ = next;
+  // The saved states belong to the old propagator (its integrator, its policy): not replayed.
+  clearHistory();
+  if (estimate_changed) resetBiasState();
   config_.gyro_bias_B = bias_B;
   rate_delay_ns_ = rate_delay_ns;
   default_R_B_ = config_.rate_stddev * config_.rate_stddev * Eigen::Matrix3d::Identity();
@@ -373,8 +510,228 @@ std::string AttitudeEngine::setState(Stamp stamp, const Eigen::Quaterniond& q_WB
     return e.what();
   }
   P_B_.setZero();  // pinned: the state is what the caller says it is
+  error_.P_Bb.setZero();
+  clearHistory();  // a fix stamped before the pin is too old
+  if (keep_history_) recordHistory(Input{}, true);
   emitState(stamp);
   return {};
+}
+
+// ---------------------------------------------------------------------------------------------
+// Late absolute fixes (docs/design.md §6.9, docs/numerics.md §7.1)
+// ---------------------------------------------------------------------------------------------
+
+void AttitudeEngine::countFix(FixOutcome outcome) {
+  switch (outcome) {
+    case FixOutcome::Accepted:
+      ++counters_.fixes_accepted;
+      break;
+    case FixOutcome::Reset:
+      ++counters_.fixes_accepted;
+      ++counters_.fixes_reset;
+      break;
+    case FixOutcome::Waiting:
+      break;  // counted when the rates reach it
+    case FixOutcome::RejectedGate:
+      ++counters_.fixes_rejected_gate;
+      break;
+    case FixOutcome::TooOld:
+      ++counters_.fixes_too_old;
+      break;
+    case FixOutcome::BadQuaternion:
+      ++counters_.fixes_bad_quaternion;
+      break;
+    case FixOutcome::BadCovariance:
+      ++counters_.fixes_bad_covariance;
+      break;
+    case FixOutcome::QueueFull:
+      ++counters_.fixes_queue_full;
+      break;
+    case FixOutcome::RefusedByModel:
+      ++counters_.fixes_refused_model;
+      break;
+  }
+}
+
+FixOutcome AttitudeEngine::submitFix(Stamp stamp, const Eigen::Quaterniond& q_WB,
+                                     const Eigen::Matrix3d& covariance_B) {
+  FixOutcome outcome = FixOutcome::Waiting;
+  if (!q_WB.coeffs().allFinite() || !(std::abs(q_WB.norm() - 1.0) <= kFixUnitTolerance)) {
+    outcome = FixOutcome::BadQuaternion;
+  } else if (!validFixCovariance(covariance_B)) {
+    outcome = FixOutcome::BadCovariance;
+  } else if (propagator_->replayableState() == nullptr) {
+    outcome = FixOutcome::RefusedByModel;
+  }
+  if (outcome != FixOutcome::Waiting) {
+    countFix(outcome);
+    return outcome;
+  }
+  const double s = config_.fixes.stddev;
+  PendingFix fix{stamp, q_WB.normalized(),
+                 covariance_B.isZero(0.0)
+                     ? Eigen::Matrix3d(s * s * Eigen::Matrix3d::Identity())
+                     : Eigen::Matrix3d(0.5 * (covariance_B + covariance_B.transpose()))};
+  if (!keep_history_) {
+    // Nothing is kept until fixes arrive: the history starts at the newest state.
+    keep_history_ = true;
+    recordHistory(Input{}, true);
+  }
+  if (history_size_ > 0 && stamp <= historyEntry(history_size_ - 1).stamp) {
+    outcome = applyFix(fix);
+    countFix(outcome);
+    return outcome;
+  }
+  // Ahead of the newest rate (or before the first): it waits for the rates to reach it.
+  const auto at =
+      std::upper_bound(pending_fixes_.begin(), pending_fixes_.end(), stamp,
+                       [](Stamp t, const PendingFix& other) { return t < other.stamp; });
+  if (pending_fixes_.size() >= kMaxPendingFixes) {
+    countFix(FixOutcome::QueueFull);
+    if (at == pending_fixes_.end()) return FixOutcome::QueueFull;  // the furthest ahead
+    pending_fixes_.pop_back();
+  }
+  const auto where =
+      std::upper_bound(pending_fixes_.begin(), pending_fixes_.end(), stamp,
+                       [](Stamp t, const PendingFix& other) { return t < other.stamp; });
+  pending_fixes_.insert(where, fix);
+  return FixOutcome::Waiting;
+}
+
+void AttitudeEngine::applyDueFixes() {
+  while (!pending_fixes_.empty() && history_size_ > 0 &&
+         pending_fixes_.front().stamp <= historyEntry(history_size_ - 1).stamp) {
+    const PendingFix fix = pending_fixes_.front();
+    pending_fixes_.erase(pending_fixes_.begin());
+    countFix(applyFix(fix));
+  }
+}
+
+void AttitudeEngine::clearHistory() {
+  history_head_ = 0;
+  history_size_ = 0;  // the entries' storage stays for reuse
+}
+
+void AttitudeEngine::recordHistory(const Input& input, bool base) {
+  const KinematicPropagator* model = propagator_->kinematic();
+  if (model == nullptr || !model->anchored()) return;
+  const std::optional<Stamp> stamp = stampAt(model->time());
+  if (!stamp) return;
+  FixHistoryEntry* slot = nullptr;
+  if (history_size_ < history_.size()) {
+    slot = &historyEntry(history_size_++);
+  } else if (history_.size() < kMaxFixHistorySamples) {
+    // Grow the ring: oldest first again, then one more slot at the end.
+    std::rotate(history_.begin(), history_.begin() + static_cast<std::ptrdiff_t>(history_head_),
+                history_.end());
+    history_head_ = 0;
+    history_.push_back(FixHistoryEntry{Input{}, *model, error_, *stamp, base});
+    slot = &history_.back();
+    ++history_size_;
+  } else {
+    slot = &history_[history_head_];  // full: the oldest goes (the memory bound, limits.h)
+    history_head_ = (history_head_ + 1) % history_.size();
+  }
+  slot->input = input;
+  slot->input.payload.reset();  // the message is not kept
+  slot->model = *model;
+  slot->error = error_;
+  slot->stamp = *stamp;
+  slot->base = base;
+  // Keep the newest entry at or before newest - fix_history (a fix stamped exactly there needs
+  // it), drop the ones before it.
+  const Stamp span = static_cast<Stamp>(std::llround(config_.fixes.history * 1e9));
+  while (history_size_ > 1 && *stamp - historyEntry(1).stamp >= span) {
+    history_head_ = (history_head_ + 1) % history_.size();
+    --history_size_;
+  }
+}
+
+// The fix is applied at the last saved state at or before its stamp, k (docs/design.md §6.9):
+// the estimate at the fix's stamp is interpolated along the geodesic to the next state,
+// q_f = q_k (x) D, D = Exp(a Log(q_k^-1 q_k+1)), a = (t_f - t_k) / (t_k+1 - t_k); an error at t_f
+// is the error at t_k seen through D (dtheta_k = C(D) dtheta_f), so the innovation
+// r = Log(q_f^-1 (x) q_fix) and the fix's covariance are carried to t_k by C(D), and the update
+// is made there.
+FixOutcome AttitudeEngine::applyFix(const PendingFix& fix) {
+  const std::size_t n = history_size_;
+  if (n == 0) return FixOutcome::TooOld;
+  const Stamp newest = historyEntry(n - 1).stamp;
+  const Stamp span = static_cast<Stamp>(std::llround(config_.fixes.history * 1e9));
+  if (newest - fix.stamp > span) return FixOutcome::TooOld;
+  std::size_t k = n;
+  while (k > 0 && historyEntry(k - 1).stamp > fix.stamp) --k;
+  if (k == 0) return FixOutcome::TooOld;  // before the oldest state kept (or the anchor)
+  --k;
+  FixHistoryEntry& base = historyEntry(k);
+  const Eigen::Quaterniond q_k = base.model.orientation();
+  Eigen::Quaterniond D = Eigen::Quaterniond::Identity();
+  if (base.stamp < fix.stamp && k + 1 < n) {
+    const FixHistoryEntry& next = historyEntry(k + 1);
+    const double a =
+        static_cast<double>(fix.stamp - base.stamp) / static_cast<double>(next.stamp - base.stamp);
+    D = expMap(a * logMap(q_k.conjugate() * next.model.orientation()));
+  }
+  const Eigen::Matrix3d C = D.toRotationMatrix();
+  const Eigen::Vector3d r = C * logMap((q_k * D).conjugate() * fix.q_WB);
+  const Eigen::Matrix3d R = C * fix.R_B * C.transpose();
+
+  ErrorState e = base.error;
+  Eigen::Quaterniond q = q_k;
+  bool reset = config_.fixes.mode == FixMode::Reset;
+  if (!reset) {
+    Eigen::Matrix3d S = e.P_B + R;
+    S.diagonal() = S.diagonal().cwiseMax(kMinInnovationVariance);
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(S);
+    const double d2 = r.dot(ldlt.solve(r));
+    if (!(d2 <= config_.fixes.gate)) {
+      if (rejected_in_a_row_ < kFixRejectionRun) {
+        ++rejected_in_a_row_;
+        return FixOutcome::RejectedGate;
+      }
+      reset = true;  // a run of rejections: the estimate is what is wrong
+    } else {
+      // Multiplicative EKF update of x = (dtheta_B, db), H = [I 0] (numerics.md §7.1), with
+      // the Joseph form for P. Without a bias estimate its blocks are zero and stay so.
+      using Matrix6 = Eigen::Matrix<double, 6, 6>;
+      Matrix6 P;
+      P << e.P_B, e.P_Bb, e.P_Bb.transpose(), e.P_bb;
+      const Eigen::Matrix<double, 6, 3> K = ldlt.solve(P.leftCols<3>().transpose()).transpose();
+      const Eigen::Matrix<double, 6, 1> dx = K * r;
+      q = q_k * expMap(dx.head<3>());
+      e.bias_B += dx.tail<3>();
+      Matrix6 I_KH = Matrix6::Identity();
+      I_KH.leftCols<3>() -= K;
+      P = I_KH * P * I_KH.transpose() + K * R * K.transpose();
+      P = 0.5 * (P + P.transpose());
+      e.P_B = clampOrientationCovariance(P.topLeftCorner<3, 3>());
+      e.P_Bb = P.topRightCorner<3, 3>();
+      e.P_bb = P.bottomRightCorner<3, 3>();
+    }
+  }
+  if (reset) {
+    q = q_k * expMap(r);  // = q_fix (x) D^-1: the fix, carried back to t_k
+    e.P_B = clampOrientationCovariance(R);
+    e.P_Bb.setZero();
+  }
+  rejected_in_a_row_ = 0;
+
+  // Back to the state at t_k, corrected, and the rate inputs since replayed.
+  KinematicPropagator& model = *propagator_->replayableState();
+  model = base.model;
+  model.correctOrientation(q);
+  error_ = e;
+  base.model = model;
+  base.error = error_;
+  replaying_ = true;
+  for (std::size_t i = k + 1; i < n; ++i) {
+    FixHistoryEntry& entry = historyEntry(i);
+    if (!entry.base) submitToModel(entry.input);
+    entry.model = model;
+    entry.error = error_;
+  }
+  replaying_ = false;
+  return reset ? FixOutcome::Reset : FixOutcome::Accepted;
 }
 
 }  // namespace attitude_propagator

@@ -189,6 +189,16 @@ void KinematicPropagator::reset() {
   restamp_.reset();
 }
 
+void KinematicPropagator::correctOrientation(const Eigen::Quaterniond& q_WB) {
+  const std::optional<Eigen::Quaterniond> unit = safeNormalized(q_WB);
+  if (!anchored_ || !unit) return;
+  // A rotation on the world side commutes with every body-side step from the anchor on, so the
+  // anchor turned by it re-integrates to the corrected orientation.
+  const Eigen::Quaterniond fix_turn = *unit * q_WB_.conjugate();
+  anchor_q_WB_ = (fix_turn * anchor_q_WB_).normalized();
+  q_WB_ = *unit;
+}
+
 void KinematicPropagator::setState(double t, const Eigen::Quaterniond& q_WB,
                                    const Eigen::Vector3d& w_B) {
   if (!std::isfinite(t) || !w_B.allFinite()) {

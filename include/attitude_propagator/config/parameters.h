@@ -55,6 +55,13 @@ struct Parameters {
   std::string average_stamp = "end";
   std::string stamp_filter = "none";
   std::vector<double> gyro_bias{0.0, 0.0, 0.0};
+  std::string fix_mode = "fuse";
+  double fix_history = 1.0;
+  double fix_gate = 16.266;  // the 99.9 % point of chi-square(3)
+  double fix_stddev = 0.01;
+  bool estimate_gyro_bias = false;
+  double gyro_bias_random_walk = 1e-6;
+  double gyro_bias_stddev = 2.424e-5;  // 5 deg/h
 };
 
 /// The `integrator` parameter's description, from the integrator table: the methods of each
@@ -126,6 +133,23 @@ void forEachParameter(P& p, F&& f) {
   f("stamp_filter", p.stamp_filter, "",
     "`none` or `sensor_clock`: replace receipt stamps by a fitted sensor clock");
   f("gyro_bias", p.gyro_bias, "rad/s", "subtracted from every rate, [x, y, z] in the body frame");
+  f("fix_mode", p.fix_mode, "",
+    "what an absolute attitude fix does at its stamp: `fuse` (EKF update behind `fix_gate`) or "
+    "`reset` (the attitude replaced); the rates since are integrated again");
+  f("fix_history", p.fix_history, "s",
+    "how late a fix may arrive: rate inputs kept (from the first fix on), in (0, 10], at most "
+    "4096 inputs");
+  f("fix_gate", p.fix_gate, "",
+    "`fuse`: largest squared Mahalanobis distance of a fix's innovation accepted (99.9 % of "
+    "chi-square(3)); > 0");
+  f("fix_stddev", p.fix_stddev, "rad",
+    "rotation error of a fix that carries no covariance, per axis; in (0, π]");
+  f("estimate_gyro_bias", p.estimate_gyro_bias, "",
+    "kinematic model: estimate the gyro bias from the fixes (subtracted on top of `gyro_bias`)");
+  f("gyro_bias_random_walk", p.gyro_bias_random_walk, "rad/s/√s",
+    "`estimate_gyro_bias`: random walk of the bias; in [0, 1000]");
+  f("gyro_bias_stddev", p.gyro_bias_stddev, "rad/s",
+    "`estimate_gyro_bias`: prior standard deviation of the bias per axis (5 °/h); in [0, 1000]");
 }
 
 /// All parameter names, for rejecting unknown ones.

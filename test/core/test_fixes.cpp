@@ -1,0 +1,586 @@
+// Late absolute attitude fixes (docs/design.md §6.9, docs/numerics.md §7.1): a fix applied at
+// its stamp and the rates since replayed, against the same fix on time; the multiplicative EKF
+// against its closed form; the gyro bias estimate, the gate and the error model against a
+// simulated gyro on the coning motion's closed form; bad fixes; the history's bounds.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "attitude_propagator/config/parameters.h"
+#include "attitude_propagator/coning_motion.h"
+#include "attitude_propagator/engine.h"
+#include "attitude_propagator/limits.h"
+#include "attitude_propagator/quaternion.h"
+#include "engine_fixtures.h"
+
+namespace {
+
+namespace ap = attitude_propagator;
+using engine_fixtures::aboutAxis;
+using engine_fixtures::at;
+using engine_fixtures::kSecond;
+using engine_fixtures::Recorder;
+
+constexpr double kDegPerHour = M_PI / 180.0 / 3600.0;  // rad/s
+
+ap::Input rate(double t, const Eigen::Vector3d& w_B) {
+  ap::Input in;
+  in.source = ap::Source::Imu;
+  in.stamp = at(t);
+  in.value = w_B;
+  return in;
+}
+
+ap::EngineConfig fixConfig(ap::Integrator integrator, ap::FixMode mode, bool estimate_bias) {
+  ap::EngineConfig c = engine_fixtures::kinematicConfig();
+  c.kinematic.integrator = integrator;
+  c.rate_stddev = 0.01;
+  c.initial_orientation_stddev = 0.05;
+  c.fixes.mode = mode;
+  c.fixes.estimate_gyro_bias = estimate_bias;
+  c.fixes.gyro_bias_stddev = 1e-3;
+  return c;
+}
+
+// ---- (a) a late fix gives the state the same fix would have given on time ------------------
+
+// Streams 200 Hz coning rates for 1 s, with a first fix at 0.1 s (the history starts there) and
+// a fix at `fix_t`, handed in after the sample at `submit_t`. Returns the newest state.
+ap::EngineState runWithFix(const ap::EngineConfig& config, double fix_t, double submit_t,
+                           Recorder& sink) {
+  const ap::ConingMotion cone;
+  ap::AttitudeEngine engine(config, sink);
+  const Eigen::Matrix3d R = 1e-4 * Eigen::Matrix3d::Identity();
+  const Eigen::Quaterniond offset = ap::expMap(Eigen::Vector3d(0.02, -0.01, 0.015));
+  bool sent = false;
+  for (int k = 0; k <= 200; ++k) {
+    const double t = 0.005 * k;
+    engine.submit(rate(t, cone.bodyRate(t)));
+    if (k == 20) {
+      EXPECT_EQ(engine.submitFix(at(0.1), cone.attitude(0.1) * offset, R),
+                config.fixes.mode == ap::FixMode::Fuse ? ap::FixOutcome::Accepted
+                                                       : ap::FixOutcome::Reset);
+    }
+    if (!sent && t >= submit_t - 1e-9) {
+      const std::size_t published = sink.states.size();
+      engine.submitFix(at(fix_t), cone.attitude(fix_t) * offset.conjugate(), R);
+      EXPECT_EQ(sink.states.size(), published) << "a fix publishes nothing itself";
+      sent = true;
+    }
+  }
+  EXPECT_TRUE(sink.stampsIncrease());
+  if (submit_t <= 1.0) {
+    EXPECT_TRUE(sent);
+    EXPECT_EQ(engine.counters().fixes_accepted, 2u);
+  }
+  return engine.state();
+}
+
+struct ReplayCase {
+  ap::Integrator integrator;
+  ap::FixMode mode;
+  bool estimate_bias;
+};
+
+class LateFix : public ::testing::TestWithParam<ReplayCase> {};
+
+TEST_P(LateFix, NewestStateIsTheOnTimeOne) {
+  const ReplayCase c = GetParam();
+  const ap::EngineConfig config = fixConfig(c.integrator, c.mode, c.estimate_bias);
+  for (double fix_t : {0.5, 0.5025}) {  // at a sample, and between two
+    Recorder on_time_sink, late_sink, without_sink;
+    // On time: handed in with the first sample at or after its stamp. Late: 100 ms later.
+    const double on_time = std::ceil(fix_t / 0.005 - 1e-9) * 0.005;
+    const ap::EngineState on_time_state = runWithFix(config, fix_t, on_time, on_time_sink);
+    const ap::EngineState late_state = runWithFix(config, fix_t, on_time + 0.1, late_sink);
+    EXPECT_LE(ap::rotationAngle(on_time_state.q_WB, late_state.q_WB), 1e-12) << fix_t;
+    EXPECT_LE((on_time_state.P_B - late_state.P_B).cwiseAbs().maxCoeff(), 1e-15) << fix_t;
+    EXPECT_LE((on_time_state.gyro_bias_estimate_B - late_state.gyro_bias_estimate_B).norm(), 1e-15);
+    // The fix matters: without it the state differs by far more than round-off.
+    const ap::EngineState without = runWithFix(config, fix_t, 10.0, without_sink);
+    EXPECT_GT(ap::rotationAngle(without.q_WB, late_state.q_WB), 1e-3);
+    // The states published before the late fix was handed in are the same in both runs, and
+    // after it the late run's states are the on-time run's.
+    ASSERT_EQ(on_time_sink.states.size(), late_sink.states.size());
+    const ap::EngineState& last_on_time = on_time_sink.states.back();
+    EXPECT_LE(ap::rotationAngle(last_on_time.q_WB, late_sink.states.back().q_WB), 1e-12);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    EveryIntegratorAndMode, LateFix,
+    ::testing::Values(ReplayCase{ap::Integrator::Euler, ap::FixMode::Fuse, false},
+                      ReplayCase{ap::Integrator::Euler, ap::FixMode::Reset, false},
+                      ReplayCase{ap::Integrator::Rk4, ap::FixMode::Fuse, false},
+                      ReplayCase{ap::Integrator::Rk4, ap::FixMode::Reset, false},
+                      ReplayCase{ap::Integrator::Exp, ap::FixMode::Fuse, false},
+                      ReplayCase{ap::Integrator::Exp, ap::FixMode::Reset, false},
+                      ReplayCase{ap::Integrator::Exp2, ap::FixMode::Fuse, false},
+                      ReplayCase{ap::Integrator::Exp2, ap::FixMode::Reset, false},
+                      ReplayCase{ap::Integrator::Cf4, ap::FixMode::Fuse, false},
+                      ReplayCase{ap::Integrator::Cf4, ap::FixMode::Reset, false},
+                      ReplayCase{ap::Integrator::Cf4, ap::FixMode::Fuse, true},
+                      ReplayCase{ap::Integrator::Exp2, ap::FixMode::Reset, true}));
+
+// A fix stamped ahead of the newest rate waits, and is applied when the rates reach it: the
+// same as handing it in then.
+TEST(LateFix, AFixAheadOfTheRatesWaits) {
+  const ap::EngineConfig config = fixConfig(ap::Integrator::Cf4, ap::FixMode::Fuse, false);
+  Recorder early_sink;
+  ap::EngineState early_state;
+  {
+    const ap::ConingMotion cone;
+    ap::AttitudeEngine engine(config, early_sink);
+    const Eigen::Matrix3d R = 1e-4 * Eigen::Matrix3d::Identity();
+    const Eigen::Quaterniond offset = ap::expMap(Eigen::Vector3d(0.02, -0.01, 0.015));
+    for (int k = 0; k <= 200; ++k) {
+      const double t = 0.005 * k;
+      engine.submit(rate(t, cone.bodyRate(t)));
+      if (k == 20) engine.submitFix(at(0.1), cone.attitude(0.1) * offset, R);
+      if (k == 60) {
+        EXPECT_EQ(engine.submitFix(at(0.5025), cone.attitude(0.5025) * offset.conjugate(), R),
+                  ap::FixOutcome::Waiting);
+        EXPECT_EQ(engine.pendingFixes(), 1u);
+      }
+    }
+    EXPECT_EQ(engine.pendingFixes(), 0u);
+    EXPECT_EQ(engine.counters().fixes_accepted, 2u);
+    early_state = engine.state();
+  }
+  Recorder on_time_sink;
+  const ap::EngineState on_time = runWithFix(config, 0.5025, 0.505, on_time_sink);
+  EXPECT_LE(ap::rotationAngle(on_time.q_WB, early_state.q_WB), 1e-12);
+}
+
+TEST(LateFix, TheWaitingQueueIsBounded) {
+  Recorder sink;
+  ap::AttitudeEngine engine(fixConfig(ap::Integrator::Exp, ap::FixMode::Fuse, false), sink);
+  engine.submit(rate(0.0, Eigen::Vector3d::Zero()));
+  const Eigen::Matrix3d R = 1e-4 * Eigen::Matrix3d::Identity();
+  for (std::size_t j = 0; j < ap::kMaxPendingFixes; ++j) {
+    EXPECT_EQ(engine.submitFix(at(0.1 + 0.01 * j), Eigen::Quaterniond::Identity(), R),
+              ap::FixOutcome::Waiting);
+  }
+  EXPECT_EQ(engine.submitFix(at(0.5), Eigen::Quaterniond::Identity(), R),
+            ap::FixOutcome::QueueFull);
+  EXPECT_EQ(engine.submitFix(at(0.05), Eigen::Quaterniond::Identity(), R),
+            ap::FixOutcome::Waiting);  // nearer: the furthest ahead goes instead
+  EXPECT_EQ(engine.counters().fixes_queue_full, 2u);
+  EXPECT_EQ(engine.pendingFixes(), ap::kMaxPendingFixes);
+}
+
+// ---- the update itself against its closed form -----------------------------------------------
+
+// P = p I and R = rho I: K = p / (p + rho) I, the estimate moves that fraction of the
+// innovation in the body frame, P becomes p rho / (p + rho) I (numerics.md §7.1).
+TEST(FixUpdate, FuseIsTheKalmanUpdateInTheBodyFrame) {
+  ap::EngineConfig config = fixConfig(ap::Integrator::Exp, ap::FixMode::Fuse, false);
+  config.rate_stddev = 0.0;
+  config.initial_orientation_stddev = 0.03;
+  const Eigen::Quaterniond q0 = aboutAxis(Eigen::Vector3d(0.3, -1.0, 0.5), 2.0);
+  config.kinematic.initial_q_WB = q0;
+  Recorder sink;
+  ap::AttitudeEngine engine(config, sink);
+  engine.submit(rate(0.0, Eigen::Vector3d::Zero()));
+  const double p = 0.03 * 0.03, rho = 0.02 * 0.02;
+  const Eigen::Vector3d v(0.01, -0.02, 0.005);
+  EXPECT_EQ(engine.submitFix(at(0.0), q0 * ap::expMap(v), rho * Eigen::Matrix3d::Identity()),
+            ap::FixOutcome::Accepted);
+  const Eigen::Quaterniond expected = q0 * ap::expMap(p / (p + rho) * v);
+  EXPECT_LE(ap::rotationAngle(engine.state().q_WB, expected), 1e-14);
+  EXPECT_LE((engine.state().P_B - p * rho / (p + rho) * Eigen::Matrix3d::Identity())
+                .cwiseAbs()
+                .maxCoeff(),
+            1e-18);
+  // reset: the fix's attitude and covariance.
+  config.fixes.mode = ap::FixMode::Reset;
+  Recorder reset_sink;
+  ap::AttitudeEngine reset(config, reset_sink);
+  reset.submit(rate(0.0, Eigen::Vector3d::Zero()));
+  EXPECT_EQ(reset.submitFix(at(0.0), q0 * ap::expMap(v), rho * Eigen::Matrix3d::Identity()),
+            ap::FixOutcome::Reset);
+  EXPECT_LE(ap::rotationAngle(reset.state().q_WB, q0 * ap::expMap(v)), 1e-14);
+  EXPECT_LE((reset.state().P_B - rho * Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff(), 1e-18);
+}
+
+// A constant rate about z: the attitude is known in closed form at every instant, and the
+// geodesic between two states is exact. A reset with the truth between two samples, after a
+// wrong start, must leave the newest state on the truth.
+TEST(FixUpdate, AFixBetweenSamplesActsAtItsOwnStamp) {
+  const Eigen::Vector3d w(0.0, 0.0, 2.0);
+  auto truth = [&w](double t) { return ap::expMap(w * t); };
+  ap::EngineConfig config = fixConfig(ap::Integrator::Exp, ap::FixMode::Reset, false);
+  config.kinematic.initial_q_WB = aboutAxis(Eigen::Vector3d::UnitX(), 0.3);  // wrong
+  Recorder sink;
+  ap::AttitudeEngine engine(config, sink);
+  const Eigen::Matrix3d R = 1e-6 * Eigen::Matrix3d::Identity();
+  for (int k = 0; k <= 100; ++k) {
+    engine.submit(rate(0.01 * k, w));
+    if (k == 0) engine.submitFix(at(0.0), config.kinematic.initial_q_WB, R);
+    if (k == 40) {
+      EXPECT_EQ(engine.submitFix(at(0.2537), truth(0.2537), R), ap::FixOutcome::Reset);
+    }
+  }
+  EXPECT_LE(ap::rotationAngle(engine.state().q_WB, truth(1.0)), 1e-12);
+}
+
+// cf4 integrates its first intervals again from the anchor once its window is full: a fix in
+// between must survive that re-integration.
+TEST(FixUpdate, AFixDuringTheStartUpOfCf4Survives) {
+  const Eigen::Vector3d w(0.4, -0.3, 1.1);
+  auto truth = [&w](double t) { return ap::expMap(w * t); };
+  ap::EngineConfig config = fixConfig(ap::Integrator::Cf4, ap::FixMode::Reset, false);
+  config.kinematic.initial_q_WB = aboutAxis(Eigen::Vector3d::UnitY(), 0.5);  // wrong
+  Recorder sink;
+  ap::AttitudeEngine engine(config, sink);
+  const Eigen::Matrix3d R = 1e-6 * Eigen::Matrix3d::Identity();
+  for (int k = 0; k <= 50; ++k) {
+    engine.submit(rate(0.01 * k, w));
+    // At the anchor, before cf4 has the samples for its re-integration from there.
+    if (k == 0) EXPECT_EQ(engine.submitFix(at(0.0), truth(0.0), R), ap::FixOutcome::Reset);
+  }
+  EXPECT_LE(ap::rotationAngle(engine.state().q_WB, truth(0.5)), 1e-10);
+}
+
+// ---- (b), (c): a simulated gyro on the coning motion -----------------------------------------
+
+struct GyroRun {
+  double rms_after_60 = 0.0;  ///< rad, RMS of the attitude error's angle after 60 s
+  double mean_nees = 0.0;     ///< of the attitude after 60 s
+  double bias_error_120 = 0.0;
+  double bias_error_end = 0.0;
+  Eigen::Vector3d final_error_W = Eigen::Vector3d::Zero();  ///< Log(q_est q_true^-1)
+  Eigen::Vector3d predicted_drift_W = Eigen::Vector3d::Zero();
+  std::vector<ap::FixOutcome> outlier_outcomes;
+  ap::EngineCounters counters;
+};
+
+// 200 Hz gyro: the coning rate, a constant bias of 10 deg/h and white noise of 0.1 deg/sqrt(h)
+// angle random walk; fixes at 5 Hz stamped 1.3 ms after a sample with 1 mrad noise, handed in
+// 150 ms late; `outliers`: that fraction of them 0.5 rad off instead.
+GyroRun simulateGyro(double seconds, bool fixes, bool estimate_bias, double outliers) {
+  const double h = 0.005;
+  const double arw = 0.1 * M_PI / 180.0 / 60.0;  // rad/sqrt(s)
+  const double rate_sigma = arw / std::sqrt(h);  // per sample
+  const double fix_sigma = 1e-3;
+  const Eigen::Vector3d bias = 10.0 * kDegPerHour * Eigen::Vector3d(1.0, -0.5, 0.8).normalized();
+  const ap::ConingMotion cone;
+  ap::EngineConfig config = engine_fixtures::kinematicConfig();
+  config.kinematic.integrator = ap::Integrator::Cf4;
+  config.kinematic.initial_q_WB = cone.attitude(0.0);
+  config.rate_stddev = rate_sigma;
+  config.initial_orientation_stddev = 0.0;
+  config.fixes.mode = ap::FixMode::Fuse;
+  config.fixes.estimate_gyro_bias = estimate_bias;
+  config.fixes.gyro_bias_random_walk = 1e-7;  // the truth's bias is constant
+  Recorder sink;
+  sink.states.reserve(static_cast<std::size_t>(seconds / h) + 2);
+  ap::AttitudeEngine engine(config, sink);
+  std::mt19937_64 rng(20240611);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  auto gaussian = [&]() { return Eigen::Vector3d(normal(rng), normal(rng), normal(rng)); };
+  std::mt19937_64 outlier_rng(7);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+
+  struct Fix {
+    double t;
+    Eigen::Quaterniond q;
+    bool outlier;
+  };
+  std::vector<Fix> queued;
+  GyroRun run;
+  double sum_sq = 0.0, sum_nees = 0.0;
+  std::size_t n_after_60 = 0;
+  const int steps = static_cast<int>(std::lround(seconds / h));
+  int next_fix = 0;
+  for (int k = 0; k <= steps; ++k) {
+    const double t = h * k;
+    engine.submit(rate(t, cone.bodyRate(t) + bias + rate_sigma * gaussian()));
+    run.predicted_drift_W += h * (cone.attitude(t) * bias);
+    // Fixes are measured 1.3 ms after a sample and handed in 150 ms later.
+    const double fix_t = 0.2 * next_fix + 0.0013;
+    if (fix_t < t) {
+      // The same draws with and without outliers, so the good fixes are the same.
+      const Eigen::Vector3d noise = fix_sigma * gaussian();
+      const Eigen::Vector3d direction = gaussian().normalized();
+      const bool outlier = uniform(outlier_rng) < outliers && next_fix > 0;
+      const Eigen::Vector3d off = outlier ? Eigen::Vector3d(0.5 * direction) : noise;
+      queued.push_back({fix_t, cone.attitude(fix_t) * ap::expMap(off), outlier});
+      ++next_fix;
+    }
+    while (fixes && !queued.empty() && queued.front().t + 0.15 <= t) {
+      const ap::FixOutcome o =
+          engine.submitFix(at(queued.front().t), queued.front().q,
+                           fix_sigma * fix_sigma * Eigen::Matrix3d::Identity());
+      if (queued.front().outlier) run.outlier_outcomes.push_back(o);
+      queued.erase(queued.begin());
+    }
+    const ap::EngineState s = engine.state();
+    if (t > 60.0) {
+      const Eigen::Vector3d e = ap::logMap(s.q_WB.conjugate() * cone.attitude(t));
+      sum_sq += e.squaredNorm();
+      sum_nees += e.dot(s.P_B.ldlt().solve(e));
+      ++n_after_60;
+    }
+    if (k == static_cast<int>(std::lround(120.0 / h))) {
+      run.bias_error_120 = (s.gyro_bias_estimate_B - bias).norm();
+    }
+  }
+  const ap::EngineState s = engine.state();
+  run.rms_after_60 = std::sqrt(sum_sq / static_cast<double>(n_after_60));
+  run.mean_nees = sum_nees / static_cast<double>(n_after_60);
+  run.bias_error_end = (s.gyro_bias_estimate_B - bias).norm();
+  run.final_error_W = ap::logMap(s.q_WB * cone.attitude(seconds).conjugate());
+  run.counters = engine.counters();
+  return run;
+}
+
+TEST(GyroWithFixes, FuseWithBiasEstimateMeetsTheTargets) {
+  const GyroRun run = simulateGyro(600.0, true, true, 0.0);
+  std::printf(
+      "[ fixes    ] rms after 60 s %.3g rad, mean NEES %.3f, bias error %.3g deg/h at "
+      "120 s, %.3g deg/h at 600 s, %llu fixes accepted, %llu rejected\n",
+      run.rms_after_60, run.mean_nees, run.bias_error_120 / kDegPerHour,
+      run.bias_error_end / kDegPerHour,
+      static_cast<unsigned long long>(run.counters.fixes_accepted),
+      static_cast<unsigned long long>(run.counters.fixes_rejected_gate));
+  EXPECT_LE(run.rms_after_60, 0.5 * 1e-3);
+  EXPECT_LE(run.bias_error_120, 2.0 * kDegPerHour);
+  EXPECT_LE(run.bias_error_end, 1.0 * kDegPerHour);
+  EXPECT_GE(run.mean_nees, 1.5);
+  EXPECT_LE(run.mean_nees, 4.5);
+  // The history starts with the first fix, which arrives 150 ms late: too old.
+  EXPECT_EQ(run.counters.fixes_too_old, 1u);
+  EXPECT_EQ(run.counters.fixes_reset, 0u);
+  EXPECT_GE(run.counters.fixes_accepted, 2990u);
+}
+
+// Without fixes the attitude drifts as the bias integrated along the true attitude says:
+// Log(q_est q_true^-1) = int C_WB(t) b dt, to the angle random walk (0.1 deg/sqrt(h) over 600 s
+// is 0.7 mrad) and second-order terms.
+TEST(GyroWithFixes, WithoutFixesItDriftsAsTheBiasSays) {
+  const GyroRun run = simulateGyro(600.0, false, false, 0.0);
+  std::printf("[ fixes    ] drift %.4g rad, predicted %.4g rad\n", run.final_error_W.norm(),
+              run.predicted_drift_W.norm());
+  EXPECT_GT(run.predicted_drift_W.norm(), 0.01);
+  EXPECT_LE((run.final_error_W - run.predicted_drift_W).norm(),
+            0.02 * run.predicted_drift_W.norm() + 3e-3);
+}
+
+// (c) 5 % of the fixes 0.5 rad off: each one rejected by the gate, and the attitude as good as
+// without them (the same good fixes less the outliers).
+TEST(GyroWithFixes, OutliersAreRejected) {
+  const GyroRun clean = simulateGyro(120.0, true, true, 0.0);
+  const GyroRun dirty = simulateGyro(120.0, true, true, 0.05);
+  ASSERT_GE(dirty.outlier_outcomes.size(), 15u);
+  for (ap::FixOutcome o : dirty.outlier_outcomes) EXPECT_EQ(o, ap::FixOutcome::RejectedGate);
+  EXPECT_GE(dirty.counters.fixes_rejected_gate, dirty.outlier_outcomes.size());
+  EXPECT_EQ(dirty.counters.fixes_reset, 0u);
+  std::printf("[ fixes    ] rms %.3g rad with outliers, %.3g rad without\n", dirty.rms_after_60,
+              clean.rms_after_60);
+  EXPECT_LE(dirty.rms_after_60, 1.2 * clean.rms_after_60);
+}
+
+// After kFixRejectionRun fixes in a row rejected by the gate, the next one that fails resets.
+TEST(GyroWithFixes, ARunOfRejectionsEndsInAReset) {
+  ap::EngineConfig config = fixConfig(ap::Integrator::Exp, ap::FixMode::Fuse, false);
+  config.rate_stddev = 0.0;
+  config.initial_orientation_stddev = 0.001;
+  Recorder sink;
+  ap::AttitudeEngine engine(config, sink);
+  const Eigen::Matrix3d R = 1e-6 * Eigen::Matrix3d::Identity();
+  const Eigen::Quaterniond truth = aboutAxis(Eigen::Vector3d::UnitZ(), 1.0);  // far off
+  for (int k = 0; k <= ap::kFixRejectionRun; ++k) {
+    engine.submit(rate(0.01 * k, Eigen::Vector3d::Zero()));
+    const ap::FixOutcome expected =
+        k < ap::kFixRejectionRun ? ap::FixOutcome::RejectedGate : ap::FixOutcome::Reset;
+    EXPECT_EQ(engine.submitFix(at(0.01 * k), truth, R), expected) << k;
+  }
+  EXPECT_EQ(engine.counters().fixes_rejected_gate,
+            static_cast<std::uint64_t>(ap::kFixRejectionRun));
+  EXPECT_EQ(engine.counters().fixes_reset, 1u);
+  EXPECT_LE(ap::rotationAngle(engine.state().q_WB, truth), 1e-14);
+}
+
+// ---- (d) bad fixes ---------------------------------------------------------------------------
+
+TEST(BadFixes, EachIsRejectedCountedAndTheStateUntouched) {
+  ap::EngineConfig config = fixConfig(ap::Integrator::Cf4, ap::FixMode::Fuse, true);
+  Recorder sink;
+  ap::AttitudeEngine engine(config, sink);
+  const ap::ConingMotion cone;
+  for (int k = 0; k <= 40; ++k) engine.submit(rate(0.005 * k, cone.bodyRate(0.005 * k)));
+  const Eigen::Matrix3d R = 1e-4 * Eigen::Matrix3d::Identity();
+  const Eigen::Quaterniond q = cone.attitude(0.1);
+  const double nan = std::nan("");
+  struct Bad {
+    Eigen::Quaterniond q;
+    Eigen::Matrix3d R;
+    ap::FixOutcome outcome;
+  };
+  Eigen::Matrix3d asymmetric = R, negative = R, huge = R, correlated = R, non_finite = R;
+  asymmetric(0, 1) = 1e-5;
+  negative(2, 2) = -1e-4;
+  huge(1, 1) = 10.0;  // above pi^2
+  correlated(0, 1) = correlated(1, 0) = 2e-4;
+  non_finite(0, 0) = nan;
+  const std::vector<Bad> bad{
+      {Eigen::Quaterniond(nan, 0, 0, 0), R, ap::FixOutcome::BadQuaternion},
+      {Eigen::Quaterniond(1.1, 0, 0, 0), R, ap::FixOutcome::BadQuaternion},
+      {Eigen::Quaterniond(0, 0, 0, 0), R, ap::FixOutcome::BadQuaternion},
+      {Eigen::Quaterniond(1.0, 0, 0, 1e-300 * 1e10), non_finite, ap::FixOutcome::BadCovariance},
+      {q, asymmetric, ap::FixOutcome::BadCovariance},
+      {q, negative, ap::FixOutcome::BadCovariance},
+      {q, huge, ap::FixOutcome::BadCovariance},
+      {q, correlated, ap::FixOutcome::BadCovariance},
+  };
+  const ap::EngineState before = engine.state();
+  for (const Bad& b : bad) {
+    EXPECT_EQ(engine.submitFix(at(0.1), b.q, b.R), b.outcome) << ap::fixOutcomeName(b.outcome);
+  }
+  // Too old: before the history started (the first fix starts it).
+  EXPECT_EQ(engine.submitFix(at(0.1), q, R), ap::FixOutcome::TooOld);
+  const ap::EngineState after = engine.state();
+  EXPECT_EQ(after.q_WB.coeffs(), before.q_WB.coeffs());
+  EXPECT_EQ(after.P_B, before.P_B);
+  EXPECT_EQ(after.gyro_bias_estimate_B, before.gyro_bias_estimate_B);
+  EXPECT_EQ(after.gyro_bias_stddev_B, before.gyro_bias_stddev_B);
+  const ap::EngineCounters& c = engine.counters();
+  EXPECT_EQ(c.fixes_bad_quaternion, 3u);
+  EXPECT_EQ(c.fixes_bad_covariance, 5u);
+  EXPECT_EQ(c.fixes_too_old, 1u);
+  EXPECT_EQ(c.fixes_accepted, 0u);
+  EXPECT_STREQ(ap::fixOutcomeName(ap::FixOutcome::BadCovariance), "bad_covariance");
+}
+
+TEST(BadFixes, TheDynamicModelRefusesFixes) {
+  Recorder sink;
+  ap::AttitudeEngine engine(engine_fixtures::torqueConfig(), sink);
+  engine.clockTick(at(0.0));
+  engine.clockTick(at(0.1));
+  const ap::EngineState before = engine.state();
+  EXPECT_EQ(engine.submitFix(at(0.05), Eigen::Quaterniond::Identity(), Eigen::Matrix3d::Zero()),
+            ap::FixOutcome::RefusedByModel);
+  EXPECT_EQ(engine.counters().fixes_refused_model, 1u);
+  EXPECT_EQ(engine.state().q_WB.coeffs(), before.q_WB.coeffs());
+}
+
+// ---- (e) the history's bounds ----------------------------------------------------------------
+
+TEST(FixHistory, AFixExactlyFixHistoryOldIsTakenOneNanosecondOlderIsNot) {
+  ap::EngineConfig config = fixConfig(ap::Integrator::Exp2, ap::FixMode::Fuse, false);
+  config.fixes.history = 0.5;
+  Recorder sink;
+  ap::AttitudeEngine engine(config, sink);
+  const Eigen::Matrix3d R = 1e-4 * Eigen::Matrix3d::Identity();
+  const Eigen::Vector3d w(0.1, 0.2, -0.3);
+  for (int k = 0; k <= 200; ++k) {
+    engine.submit(rate(0.005 * k, w));
+    if (k == 0) engine.submitFix(at(0.0), Eigen::Quaterniond::Identity(), R);
+  }
+  // The newest rate is at 1.0 s.
+  const Eigen::Quaterniond q = ap::expMap(0.5 * w);
+  EXPECT_EQ(engine.submitFix(at(0.5) - 1, q, R), ap::FixOutcome::TooOld);
+  EXPECT_EQ(engine.submitFix(at(0.5), q, R), ap::FixOutcome::Accepted);
+  EXPECT_EQ(engine.submitFix(at(0.5) + 1, q, R), ap::FixOutcome::Accepted);
+  EXPECT_EQ(engine.counters().fixes_too_old, 1u);
+  EXPECT_LE(engine.fixHistorySize(), 102u);
+}
+
+TEST(FixHistory, TheMemoryBoundCapsTheInputsKept) {
+  ap::EngineConfig config = fixConfig(ap::Integrator::Exp, ap::FixMode::Fuse, false);
+  config.fixes.history = ap::kMaxFixHistory;
+  config.kinematic.time_policy.max_dt = 1.0;
+  Recorder sink;
+  ap::AttitudeEngine engine(config, sink);
+  const Eigen::Matrix3d R = 1e-4 * Eigen::Matrix3d::Identity();
+  const double h = 0.001;  // 1 kHz: 10 s would be 10 000 inputs
+  const int steps = 6000;
+  for (int k = 0; k <= steps; ++k) {
+    engine.submit(rate(h * k, Eigen::Vector3d::Zero()));
+    if (k == 0) engine.submitFix(at(0.0), Eigen::Quaterniond::Identity(), R);
+  }
+  EXPECT_EQ(engine.fixHistorySize(), ap::kMaxFixHistorySamples);
+  const double oldest_kept = h * (steps - static_cast<double>(ap::kMaxFixHistorySamples) + 1);
+  EXPECT_EQ(engine.submitFix(at(oldest_kept - h), Eigen::Quaterniond::Identity(), R),
+            ap::FixOutcome::TooOld);
+  EXPECT_EQ(engine.submitFix(at(oldest_kept), Eigen::Quaterniond::Identity(), R),
+            ap::FixOutcome::Accepted);
+  std::printf("[ fixes    ] one history entry: %zu bytes; at most %zu entries: %.2f MB\n",
+              sizeof(ap::FixHistoryEntry), ap::kMaxFixHistorySamples,
+              static_cast<double>(sizeof(ap::FixHistoryEntry) * ap::kMaxFixHistorySamples) / 1e6);
+}
+
+TEST(FixHistory, ParametersOutsideTheirRangesRefuseStart) {
+  auto refused = [](const std::function<void(ap::Parameters&)>& set, const std::string& name) {
+    ap::Parameters p;
+    set(p);
+    try {
+      ap::validateParameters(p);
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind(name + ":", 0), 0u) << what;
+      EXPECT_NE(what.find("accepted"), std::string::npos) << what;
+      return true;
+    }
+    return false;
+  };
+  EXPECT_TRUE(refused([](ap::Parameters& p) { p.fix_stddev = 0.0; }, "fix_stddev"));
+  EXPECT_TRUE(refused([](ap::Parameters& p) { p.gyro_bias_stddev = -1e-9; }, "gyro_bias_stddev"));
+  EXPECT_TRUE(refused([](ap::Parameters& p) { p.fix_history = 10.001; }, "fix_history"));
+  EXPECT_TRUE(refused([](ap::Parameters& p) { p.fix_history = 0.0; }, "fix_history"));
+  EXPECT_TRUE(refused([](ap::Parameters& p) { p.fix_gate = 0.0; }, "fix_gate"));
+  EXPECT_TRUE(refused([](ap::Parameters& p) { p.fix_mode = "replace"; }, "fix_mode"));
+  EXPECT_TRUE(
+      refused([](ap::Parameters& p) { p.gyro_bias_random_walk = -1.0; }, "gyro_bias_random_walk"));
+  EXPECT_TRUE(refused(
+      [](ap::Parameters& p) {
+        p.estimate_gyro_bias = true;
+        p.inertia = {1.0, 2.0, 3.0};
+      },
+      "estimate_gyro_bias"));
+  EXPECT_FALSE(refused([](ap::Parameters& p) { p.fix_history = ap::kMaxFixHistory; }, ""));
+  ap::Parameters p;
+  p.fix_mode = "reset";
+  p.estimate_gyro_bias = true;
+  const ap::EngineConfig c = ap::engineConfig(ap::validateParameters(p));
+  EXPECT_EQ(c.fixes.mode, ap::FixMode::Reset);
+  EXPECT_TRUE(c.fixes.estimate_gyro_bias);
+  EXPECT_DOUBLE_EQ(c.fixes.gyro_bias_stddev, 2.424e-5);
+  EXPECT_NEAR(c.fixes.gyro_bias_stddev / kDegPerHour, 5.0, 0.001);
+}
+
+// The cost of a replay: a fix 1 s late on a 200 Hz stream replays 200 inputs. Printed, not
+// asserted (docs/benchmarks.md has no timing assertions in tests either).
+TEST(FixHistory, PrintsTheCostOfAOneSecondReplay) {
+  ap::EngineConfig config = fixConfig(ap::Integrator::Cf4, ap::FixMode::Fuse, true);
+  config.fixes.history = 1.5;
+  Recorder sink;
+  ap::AttitudeEngine engine(config, sink);
+  const ap::ConingMotion cone;
+  const Eigen::Matrix3d R = 1e-4 * Eigen::Matrix3d::Identity();
+  double t = 0.0;
+  for (int k = 0; k <= 300; ++k, t = 0.005 * k) {
+    engine.submit(rate(t, cone.bodyRate(t)));
+    if (k == 0) engine.submitFix(at(0.0), cone.attitude(0.0), R);
+  }
+  const int repeats = 50;
+  const auto start = std::chrono::steady_clock::now();
+  for (int j = 0; j < repeats; ++j) {
+    engine.submitFix(at(0.5), cone.attitude(0.5), R);  // the newest is at 1.5 s
+  }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("[ fixes    ] a 1 s replay at 200 Hz (cf4, bias estimated): %.1f us\n",
+              1e6 * seconds / repeats);
+  EXPECT_EQ(engine.counters().fixes_accepted, static_cast<std::uint64_t>(repeats + 1));
+}
+
+}  // namespace
