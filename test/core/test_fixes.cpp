@@ -235,18 +235,26 @@ TEST(FixUpdate, AFixBetweenSamplesActsAtItsOwnStamp) {
 // between must survive that re-integration.
 TEST(FixUpdate, AFixDuringTheStartUpOfCf4Survives) {
   const Eigen::Vector3d w(0.4, -0.3, 1.1);
-  auto truth = [&w](double t) { return ap::expMap(w * t); };
-  ap::EngineConfig config = fixConfig(ap::Integrator::Cf4, ap::FixMode::Reset, false);
-  config.kinematic.initial_q_WB = aboutAxis(Eigen::Vector3d::UnitY(), 0.5);  // wrong
-  Recorder sink;
-  ap::AttitudeEngine engine(config, sink);
-  const Eigen::Matrix3d R = 1e-6 * Eigen::Matrix3d::Identity();
-  for (int k = 0; k <= 50; ++k) {
-    engine.submit(rate(0.01 * k, w));
-    // At the anchor, before cf4 has the samples for its re-integration from there.
-    if (k == 0) EXPECT_EQ(engine.submitFix(at(0.0), truth(0.0), R), ap::FixOutcome::Reset);
+  // A true start that does not commute with the configured one, so a correction turned on the
+  // wrong side of cf4's start-up anchor shows.
+  const Eigen::Quaterniond q0 = aboutAxis(Eigen::Vector3d::UnitX(), 0.3);
+  auto truth = [&w, &q0](double t) { return q0 * ap::expMap(w * t); };
+  for (int fix_at : {0, 1}) {
+    ap::EngineConfig config = fixConfig(ap::Integrator::Cf4, ap::FixMode::Reset, false);
+    config.kinematic.initial_q_WB = aboutAxis(Eigen::Vector3d::UnitY(), 0.5);  // wrong
+    Recorder sink;
+    ap::AttitudeEngine engine(config, sink);
+    const Eigen::Matrix3d R = 1e-6 * Eigen::Matrix3d::Identity();
+    for (int k = 0; k <= 50; ++k) {
+      engine.submit(rate(0.01 * k, w));
+      // At the anchor or the sample after, before cf4 has the samples for its re-integration
+      // from the anchor.
+      if (k == fix_at) {
+        EXPECT_EQ(engine.submitFix(at(0.01 * k), truth(0.01 * k), R), ap::FixOutcome::Reset);
+      }
+    }
+    EXPECT_LE(ap::rotationAngle(engine.state().q_WB, truth(0.5)), 1e-10) << fix_at;
   }
-  EXPECT_LE(ap::rotationAngle(engine.state().q_WB, truth(0.5)), 1e-10);
 }
 
 // ---- (b), (c): a simulated gyro on the coning motion -----------------------------------------
