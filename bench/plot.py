@@ -31,7 +31,7 @@ FLOOR = 1e-16  # zero errors are drawn here on log axes
 
 # One colour and marker per method, the same in every chart: the methods take these in the
 # order they first appear in the sweep (the core's table order), so a new method gets the next
-# free style without an edit here.
+# free style without an edit here (test/checks/integrator_lists.sh checks that one is free).
 PALETTE = [("tab:red", "v"), ("tab:blue", "o"), ("tab:orange", "s"), ("tab:olive", "D"),
            ("tab:green", "^"), ("tab:purple", "s"), ("tab:brown", "D"), ("tab:pink", "^"),
            ("black", "*"), ("tab:cyan", "P"), ("tab:gray", "X"), ("gold", "p"),

@@ -2,11 +2,14 @@
 // interface: they are the values of the `model` and `integrator` parameters and appear in
 // AttitudeState.
 //
-// The integrators are one table (src/core/integrator.cpp), one row per method: its name, the
-// models it drives with their declared orders, the rate samples it reads, what it keeps
-// exactly, and its step function. Names, error messages, the parameter documentation, the
-// choice of `auto`, the tests' method lists and order bounds, and the benchmarks all read the
-// table. Adding an integrator: an enumerator below, a step function, a row.
+// The integrators are one table (src/core/integrator.cpp), one row per method (IntegratorInfo
+// below): its name, the models it drives with their declared orders, the rate samples it reads,
+// what it keeps exactly, and its step function. Names, error messages, the parameter
+// documentation, the choice of `auto`, the tests' method lists and order bounds, the benchmarks
+// and evaluate_bag_core's methods all read the table; the lists kept by hand outside C++ (the
+// reconfigure enum, the fuzz seeds, evaluate_bag's colours) are checked against it by
+// test/checks/integrator_lists.sh. Adding an integrator: an enumerator below, a step function,
+// a row (docs/design.md §4.2).
 #pragma once
 
 #include <cstddef>
@@ -74,27 +77,33 @@ constexpr unsigned kTorqueFree = 1u << 1;  ///< dynamic model without torque inp
 constexpr unsigned kTorqued = 1u << 2;     ///< dynamic model with torque input
 }  // namespace auto_for
 
-/// One row of the table.
+/// One row of the table: a method's name and what it is. integrator.cpp builds each row field by
+/// field, naming only the fields that differ from these defaults (a method with no declared
+/// order, reading no samples, keeping nothing, never picked by `auto`, taking no torque, driving
+/// no model).
 struct IntegratorInfo {
-  Integrator id;
-  const char* name;
+  Integrator id = Integrator::Auto;
+  /// The parameter value: lower case, digits and '_'.
+  const char* name = "";
   /// Declared orders of convergence on smooth input; 0 where the method has no fixed order
   /// (adaptive, exact) or does not drive the model. Tests measure them.
-  int kinematic_order;  ///< from instantaneous rate samples
-  int averaged_order;   ///< from interval-averaged rate samples
-  int dynamic_order;    ///< on the Euler equations
-  /// Kinematic: the rate samples a step reads at most, the newest last (the window it needs).
-  int samples;
-  unsigned keeps;     ///< keeps::*
-  unsigned auto_for;  ///< auto_for::*
+  int kinematic_order = 0;  ///< from instantaneous rate samples
+  int averaged_order = 0;   ///< from interval-averaged rate samples
+  int dynamic_order = 0;    ///< on the Euler equations
+  /// Kinematic: the rate samples a step reads at most, the newest last (the window it needs;
+  /// at most RateWindow::kCapacity, which integrator.cpp checks).
+  int samples = 0;
+  unsigned keeps = keeps::kNothing;      ///< keeps::*
+  unsigned auto_for = auto_for::kNever;  ///< auto_for::*
   /// Dynamic: whether a torque may act (the exact solution is torque-free).
-  bool takes_torque;
+  bool takes_torque = false;
   /// Kinematic start-up: until `samples` samples exist after an anchor the step runs on the
   /// fewer it has; when the window first fills, the propagator integrates again from the
   /// anchor across it, so the start-up leaves no lower-order error in the states that follow.
-  bool restart_from_anchor;
-  KinematicStepFunction kinematic_step;  ///< nullptr: not a kinematic method
-  DynamicStepFunction dynamic_step;      ///< nullptr: not a dynamic method
+  bool restart_from_anchor = false;
+  /// The step functions; which are set says which models the method drives.
+  KinematicStepFunction kinematic_step = nullptr;  ///< nullptr: not a kinematic method
+  DynamicStepFunction dynamic_step = nullptr;      ///< nullptr: not a dynamic method
 };
 
 /// Every row, `auto` first, in the enumeration's order.

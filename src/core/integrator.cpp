@@ -13,40 +13,127 @@ using keeps::kConstantRate;
 using keeps::kEnergy;
 using keeps::kExactFlow;
 using keeps::kMomentum;
-using keeps::kNothing;
 using keeps::kUnitNorm;
 
-// One row per method, in the enumeration's order: adding an integrator means its step function
-// and one row here. Columns: id, name, orders (kinematic from instantaneous samples, from
-// interval averages, dynamic), samples read, what it keeps, where auto picks it, takes torque,
-// restarts from the anchor, step functions.
-// - rk4 on sampled rates sees only the linear interpolant at the midpoint: second
-//   order from point samples, third from interval means (the linear rate of two means).
-// - euler and exp on interval means: the mean carries the rotation angle exactly, second order.
-// - exp2 on interval means adds the two-sample coning correction: third order.
+// One row per method, in the enumeration's order, each built field by field: a field not named
+// keeps IntegratorInfo's default (integrator.h). Adding an integrator means its step function
+// and one row here (docs/design.md §4.2).
 constexpr IntegratorInfo kIntegrators[] = {
-    {Integrator::Auto, "auto", 0, 0, 0, 0, kNothing, auto_for::kNever, true, false, nullptr,
-     nullptr},
-    {Integrator::Euler, "euler", 1, 2, 0, 2, kNothing, auto_for::kNever, false, false,
-     &kinematicEuler, nullptr},
-    {Integrator::Rk4, "rk4", 2, 3, 4, 3, kNothing, auto_for::kTorqued, true, false, &kinematicRk4,
-     &DynamicStepper::rk4},
-    {Integrator::Exp, "exp", 1, 2, 0, 2, kUnitNorm | kConstantRate, auto_for::kNever, false, false,
-     &kinematicExp, nullptr},
-    {Integrator::Exp2, "exp2", 2, 3, 0, 3, kUnitNorm | kConstantRate, auto_for::kNever, false,
-     false, &kinematicExp2, nullptr},
-    {Integrator::Cf4, "cf4", 4, 4, 0, 4, kUnitNorm | kConstantRate, auto_for::kKinematic, false,
-     true, &kinematicCf4, nullptr},
-    {Integrator::ImplicitMidpoint, "implicit_midpoint", 0, 0, 2, 0, kUnitNorm | kEnergy | kMomentum,
-     auto_for::kNever, true, false, nullptr, &DynamicStepper::implicitMidpoint},
-    {Integrator::Splitting, "splitting", 0, 0, 2, 0, kUnitNorm | kMomentum, auto_for::kNever, true,
-     false, nullptr, &DynamicStepper::splitting},
-    {Integrator::Splitting4, "splitting4", 0, 0, 4, 0, kUnitNorm | kMomentum, auto_for::kNever,
-     true, false, nullptr, &DynamicStepper::splitting4},
-    {Integrator::Dopri5, "dopri5", 0, 0, 0, 0, kNothing, auto_for::kNever, true, false, nullptr,
-     &DynamicStepper::dopri5},
-    {Integrator::Exact, "exact", 0, 0, 0, 0, kUnitNorm | kEnergy | kMomentum | kExactFlow,
-     auto_for::kTorqueFree, false, false, nullptr, &DynamicStepper::exact},
+    [] {
+      IntegratorInfo m;
+      m.id = Integrator::Auto;
+      m.name = "auto";
+      m.takes_torque = true;
+      return m;
+    }(),
+    [] {
+      IntegratorInfo m;
+      m.id = Integrator::Euler;
+      m.name = "euler";
+      m.kinematic_step = &kinematicEuler;
+      m.kinematic_order = 1;
+      m.averaged_order = 2;  // the interval mean carries the rotation angle exactly
+      m.samples = 2;
+      return m;
+    }(),
+    [] {
+      IntegratorInfo m;
+      m.id = Integrator::Rk4;
+      m.name = "rk4";
+      m.kinematic_step = &kinematicRk4;
+      // On sampled rates rk4 sees only the linear interpolant at the midpoint: second order
+      // from point samples, third from interval means (the linear rate of two means).
+      m.kinematic_order = 2;
+      m.averaged_order = 3;
+      m.samples = 3;
+      m.dynamic_step = &DynamicStepper::rk4;
+      m.dynamic_order = 4;
+      m.takes_torque = true;
+      m.auto_for = auto_for::kTorqued;
+      return m;
+    }(),
+    [] {
+      IntegratorInfo m;
+      m.id = Integrator::Exp;
+      m.name = "exp";
+      m.kinematic_step = &kinematicExp;
+      m.kinematic_order = 1;
+      m.averaged_order = 2;  // the interval mean carries the rotation angle exactly
+      m.samples = 2;
+      m.keeps = kUnitNorm | kConstantRate;
+      return m;
+    }(),
+    [] {
+      IntegratorInfo m;
+      m.id = Integrator::Exp2;
+      m.name = "exp2";
+      m.kinematic_step = &kinematicExp2;
+      m.kinematic_order = 2;
+      m.averaged_order = 3;  // interval means: the two-sample coning correction
+      m.samples = 3;
+      m.keeps = kUnitNorm | kConstantRate;
+      return m;
+    }(),
+    [] {
+      IntegratorInfo m;
+      m.id = Integrator::Cf4;
+      m.name = "cf4";
+      m.kinematic_step = &kinematicCf4;
+      m.kinematic_order = 4;
+      m.averaged_order = 4;
+      m.samples = 4;
+      m.keeps = kUnitNorm | kConstantRate;
+      m.auto_for = auto_for::kKinematic;
+      m.restart_from_anchor = true;
+      return m;
+    }(),
+    [] {
+      IntegratorInfo m;
+      m.id = Integrator::ImplicitMidpoint;
+      m.name = "implicit_midpoint";
+      m.dynamic_step = &DynamicStepper::implicitMidpoint;
+      m.dynamic_order = 2;
+      m.keeps = kUnitNorm | kEnergy | kMomentum;
+      m.takes_torque = true;
+      return m;
+    }(),
+    [] {
+      IntegratorInfo m;
+      m.id = Integrator::Splitting;
+      m.name = "splitting";
+      m.dynamic_step = &DynamicStepper::splitting;
+      m.dynamic_order = 2;
+      m.keeps = kUnitNorm | kMomentum;
+      m.takes_torque = true;
+      return m;
+    }(),
+    [] {
+      IntegratorInfo m;
+      m.id = Integrator::Splitting4;
+      m.name = "splitting4";
+      m.dynamic_step = &DynamicStepper::splitting4;
+      m.dynamic_order = 4;
+      m.keeps = kUnitNorm | kMomentum;
+      m.takes_torque = true;
+      return m;
+    }(),
+    [] {
+      IntegratorInfo m;
+      m.id = Integrator::Dopri5;
+      m.name = "dopri5";
+      m.dynamic_step = &DynamicStepper::dopri5;  // adaptive: no declared order
+      m.takes_torque = true;
+      return m;
+    }(),
+    [] {
+      IntegratorInfo m;
+      m.id = Integrator::Exact;
+      m.name = "exact";
+      m.dynamic_step = &DynamicStepper::exact;  // the solution: no declared order
+      m.keeps = kUnitNorm | kEnergy | kMomentum | kExactFlow;
+      m.auto_for = auto_for::kTorqueFree;
+      return m;
+    }(),
 };
 
 constexpr std::size_t kRows = sizeof(kIntegrators) / sizeof(kIntegrators[0]);
@@ -66,6 +153,40 @@ constexpr bool windowsFit() {
   return true;
 }
 static_assert(windowsFit(), "a method reads more samples than RateWindow::kCapacity holds");
+
+constexpr bool sameName(const char* a, const char* b) {
+  while (*a != '\0' && *a == *b) {
+    ++a;
+    ++b;
+  }
+  return *a == *b;
+}
+
+constexpr bool namesValidAndUnique() {
+  for (std::size_t i = 0; i < kRows; ++i) {
+    const char* c = kIntegrators[i].name;
+    if (*c == '\0') return false;
+    for (; *c != '\0'; ++c) {
+      if (!((*c >= 'a' && *c <= 'z') || (*c >= '0' && *c <= '9') || *c == '_')) return false;
+    }
+    for (std::size_t j = 0; j < i; ++j) {
+      if (sameName(kIntegrators[i].name, kIntegrators[j].name)) return false;
+    }
+  }
+  return true;
+}
+static_assert(namesValidAndUnique(), "every row needs its own name of [a-z0-9_]");
+
+constexpr bool kinematicRowsReadAnInterval() {
+  for (std::size_t i = 1; i < kRows; ++i) {
+    if ((kIntegrators[i].kinematic_step != nullptr) != (kIntegrators[i].samples >= 2)) {
+      return false;
+    }
+  }
+  return true;
+}
+static_assert(kinematicRowsReadAnInterval(),
+              "a kinematic row reads at least two samples (an interval); no other row reads any");
 
 }  // namespace
 

@@ -112,7 +112,7 @@ struct Options {
   double max_offset = 0.5;
   double calibration = 60.0;
   std::optional<double> truth_gap;
-  std::vector<std::string> integrators{"euler", "rk4", "exp", "exp2", "cf4"};
+  std::vector<std::string> integrators = integratorNames(integratorsFor(Model::Kinematic));
   std::vector<std::string> rate_samples{"instantaneous", "interval_average"};
   std::string prefix;
   bool progress = true;

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "attitude_propagator/config/parameters.h"
+#include "attitude_propagator/integrator.h"
 #include "fuzz_support.h"
 
 namespace ap = attitude_propagator;
@@ -38,6 +39,15 @@ std::vector<double> vectorOfSize(ByteReader& in, std::size_t n) {
   return v;
 }
 
+/// The integrator values tried: every name the core accepts, in the table's order, then names
+/// it refuses. make_seeds.py's CHOICES["integrator"] encodes an index into this list
+/// (test/checks/integrator_lists.sh checks the two agree).
+std::vector<std::string> integratorChoices() {
+  std::vector<std::string> names = ap::integratorNames();
+  for (const char* refused : {"", "rk5"}) names.emplace_back(refused);
+  return names;
+}
+
 double number(ByteReader& in, const std::vector<double>& ordinary) {
   return in.flag() ? ordinary[in.choice(ordinary.size())] : in.value();
 }
@@ -46,8 +56,8 @@ ap::Parameters readParameters(ByteReader& in) {
   ap::Parameters p;  // every field not overridden keeps its default
   if (in.flag()) p.model = pick(in, {"auto", "kinematic", "dynamic", "", "Dynamic"});
   if (in.flag()) {
-    p.integrator = pick(in, {"auto", "euler", "rk4", "exp", "exp2", "cf4", "implicit_midpoint",
-                             "splitting", "splitting4", "dopri5", "exact", "", "rk5"});
+    static const std::vector<std::string> integrators = integratorChoices();
+    p.integrator = pick(in, integrators);
   }
   if (in.flag()) p.rate_input = pick(in, {"imu", "twist", "none", "IMU"});
   if (in.flag()) p.torque_input = in.flag();

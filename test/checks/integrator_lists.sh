@@ -1,0 +1,137 @@
+#!/usr/bin/env bash
+# The lists of integrators kept by hand outside the core name the methods of its table
+# (src/core/integrator.cpp), in the table's order: the reconfigure enum
+# (cfg/AttitudePropagator.cfg), evaluate_bag_core's --integrators default in its help text
+# (src/tools/evaluate_bag_core.cpp, whose default list itself reads the table), evaluate_bag's
+# colours (nodes/evaluate_bag, those of the benchmark charts: bench/plot.py's PALETTE in the
+# sweep's order, kinematic methods first), the fuzz seeds (test/fuzz/make_seeds.py, its corpus
+# and fuzz_parameters.cpp's refused names), bench/bag_throughput.sh's loop and
+# docs/bag_tools.md's sentence. The table comes from the core's API through the integrator_table
+# program, so this needs the built workspace (scripts/test.sh builds first).
+source "$(dirname "${BASH_SOURCE[0]}")/../../scripts/common.sh"
+source_ros
+# Under catkin's run_tests (test/checks/junit.py) the workspace's environment is already set.
+[ -n "${AP_CATKIN_ENV:-}" ] || source_workspace
+cd "$REPO_DIR" || exit 1
+program="$(catkin_find --first-only --libexec attitude_propagator integrator_table 2>/dev/null)"
+[ -x "$program" ] || program="$WORKSPACE/devel/lib/attitude_propagator/integrator_table"
+if [ ! -x "$program" ]; then
+  echo "integrator lists: integrator_table is not built (build the package first)"
+  exit 1
+fi
+table="$("$program")" || { echo "integrator lists: $program failed"; exit 1; }
+TABLE="$table" /usr/bin/python3 - <<'PY'
+import ast
+import os
+import pathlib
+import re
+import sys
+
+sys.dont_write_bytecode = True
+
+rows = [line.split() for line in os.environ["TABLE"].splitlines() if line.strip()]
+names = [r[0] for r in rows]
+kinematic = [r[0] for r in rows if r[0] != "auto" and "kinematic" in r[1:]]
+dynamic = [r[0] for r in rows if r[0] != "auto" and "dynamic" in r[1:]]
+errors = []
+
+
+def expect(what, found, wanted, source="the table"):
+    if found != wanted:
+        errors.append("%s: %s; %s: %s" % (what, found, source, wanted))
+
+
+def assigned(path, variable):
+    """The literal value assigned to a top-level variable of a Python file."""
+    for node in ast.parse(pathlib.Path(path).read_text(), path).body:
+        if isinstance(node, ast.Assign) and any(
+                isinstance(t, ast.Name) and t.id == variable for t in node.targets):
+            return ast.literal_eval(node.value)
+    errors.append("%s: no %s = ..." % (path, variable))
+    return None
+
+
+def one_match(path, pattern):
+    found = re.findall(pattern, pathlib.Path(path).read_text())
+    if len(found) != 1:
+        errors.append("%s: %d matches of %r, expected 1" % (path, len(found), pattern))
+        return None
+    return found[0]
+
+
+if not names or names[0] != "auto" or not kinematic or not dynamic:
+    errors.append("integrator_table printed no usable table: %r" % rows)
+
+# The reconfigure enum: every name, auto first.
+cfg = assigned("cfg/AttitudePropagator.cfg", "integrators")
+if cfg is not None:
+    expect("cfg/AttitudePropagator.cfg integrators", [n for n, _ in cfg], names)
+
+# evaluate_bag_core: the default reads the table; its help text spells it out.
+core = "src/tools/evaluate_bag_core.cpp"
+default = one_match(core, r"std::vector<std::string> integrators\b[^;]*;")
+if default is not None and "integratorsFor(Model::Kinematic)" not in default:
+    errors.append("%s: the --integrators default is not the table's kinematic methods: %s"
+                  % (core, default))
+help_list = one_match(core, r"--integrators LIST +comma-separated \(default ([a-z0-9_,]+)\)")
+if help_list is not None:
+    expect(core + " --integrators help", help_list.split(","), kinematic)
+
+# The benchmark charts give each method the next PALETTE entry in the order it first appears in
+# the sweep (kinematic methods, then the dynamic ones not yet seen); evaluate_bag uses the same
+# colours for the kinematic methods.
+palette = assigned("bench/plot.py", "PALETTE")
+charted = kinematic + [m for m in dynamic if m not in kinematic]
+if palette is not None:
+    colours = [c for c, _ in palette]
+    if len(palette) < len(charted) or len(set(colours[:len(charted)])) < len(charted):
+        errors.append("bench/plot.py PALETTE: %d distinct colours for the %d methods %s"
+                      % (len(set(colours)), len(charted), charted))
+    evaluate_colours = assigned("nodes/evaluate_bag", "COLOURS")
+    if evaluate_colours is not None:
+        expect("nodes/evaluate_bag COLOURS", evaluate_colours,
+               {m: colours[i % len(colours)] for i, m in enumerate(kinematic)})
+        expect("nodes/evaluate_bag COLOURS order", list(evaluate_colours), kinematic)
+
+# The fuzz seeds: the names the targets index, the methods seeded, and the corpus they write.
+sys.path.insert(0, "test/fuzz")
+import make_seeds  # noqa: E402
+
+expect("test/fuzz/make_seeds.py NAMES", make_seeds.NAMES, names)
+expect("test/fuzz/make_seeds.py KINEMATIC", make_seeds.KINEMATIC, kinematic)
+expect("test/fuzz/make_seeds.py DYNAMIC", make_seeds.DYNAMIC, dynamic)
+refused = one_match("test/fuzz/fuzz_parameters.cpp",
+                    r"for \(const char\* refused : \{([^}]*)\}\)")
+if refused is not None:
+    expect("test/fuzz/make_seeds.py CHOICES['integrator']", make_seeds.CHOICES["integrator"],
+           make_seeds.NAMES + ast.literal_eval("[" + refused + "]"),
+           "NAMES and fuzz_parameters.cpp's refused names")
+try:
+    seeds = make_seeds.seeds()
+except Exception as e:  # a seed naming a method NAMES lacks
+    errors.append("test/fuzz/make_seeds.py: seeds() fails: %r" % e)
+    seeds = {}
+for target, files in seeds.items():
+    folder = pathlib.Path("test/fuzz/corpus") / target
+    held = {p.name: p.read_bytes() for p in folder.iterdir()} if folder.is_dir() else {}
+    differ = sorted(n for n in set(held) | set(files) if held.get(n) != files.get(n))
+    if differ:
+        errors.append("%s differs from make_seeds.py's seeds (run python3 "
+                      "test/fuzz/make_seeds.py): %s" % (folder, " ".join(differ)))
+
+# Benchmark and documentation of the bag tools: every kinematic method.
+loop = one_match("bench/bag_throughput.sh", r"for integrator in ([a-z0-9_ ]+); do")
+if loop is not None:
+    expect("bench/bag_throughput.sh integrators", loop.split(), kinematic)
+sentence = one_match("docs/bag_tools.md", r"\*\*`evaluate_bag`\*\* runs ([a-z0-9_, ]+?),? each")
+if sentence is not None:
+    expect("docs/bag_tools.md evaluate_bag's methods",
+           [n.strip() for n in sentence.replace(" and ", ", ").split(",")], kinematic)
+
+for line in errors:
+    print("integrator lists:", line)
+if not errors:
+    print("integrator lists: %d names (%d kinematic, %d dynamic) agree with the table"
+          % (len(names), len(kinematic), len(dynamic)))
+sys.exit(1 if errors else 0)
+PY
