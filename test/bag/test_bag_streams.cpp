@@ -334,8 +334,7 @@ TEST(OutputOptions, MountGoesToTfStatic) {
 /// 200 Hz IMU messages in imu_link, its mount base_link -> imu_link published on /tf at 10 Hz
 /// (a driver's broadcaster, not /tf_static), the first one recorded before the first IMU message;
 /// and a gyro bias of zero in `bias_frame`.
-void writeTfMountedImuBag(const std::string& path, double duration,
-                          const std::string& bias_frame) {
+void writeTfMountedImuBag(const std::string& path, double duration, const std::string& bias_frame) {
   rosbag::Bag bag(path, rosbag::bagmode::Write);
   const Motion body = coning();
   const Eigen::Quaterniond q_BI = kPlate * kImuOnPlate;
@@ -379,7 +378,8 @@ TEST(Frames, MountOnTfAsTheNodeHearsIt) {
   const RunResult r =
       run(kPropagate + " " + dir.file("tf.bag") + " -o " + dir.file("tf_out.bag") + options);
   ASSERT_EQ(r.status, 0) << r.output;
-  EXPECT_NE(r.output.find("401 messages (/imu/data_raw 401), 401 accepted, dropped: none"),
+  EXPECT_NE(r.output.find("402 messages (/gyro_bias 1, /imu/data_raw 401), 401 accepted, "
+                          "dropped: none"),
             std::string::npos)
       << r.output;
   EXPECT_NE(r.output.find("gyro bias: 1 used, 0 refused"), std::string::npos) << r.output;
@@ -399,8 +399,8 @@ TEST(Frames, MountOnTfAsTheNodeHearsIt) {
 TEST(Frames, BiasInAnotherFrameRefusedOnce) {
   TempDir dir;
   writeTfMountedImuBag(dir.file("in.bag"), 1.0, "elsewhere");
-  const RunResult r = run(kPropagate + " " + dir.file("in.bag") + " -o " + dir.file("out.bag") +
-                          " --no-progress");
+  const RunResult r =
+      run(kPropagate + " " + dir.file("in.bag") + " -o " + dir.file("out.bag") + " --no-progress");
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("201 accepted, dropped: none"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("gyro bias: 0 used, 1 refused"), std::string::npos) << r.output;
