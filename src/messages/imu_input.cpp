@@ -14,15 +14,4 @@ std::optional<ImuRefusal> refuseImuRate(const sensor_msgs::Imu& msg) {
   return std::nullopt;
 }
 
-Input imuRateInput(const sensor_msgs::Imu& msg, const Eigen::Quaterniond& q_BS, Stamp stamp) {
-  Input input;
-  input.source = Source::Imu;
-  input.stamp = stamp;
-  input.value = q_BS * toEigen(msg.angular_velocity);
-  const Eigen::Matrix3d R_S = covarianceFromMsg(msg.angular_velocity_covariance);
-  input.rate_covariance_B =
-      R_S.isZero(0.0) || !R_S.allFinite() ? R_S : rotateCovariance(R_S, q_BS.toRotationMatrix());
-  return input;
-}
-
 }  // namespace attitude_propagator

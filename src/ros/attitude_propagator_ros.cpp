@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 #include <string>
 
@@ -10,7 +11,6 @@
 #include "attitude_propagator/AttitudeState.h"
 #include "attitude_propagator/limits.h"
 #include "attitude_propagator/messages/conversions.h"
-#include "attitude_propagator/messages/imu_input.h"
 #include "attitude_propagator/orientation_covariance.h"
 #include "attitude_propagator/ros/log_text.h"
 #include "attitude_propagator/ros/parameter_loader.h"
@@ -48,24 +48,6 @@ constexpr double kTfConflictClearance = 2.0;
 // Diagnostics judge what became of the rate samples over windows of this long (wall s).
 constexpr double kInputWindow = 1.0;
 
-template <class M>
-bool isType(const topic_tools::ShapeShifter& message) {
-  return message.getDataType() == ros::message_traits::datatype<M>() &&
-         message.getMD5Sum() == ros::message_traits::md5sum<M>();
-}
-
-/// Deserialises a ShapeShifter into an existing message through a reused buffer, so a
-/// steady stream allocates nothing here (instantiate() would allocate a message each time).
-template <class M>
-void decodeInto(const topic_tools::ShapeShifter& message, std::vector<std::uint8_t>& buffer,
-                M& out) {
-  buffer.resize(message.size());
-  ros::serialization::OStream write(buffer.data(), message.size());
-  message.write(write);
-  ros::serialization::IStream read(buffer.data(), message.size());
-  ros::serialization::deserialize(read, out);
-}
-
 /// An IMU message kept with an input until the engine applies it, and its sensor mount.
 struct ImuPayload {
   sensor_msgs::Imu::ConstPtr msg;
@@ -81,6 +63,7 @@ AttitudePropagatorRos::AttitudePropagatorRos(ros::NodeHandle nh, ros::NodeHandle
       config_(loadParameters(pnh)),
       updater_(nh, pnh, pnh.getNamespace()) {
   engine_ = std::make_unique<AttitudeEngine>(engineConfig(config_), *this);
+  decoders_.emplace(DecoderFrames::of(config_));
   rebuildEncoder();
   sim_time_ = ros::Time::isSimTime();
   advertise();
@@ -215,101 +198,36 @@ void AttitudePropagatorRos::guarded(const char* where, F&& f) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Inputs
+// Inputs: the message layer decodes (input_decoders.h); here they are counted, logged, submitted
 // ---------------------------------------------------------------------------------------------
+
+std::optional<Eigen::Quaterniond> AttitudePropagatorRos::TfFrames::rotation(
+    const std::string& target, const std::string& source, const ros::Time& stamp,
+    std::string* error) {
+  node_.ensureTfListener();
+  return BufferCoreFrames(*node_.tf_buffer_).rotation(target, source, stamp, error);
+}
 
 void AttitudePropagatorRos::onImu(const ros::MessageEvent<const sensor_msgs::Imu>& event) {
   guarded("imu/data_raw", [&] {
     pollClock();
     const sensor_msgs::Imu::ConstPtr& msg = event.getConstMessage();
-    if (const auto refusal = refuseImuRate(*msg)) {
-      engine_->reject(refusal->why);
-      const EngineCounters& c = engine_->counters();
-      if (refusal->why == Rejection::NoRate) {
-        ROS_WARN_THROTTLE(kWarnPeriod,
-                          "imu/data_raw: angular_velocity_covariance[0] == -1 (no rate, "
-                          "REP-145): rejected (%lu so far)",
-                          c.rejected_no_rate);
-      } else {
-        ROS_WARN_THROTTLE(kWarnPeriod,
-                          "imu/data_raw: angular_velocity_covariance rejected (%s; accepted: "
-                          "symmetric, variances in [0, %g] rad^2/s^2) (%lu so far)",
-                          rateCovarianceCheckName(refusal->check), kMaxRateVariance,
-                          c.rejected_covariance);
-      }
-      return;
-    }
-    const auto stamp = stampOf(msg->header.stamp, event.getReceiptTime(), "imu/data_raw");
-    if (!stamp) return;
-    const Eigen::Quaterniond* q_BS = mountRotation(msg->header.frame_id);
-    if (!q_BS) return;
-    Input input = imuRateInput(*msg, *q_BS, *stamp);
+    DecodedInput in = decoders_->imu(*msg, event.getReceiptTime(), &tf_frames_);
+    if (!taken(in, "imu/data_raw")) return;
     if (imu_pub_.getNumSubscribers() > 0) {
-      input.payload = std::make_shared<ImuPayload>(ImuPayload{msg, *q_BS});
+      in.value->payload = std::make_shared<ImuPayload>(ImuPayload{msg, in.q_BS});
     }
-    submit(input);
+    submit(*in.value);
   });
-}
-
-void AttitudePropagatorRos::onTwistRate(Stamp stamp, const Eigen::Vector3d& w_B) {
-  Input input;
-  input.source = Source::Twist;
-  input.stamp = stamp;
-  input.value = w_B;
-  submit(input);
-}
-
-void AttitudePropagatorRos::submit(const Input& input) {
-  last_input_ = ros::WallTime::now();
-  engine_->submit(input);
-}
-
-// Twist/TwistStamped and Wrench/WrenchStamped arrive on one topic each, told apart at run
-// time; both carry one vector of interest. The first message fixes the topic's type.
-template <class Stamped, class Plain, class Inner, class Field>
-bool AttitudePropagatorRos::decodeVectorInput(const topic_tools::ShapeShifter& msg, TopicType& type,
-                                              const char* topic, Stamped& stamped, Plain& plain,
-                                              Inner inner, Field field, VectorInput& out) {
-  const bool known = isType<Stamped>(msg) || isType<Plain>(msg);
-  if (known && type.datatype.empty()) type.datatype = msg.getDataType();
-  if (!known || msg.getDataType() != type.datatype) {
-    engine_->reject(Rejection::WrongType);
-    ROS_WARN_THROTTLE(kWarnPeriod,
-                      "%s: message type %s rejected; the topic carries %s (its first message's "
-                      "type; accepted: %s or %s) (%lu rejected so far)",
-                      topic, logText(msg.getDataType()).c_str(),
-                      type.datatype.empty() ? "nothing yet" : type.datatype.c_str(),
-                      ros::message_traits::datatype<Plain>(),
-                      ros::message_traits::datatype<Stamped>(), engine_->counters().rejected_type);
-    return false;
-  }
-  if (isType<Stamped>(msg)) {
-    decodeInto(msg, decode_buffer_, stamped);
-    out = {&field(inner(stamped)), stamped.header.stamp, &stamped.header.frame_id};
-  } else {
-    decodeInto(msg, decode_buffer_, plain);
-    out = {&field(plain), ros::Time(), nullptr};
-  }
-  return true;
 }
 
 void AttitudePropagatorRos::onTwist(
     const ros::MessageEvent<const topic_tools::ShapeShifter>& event) {
   guarded("body_twist", [&] {
     pollClock();
-    VectorInput in;
-    if (!decodeVectorInput<geometry_msgs::TwistStamped, geometry_msgs::Twist>(
-            *event.getConstMessage(), twist_type_, "body_twist", twist_stamped_, twist_,
-            [](geometry_msgs::TwistStamped& m) -> geometry_msgs::Twist& { return m.twist; },
-            [](geometry_msgs::Twist& m) -> geometry_msgs::Vector3& { return m.angular; }, in)) {
-      return;
-    }
-    const auto stamp = stampOf(in.stamp, event.getReceiptTime(), "body_twist");
-    if (!stamp) return;
-    static const std::string kBody;
-    const Eigen::Quaterniond* q_BS = mountRotation(in.frame_id ? *in.frame_id : kBody);
-    if (!q_BS) return;
-    onTwistRate(*stamp, *q_BS * toEigen(*in.value));
+    const DecodedInput in =
+        decoders_->twistTopic(*event.getConstMessage(), event.getReceiptTime(), &tf_frames_);
+    if (taken(in, "body_twist")) submit(*in.value);
   });
 }
 
@@ -317,45 +235,18 @@ void AttitudePropagatorRos::onTorque(
     const ros::MessageEvent<const topic_tools::ShapeShifter>& event) {
   guarded("torque", [&] {
     pollClock();
-    VectorInput in;
-    if (!decodeVectorInput<geometry_msgs::WrenchStamped, geometry_msgs::Wrench>(
-            *event.getConstMessage(), torque_type_, "torque", wrench_stamped_, wrench_,
-            [](geometry_msgs::WrenchStamped& m) -> geometry_msgs::Wrench& { return m.wrench; },
-            [](geometry_msgs::Wrench& m) -> geometry_msgs::Vector3& { return m.torque; }, in)) {
-      return;
-    }
-    const auto stamp = stampOf(in.stamp, event.getReceiptTime(), "torque");
-    if (!stamp) return;
-    Input input;
-    input.source = Source::Torque;
-    input.stamp = *stamp;
-    if (!resolveTorqueFrame(in.frame_id ? *in.frame_id : std::string(), toEigen(*in.value),
-                            input)) {
-      return;
-    }
-    submit(input);
+    const DecodedInput in =
+        decoders_->torqueTopic(*event.getConstMessage(), event.getReceiptTime(), &tf_frames_);
+    if (taken(in, "torque")) submit(*in.value);
   });
 }
 
 void AttitudePropagatorRos::onGyroBias(const geometry_msgs::Vector3Stamped::ConstPtr& msg) {
   guarded("gyro_bias", [&] {
-    const std::string& frame = msg->header.frame_id;
-    const bool in_body = frame.empty() || frame == config_.parameters.body_frame;
-    const bool in_mount = mount_known_ && frame == sensor_frame_;
-    if (!in_body && !in_mount) {
-      engine_->rejectBias();
-      ROS_WARN_THROTTLE(kWarnPeriod,
-                        "gyro_bias: frame '%s' rejected; accepted: '%s' (the body), the rate "
-                        "messages' frame once known, or empty (%lu rejected so far)",
-                        logText(frame).c_str(), config_.parameters.body_frame.c_str(),
-                        engine_->counters().rejected_bias);
-      return;
-    }
-    const Eigen::Vector3d b = toEigen(msg->vector);
-    const Eigen::Vector3d gyro_bias_B = in_mount ? Eigen::Vector3d(q_BS_ * b) : b;
     // Unstamped: from now on (ROS time; zero before the first /clock: from the start).
-    const Stamp stamp = toStamp(msg->header.stamp.isZero() ? ros::Time::now() : msg->header.stamp);
-    if (!engine_->submitBias(stamp, gyro_bias_B)) {
+    const Decoded<BiasSample> bias = decoders_->bias(*msg, ros::Time::now());
+    if (!bias) return refused(*bias.refusal, "gyro_bias");
+    if (!engine_->submitBias(bias->stamp, bias->b_B)) {
       ROS_WARN_THROTTLE(kWarnPeriod,
                         "gyro_bias: non-finite or larger than %g rad/s: rejected (%lu so far)",
                         kMaxBodyRate, engine_->counters().rejected_bias);
@@ -367,66 +258,83 @@ void AttitudePropagatorRos::onClock(const rosgraph_msgs::Clock::ConstPtr& msg) {
   guarded("/clock", [&] { engine_->clockTick(toStamp(msg->clock)); });
 }
 
-bool AttitudePropagatorRos::resolveTorqueFrame(const std::string& frame_id,
-                                               const Eigen::Vector3d& tau, Input& input) {
-  const auto& p = config_.parameters;
-  input.value = tau;
-  input.frame = config_.torque_frame;  // unstamped, or stamped with an empty frame_id
-  if (frame_id.empty()) return true;
-  if (frame_id == p.body_frame || frame_id == p.fixed_frame) {
-    input.frame = frame_id == p.body_frame ? TorqueFrame::Body : TorqueFrame::Fixed;
-    return true;
+void AttitudePropagatorRos::submit(const Input& input) {
+  last_input_ = ros::WallTime::now();
+  engine_->submit(input);
+}
+
+bool AttitudePropagatorRos::taken(const DecodedInput& in, const char* topic) {
+  if (in.refusal) {
+    refused(*in.refusal, topic);
+    return false;
   }
-  if (!tau.allFinite()) return true;  // the engine rejects and counts it; no tf lookup for it
-  // A third frame: rotate into the body now; the core takes it as a body torque.
-  const auto q_BF = torqueFrameRotation(frame_id);
-  if (!q_BF) return false;
-  input.value = *q_BF * tau;
-  input.frame = TorqueFrame::Body;
+  if (in.new_mount) {
+    const std::string& body = config_.parameters.body_frame;
+    const Eigen::Quaterniond& q = in.q_BS;
+    ROS_INFO("rates in frame '%s' are rotated into '%s' by q = [%g, %g, %g, %g] (x y z w)",
+             logText(decoders_->mountFrame()).c_str(), body.c_str(), q.x(), q.y(), q.z(), q.w());
+    if (!config_.torque_input) {
+      // Cached for good: stop listening, or the listener would keep digesting our own /tf.
+      tf_listener_.reset();
+      tf_buffer_.reset();
+    }
+  }
   return true;
 }
 
-const Eigen::Quaterniond* AttitudePropagatorRos::mountRotation(const std::string& frame_id) {
-  static const Eigen::Quaterniond kIdentity = Eigen::Quaterniond::Identity();
-  if (frame_id.empty() || frame_id == config_.parameters.body_frame) return &kIdentity;
-  if (mount_known_ && frame_id == sensor_frame_) return &q_BS_;
-  ensureTfListener();
+void AttitudePropagatorRos::refused(const Refusal& r, const char* topic) {
+  countRefusal(*engine_, r.why);
+  const EngineCounters& c = engine_->counters();
   const std::string& body = config_.parameters.body_frame;
-  std::string error;
-  if (!tf_buffer_->canTransform(body, frame_id, ros::Time(0), &error)) {
-    engine_->reject(Rejection::NoTransform);
-    ROS_WARN_THROTTLE(kWarnPeriod,
-                      "rates in frame '%s': waiting for the static transform from '%s'; "
-                      "dropped %lu messages so far (%s)",
-                      logText(frame_id).c_str(), body.c_str(), engine_->counters().dropped_no_tf,
-                      logText(error, 4 * kLogTextBytes).c_str());
-    return nullptr;
-  }
-  q_BS_ = rotationOf(tf_buffer_->lookupTransform(body, frame_id, ros::Time(0))).normalized();
-  sensor_frame_ = frame_id;
-  mount_known_ = true;
-  ROS_INFO("rates in frame '%s' are rotated into '%s' by q = [%g, %g, %g, %g] (x y z w)",
-           logText(frame_id).c_str(), body.c_str(), q_BS_.x(), q_BS_.y(), q_BS_.z(), q_BS_.w());
-  if (!config_.torque_input) {
-    // Cached for good: stop listening, or the listener would keep digesting our own /tf.
-    tf_listener_.reset();
-    tf_buffer_.reset();
-  }
-  return &q_BS_;
-}
-
-std::optional<Eigen::Quaterniond> AttitudePropagatorRos::torqueFrameRotation(
-    const std::string& frame_id) {
-  ensureTfListener();
-  const std::string& body = config_.parameters.body_frame;
-  try {
-    return rotationOf(tf_buffer_->lookupTransform(body, frame_id, ros::Time(0))).normalized();
-  } catch (const tf2::TransformException& e) {
-    engine_->reject(Rejection::NoTransform);
-    ROS_WARN_THROTTLE(kWarnPeriod, "torque in frame '%s': no transform to '%s' yet: dropped (%s)",
-                      logText(frame_id).c_str(), body.c_str(),
-                      logText(e.what(), 4 * kLogTextBytes).c_str());
-    return std::nullopt;
+  const bool torque = std::strcmp(topic, "torque") == 0;
+  switch (r.why) {
+    case Refused::NoRate:
+      ROS_WARN_THROTTLE(kWarnPeriod,
+                        "%s: angular_velocity_covariance[0] == -1 (no rate, REP-145): rejected "
+                        "(%lu so far)",
+                        topic, c.rejected_no_rate);
+      break;
+    case Refused::BadCovariance:
+      ROS_WARN_THROTTLE(kWarnPeriod,
+                        "%s: angular_velocity_covariance rejected (%s; accepted: symmetric, "
+                        "variances in [0, %g] rad^2/s^2) (%lu so far)",
+                        topic, rateCovarianceCheckName(r.check), kMaxRateVariance,
+                        c.rejected_covariance);
+      break;
+    case Refused::WrongType: {
+      const TopicType& type = torque ? decoders_->torqueType() : decoders_->twistType();
+      ROS_WARN_THROTTLE(kWarnPeriod,
+                        "%s: message type %s rejected; the topic carries %s (its first "
+                        "message's type; accepted: %s or %s) (%lu rejected so far)",
+                        topic, logText(r.detail).c_str(),
+                        type.datatype().empty() ? "nothing yet" : type.datatype().c_str(),
+                        type.plainType().c_str(), type.stampedType().c_str(), c.rejected_type);
+      break;
+    }
+    case Refused::NoTransform:
+      if (torque) {
+        ROS_WARN_THROTTLE(
+            kWarnPeriod, "torque in frame '%s': no transform to '%s' yet: dropped (%s)",
+            logText(r.frame).c_str(), body.c_str(), logText(r.detail, 4 * kLogTextBytes).c_str());
+      } else {
+        ROS_WARN_THROTTLE(kWarnPeriod,
+                          "rates in frame '%s': waiting for the static transform from '%s'; "
+                          "dropped %lu messages so far (%s)",
+                          logText(r.frame).c_str(), body.c_str(), c.dropped_no_tf,
+                          logText(r.detail, 4 * kLogTextBytes).c_str());
+      }
+      break;
+    case Refused::NoTime:
+      // An unstamped message under sim time before the first /clock: no time to put it at.
+      ROS_WARN_THROTTLE(kWarnPeriod, "%s: unstamped message and no ROS time yet (/clock): dropped",
+                        topic);
+      break;
+    case Refused::BiasFrame:
+      ROS_WARN_THROTTLE(kWarnPeriod,
+                        "gyro_bias: frame '%s' rejected; accepted: '%s' (the body), the rate "
+                        "messages' frame once known, or empty (%lu rejected so far)",
+                        logText(r.frame).c_str(), body.c_str(), c.rejected_bias);
+      break;
   }
 }
 
@@ -434,17 +342,6 @@ void AttitudePropagatorRos::ensureTfListener() {
   if (tf_buffer_) return;
   tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
   tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_, nh_);
-}
-
-std::optional<Stamp> AttitudePropagatorRos::stampOf(const ros::Time& stamp,
-                                                    const ros::Time& receipt, const char* input) {
-  const ros::Time time = stamp.isZero() ? receipt : stamp;
-  if (!time.isZero()) return toStamp(time);
-  // An unstamped message under sim time before the first /clock: no time to put it at.
-  engine_->reject(Rejection::NoTime);
-  ROS_WARN_THROTTLE(kWarnPeriod, "%s: unstamped message and no ROS time yet (/clock): dropped",
-                    input);
-  return std::nullopt;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -31,8 +31,9 @@
 
 #include "alignment.h"
 #include "attitude_propagator/engine.h"
-#include "attitude_propagator/quaternion.h"
 #include "attitude_propagator/messages/conversions.h"
+#include "attitude_propagator/messages/input_decoders.h"
+#include "attitude_propagator/quaternion.h"
 #include "tool_support.h"
 
 namespace attitude_propagator {
@@ -554,8 +555,7 @@ class Evaluation {
   std::vector<std::uint8_t> buffer_;
   // Decoding, reused.
   sensor_msgs::Imu imu_;
-  geometry_msgs::TwistStamped twist_stamped_;
-  geometry_msgs::Twist twist_;
+  InputDecoders decoders_{DecoderFrames{}};  // body_twist's type; frames are not looked up
   geometry_msgs::PoseStamped pose_;
   geometry_msgs::PoseWithCovarianceStamped pose_cov_;
   geometry_msgs::TransformStamped transform_;
@@ -657,17 +657,18 @@ void Evaluation::handle(const rosbag::MessageInstance& m) {
 }
 
 bool Evaluation::decodeRate(const rosbag::MessageInstance& m, RateSample& out) {
+  // The node's reading of a rate message in its own frame (the mount is this tool's to
+  // estimate): REP-145's "no rate" and covariances that are not ones refused, the type of
+  // body_twist's first message kept, a zero stamp taken as the record time.
+  Decoded<Reading> read;
   if (isType<sensor_msgs::Imu>(m)) {
     decodeInto(m, buffer_, imu_);
-    if (imu_.angular_velocity_covariance[0] == -1.0) return false;  // REP-145: no rate
-    out = {stampOr(imu_.header.stamp, record_), toEigen(imu_.angular_velocity)};
-  } else if (isType<geometry_msgs::TwistStamped>(m)) {
-    decodeInto(m, buffer_, twist_stamped_);
-    out = {stampOr(twist_stamped_.header.stamp, record_), toEigen(twist_stamped_.twist.angular)};
+    read = readImu(imu_, record_);
   } else {
-    decodeInto(m, buffer_, twist_);
-    out = {toStamp(record_), toEigen(twist_.angular)};
+    read = decoders_.readTwistTopic(m, record_);
   }
+  if (!read) return false;
+  out = {read->stamp, read->value};
   return true;
 }
 

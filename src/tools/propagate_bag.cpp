@@ -31,13 +31,13 @@
 #include <rosgraph_msgs/Clock.h>
 #include <sensor_msgs/Imu.h>
 #include <tf2/buffer_core.h>
-#include <tf2/exceptions.h>
 #include <tf2_msgs/TFMessage.h>
 
 #include "attitude_propagator/AttitudeState.h"
 #include "attitude_propagator/engine.h"
 #include "attitude_propagator/messages/conversions.h"
-#include "attitude_propagator/messages/imu_input.h"
+#include "attitude_propagator/messages/frame_source.h"
+#include "attitude_propagator/messages/input_decoders.h"
 #include "attitude_propagator/messages/outputs.h"
 #include "tool_support.h"
 
@@ -75,6 +75,9 @@ Output topics, named as the node's would be (relative names resolved in --ns, as
   --tf-static-topic NAME default /tf_static: the mounts used (body frame to the IMU's, twist's
                          or torque's frame, the transforms read from the input's /tf_static),
                          latched as rosbag records a latched topic
+
+Frames follow the node's rules: the input's /tf_static holds at every time, its /tf is heard
+as it was recorded; a mount (rates) is looked up once, a torque's frame at each message.
 
   --dry-run              open and check the bags, print their topics, types and message
                          counts, the settings that would run and the output's topics and
@@ -114,6 +117,7 @@ struct Options {
   std::string clock_topic = "/clock";
   std::string bias_topic = "/gyro_bias";
   std::string static_tf_topic = "/tf_static";
+  std::string tf_topic = "/tf";  // input transforms, heard in record order as the node hears them
   bool use_clock = true;
   bool io_floor = false;
   bool progress = true;
@@ -442,40 +446,50 @@ class BagPropagator : public EngineSink {
   double estimatedBytes();
   void dispatch(const rosbag::MessageInstance& m);
   void onImu(const rosbag::MessageInstance& m);
-  void onTwist(const rosbag::MessageInstance& m);
-  void onTorque(const rosbag::MessageInstance& m);
   void onBias(const rosbag::MessageInstance& m);
+  /// Counts a refused input once, or hands a decoded one to submit().
+  void take(DecodedInput& in);
   void submit(Input& input);
   void tickTo(Stamp now);
-  const Eigen::Quaterniond* mountRotation(const std::string& frame_id);
-  std::optional<Eigen::Quaterniond> staticRotation(const std::string& target,
-                                                   const std::string& source);
   void readStaticTransforms();
   void recordMount(const std::string& target, const std::string& source);
+
+  /// The bag's transforms for the decoders: its /tf_static (read first: static transforms hold
+  /// at every time) and its /tf as recorded up to the message at hand. Each static transform a
+  /// lookup goes through is written to the output's /tf_static; a lookup that fails is reported
+  /// once per frame.
+  class BagFrames : public FrameSource {
+   public:
+    explicit BagFrames(BagPropagator& run) : run_(run) {}
+    std::optional<Eigen::Quaterniond> rotation(const std::string& target, const std::string& source,
+                                               const ros::Time& stamp, std::string* error) override;
+
+   private:
+    BagPropagator& run_;
+    std::map<std::string, bool> reported_;  // frames whose failed lookup was reported
+  };
 
   const Options& o_;
   BagSet& bags_;
   NodeConfig config_;
   std::unique_ptr<AttitudeEngine> engine_;
   std::unique_ptr<Writer> writer_;
-  std::string rates_, torque_, clock_, bias_;  // as recorded; empty: not read
+  std::string rates_, torque_, clock_, bias_, tf_;  // as recorded; empty: not read
   bool clock_driven_ = false;
   ros::Time record_;  // record time of the message being handled
   std::optional<Stamp> last_tick_;
-  std::optional<std::string> twist_type_, wrench_type_;
+  InputDecoders decoders_{DecoderFrames::of(config_)};
+  BagFrames frames_{*this};
   ImuPayload imu_;
-  geometry_msgs::TwistStamped twist_stamped_;
-  geometry_msgs::Twist twist_;
-  geometry_msgs::WrenchStamped wrench_stamped_;
-  geometry_msgs::Wrench wrench_;
   geometry_msgs::Vector3Stamped bias_msg_;
+  tf2_msgs::TFMessage tf_msg_;
+  std::uint64_t tf_read_ = 0;  // /tf messages heard (not inputs: not in the summary's count)
   rosgraph_msgs::Clock clock_msg_;
   std::vector<std::uint8_t> buffer_;
-  std::unique_ptr<tf2::BufferCore> static_tf_;
+  std::unique_ptr<tf2::BufferCore> tf_buffer_;  // the bag's /tf_static, then its /tf
   std::map<std::string, geometry_msgs::TransformStamped> static_edges_;  // by child frame
   std::map<std::string, geometry_msgs::TransformStamped> mounts_used_;   // by child frame
-  std::map<std::string, std::optional<Eigen::Quaterniond>> mounts_;
-  std::map<std::string, std::uint64_t> read_;  // messages read per role
+  std::map<std::string, std::uint64_t> read_;                            // messages read per role
   std::uint64_t messages_ = 0;
   std::uint64_t states_ = 0;
   std::uint64_t floor_accepted_ = 0;  // --io-floor: inputs passed straight to the outputs
@@ -518,6 +532,12 @@ std::vector<std::string> BagPropagator::checkTopics() {
     bias_ = o_.bias_topic;
     topics.push_back(bias_);
   }
+  // The input's /tf, heard as the node's listener hears it (not an input: read with them).
+  try {
+    if (topicType(bags_, o_.tf_topic) == typeOf<tf2_msgs::TFMessage>().first) tf_ = o_.tf_topic;
+  } catch (const ToolError&) {
+    // A /tf of several types is no tf tree: not heard, as a tf listener would not.
+  }
   return topics;
 }
 
@@ -549,16 +569,23 @@ void BagPropagator::run(const std::string& path) {
   } else {
     writer_ = std::make_unique<BagWriter>(path, o_, config_, *engine_);
   }
-  rosbag::View view;
-  bags_.addQuery(view, topics);
-  bag_seconds_ = view.size() > 0 ? (view.getEndTime() - view.getBeginTime()).toSec() : 0.0;
-  messages_total_ = view.size();
+  {
+    rosbag::View inputs;
+    bags_.addQuery(inputs, topics);
+    bag_seconds_ = inputs.size() > 0 ? (inputs.getEndTime() - inputs.getBeginTime()).toSec() : 0.0;
+    messages_total_ = inputs.size();
+  }
   requireFreeSpace(o_.output, static_cast<std::uint64_t>(estimatedBytes()));
+  std::vector<std::string> read = topics;
+  if (!tf_.empty()) read.push_back(tf_);
+  rosbag::View view;
+  bags_.addQuery(view, read);
   Progress progress(view.size(), o_.progress);
   visitMessages(view, bags_.name(), progress, messages_, [this](const rosbag::MessageInstance& m) {
     record_ = m.getTime();
     dispatch(m);
   });
+  messages_ -= tf_read_;
   writer_->close();
   progress.finish();
   wall_ = progress.elapsed();
@@ -566,15 +593,25 @@ void BagPropagator::run(const std::string& path) {
 
 void BagPropagator::dispatch(const rosbag::MessageInstance& m) {
   const std::string& topic = m.getTopic();
+  if (!tf_.empty() && sameTopic(topic, tf_)) {
+    ++tf_read_;
+    if (!isType<tf2_msgs::TFMessage>(m)) return;
+    if (!tf_buffer_) readStaticTransforms();
+    decodeInto(m, buffer_, tf_msg_);
+    for (const auto& t : tf_msg_.transforms) tf_buffer_->setTransform(t, "bag", false);
+    return;
+  }
   ++read_[topic];
   if (!rates_.empty() && sameTopic(topic, rates_)) {
     if (config_.rate_input == RateInput::Imu) {
       onImu(m);
     } else {
-      onTwist(m);
+      DecodedInput in = decoders_.twistTopic(m, record_, &frames_);
+      take(in);
     }
   } else if (!torque_.empty() && sameTopic(topic, torque_)) {
-    onTorque(m);
+    DecodedInput in = decoders_.torqueTopic(m, record_, &frames_);
+    take(in);
   } else if (!clock_.empty() && sameTopic(topic, clock_)) {
     decodeInto(m, buffer_, clock_msg_);
     if (!o_.io_floor) engine_->clockTick(toStamp(clock_msg_.clock));
@@ -585,96 +622,28 @@ void BagPropagator::dispatch(const rosbag::MessageInstance& m) {
 
 void BagPropagator::onImu(const rosbag::MessageInstance& m) {
   decodeInto(m, buffer_, imu_.msg);
-  const sensor_msgs::Imu& msg = imu_.msg;
-  if (const auto refusal = refuseImuRate(msg)) {
-    engine_->reject(refusal->why);
-    return;
-  }
-  const Eigen::Quaterniond* q_BS = mountRotation(msg.header.frame_id);
-  if (!q_BS) return;
-  imu_.q_BI = *q_BS;
-  Input input = imuRateInput(msg, *q_BS, stampOr(msg.header.stamp, record_));
+  DecodedInput in = decoders_.imu(imu_.msg, record_, &frames_);
+  if (!in) return take(in);
+  imu_.q_BI = in.q_BS;
   if (engine_->dynamicModel()) {
-    input.payload = std::make_shared<ImuPayload>(imu_);  // may wait for the clock
+    in.value->payload = std::make_shared<ImuPayload>(imu_);  // may wait for the clock
   } else {
     // Applied before submit() returns: point at the reused message, no allocation.
-    input.payload = std::shared_ptr<const void>(std::shared_ptr<const void>(), &imu_);
+    in.value->payload = std::shared_ptr<const void>(std::shared_ptr<const void>(), &imu_);
   }
-  submit(input);
-}
-
-void BagPropagator::onTwist(const rosbag::MessageInstance& m) {
-  // As the node: the first message fixes the topic's type.
-  if (!twist_type_) twist_type_ = m.getDataType();
-  if (m.getDataType() != *twist_type_) {
-    engine_->reject(Rejection::WrongType);
-    return;
-  }
-  Input input;
-  input.source = Source::Twist;
-  std::string frame_id;
-  if (isType<geometry_msgs::TwistStamped>(m)) {
-    decodeInto(m, buffer_, twist_stamped_);
-    input.stamp = stampOr(twist_stamped_.header.stamp, record_);
-    input.value = toEigen(twist_stamped_.twist.angular);
-    frame_id = twist_stamped_.header.frame_id;
-  } else {
-    decodeInto(m, buffer_, twist_);
-    input.stamp = toStamp(record_);
-    input.value = toEigen(twist_.angular);
-  }
-  const Eigen::Quaterniond* q_BS = mountRotation(frame_id);
-  if (!q_BS) return;
-  input.value = *q_BS * input.value;
-  submit(input);
-}
-
-void BagPropagator::onTorque(const rosbag::MessageInstance& m) {
-  if (!wrench_type_) wrench_type_ = m.getDataType();
-  if (m.getDataType() != *wrench_type_) {
-    engine_->reject(Rejection::WrongType);
-    return;
-  }
-  Input input;
-  input.source = Source::Torque;
-  input.frame = config_.torque_frame;
-  std::string frame_id;
-  if (isType<geometry_msgs::WrenchStamped>(m)) {
-    decodeInto(m, buffer_, wrench_stamped_);
-    input.stamp = stampOr(wrench_stamped_.header.stamp, record_);
-    input.value = toEigen(wrench_stamped_.wrench.torque);
-    frame_id = wrench_stamped_.header.frame_id;
-  } else {
-    decodeInto(m, buffer_, wrench_);
-    input.stamp = toStamp(record_);
-    input.value = toEigen(wrench_.torque);
-  }
-  const auto& p = config_.parameters;
-  if (frame_id == p.body_frame || frame_id == p.fixed_frame) {
-    input.frame = frame_id == p.body_frame ? TorqueFrame::Body : TorqueFrame::Fixed;
-  } else if (!frame_id.empty() && input.value.allFinite()) {
-    // A third frame: rotated into the body through the bag's static transforms.
-    const auto q_B_frame = staticRotation(p.body_frame, frame_id);
-    if (!q_B_frame) {
-      engine_->reject(Rejection::NoTransform);
-      return;
-    }
-    input.value = *q_B_frame * input.value;
-    input.frame = TorqueFrame::Body;
-  }
-  submit(input);
+  take(in);
 }
 
 void BagPropagator::onBias(const rosbag::MessageInstance& m) {
   decodeInto(m, buffer_, bias_msg_);
-  const std::string& frame = bias_msg_.header.frame_id;
-  const Eigen::Quaterniond* q_B = mountRotation(frame);
-  if (!q_B) {
-    engine_->rejectBias();
-    return;
-  }
-  const Stamp stamp = stampOr(bias_msg_.header.stamp, record_);
-  if (!o_.io_floor && engine_->submitBias(stamp, *q_B * toEigen(bias_msg_.vector))) ++bias_used_;
+  const Decoded<BiasSample> bias = decoders_.bias(bias_msg_, record_);
+  if (!bias) return countRefusal(*engine_, bias.refusal->why);
+  if (!o_.io_floor && engine_->submitBias(bias->stamp, bias->b_B)) ++bias_used_;
+}
+
+void BagPropagator::take(DecodedInput& in) {
+  if (!in) return countRefusal(*engine_, in.refusal->why);
+  submit(*in.value);
 }
 
 void BagPropagator::submit(Input& input) {
@@ -705,24 +674,10 @@ void BagPropagator::tickTo(Stamp now) {
   last_tick_ = last_tick_ ? std::max(*last_tick_, now) : now;
 }
 
-const Eigen::Quaterniond* BagPropagator::mountRotation(const std::string& frame_id) {
-  static const Eigen::Quaterniond kIdentity = Eigen::Quaterniond::Identity();
-  if (frame_id.empty() || frame_id == config_.parameters.body_frame) return &kIdentity;
-  auto it = mounts_.find(frame_id);
-  if (it == mounts_.end()) {
-    it = mounts_.emplace(frame_id, staticRotation(config_.parameters.body_frame, frame_id)).first;
-  }
-  if (!it->second) {
-    engine_->reject(Rejection::NoTransform);
-    return nullptr;
-  }
-  return &*it->second;
-}
-
 void BagPropagator::readStaticTransforms() {
   // The bags' static transforms, read once (a handful of messages); a later one for the same
   // child frame replaces an earlier one, as in tf2.
-  static_tf_ = std::make_unique<tf2::BufferCore>();
+  tf_buffer_ = std::make_unique<tf2::BufferCore>();
   if (!topicType(bags_, o_.static_tf_topic)) return;
   rosbag::View view;
   bags_.addQuery(view, {o_.static_tf_topic});
@@ -731,26 +686,29 @@ void BagPropagator::readStaticTransforms() {
     tf2_msgs::TFMessage tf;
     decodeInto(m, buffer_, tf);
     for (const auto& t : tf.transforms) {
-      static_tf_->setTransform(t, "bag", true);
+      tf_buffer_->setTransform(t, "bag", true);
       static_edges_[t.child_frame_id] = t;
     }
   }
 }
 
-std::optional<Eigen::Quaterniond> BagPropagator::staticRotation(const std::string& target,
-                                                                const std::string& source) {
-  if (!static_tf_) readStaticTransforms();
-  std::optional<Eigen::Quaterniond> q;
-  try {
-    q = rotationOf(static_tf_->lookupTransform(target, source, ros::Time(0))).normalized();
-  } catch (const tf2::TransformException&) {
-    std::fprintf(stderr,
-                 "propagate_bag: no static transform %s -> %s in %s: its messages are "
-                 "dropped\n",
-                 target.c_str(), source.c_str(), bags_.name().c_str());
+std::optional<Eigen::Quaterniond> BagPropagator::BagFrames::rotation(const std::string& target,
+                                                                     const std::string& source,
+                                                                     const ros::Time& stamp,
+                                                                     std::string* error) {
+  if (!run_.tf_buffer_) run_.readStaticTransforms();
+  const auto q = BufferCoreFrames(*run_.tf_buffer_).rotation(target, source, stamp, error);
+  if (!q) {
+    if (!reported_[source]) {
+      reported_[source] = true;
+      std::fprintf(stderr,
+                   "propagate_bag: no transform %s -> %s in %s (/tf_static, or /tf so far): its "
+                   "messages are dropped until there is one\n",
+                   target.c_str(), source.c_str(), run_.bags_.name().c_str());
+    }
     return std::nullopt;
   }
-  recordMount(target, source);
+  run_.recordMount(target, source);
   return q;
 }
 
@@ -853,7 +811,8 @@ void BagPropagator::summary(std::FILE* out, bool written) const {
                  static_cast<unsigned long long>(c.deferred_ticks));
   }
   if (!bias_.empty()) {
-    std::fprintf(out, "  gyro bias: %llu used, %llu refused (non-finite, too large, no tf)\n",
+    std::fprintf(out,
+                 "  gyro bias: %llu used, %llu refused (non-finite, too large, another frame)\n",
                  static_cast<unsigned long long>(bias_used_),
                  static_cast<unsigned long long>(c.rejected_bias));
   }
@@ -883,7 +842,8 @@ void BagPropagator::dryRun(std::FILE* out) {
                                            {torque_, "torque"},
                                            {clock_, "clock: drives the engine"},
                                            {bias_, "gyro bias"},
-                                           {o_.static_tf_topic, "static transforms (mounts)"}};
+                                           {o_.static_tf_topic, "static transforms (mounts)"},
+                                           {tf_, "transforms (mounts, torque frames)"}};
   for (std::size_t i = 0; i < bags_.size(); ++i) {
     rosbag::View all(bags_.bag(i));
     std::fprintf(out, "  %s: %u messages, %.3f s of record time\n", bags_.paths()[i].c_str(),

@@ -13,6 +13,7 @@
 
 #include <unistd.h>
 
+#include <geometry_msgs/Vector3Stamped.h>
 #include <geometry_msgs/WrenchStamped.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
@@ -328,6 +329,81 @@ TEST(OutputOptions, MountGoesToTfStatic) {
   ASSERT_EQ(a.size(), b.size());
   // The rates went through q_BI and back: round-off only.
   for (std::size_t k = 0; k < a.size(); ++k) EXPECT_LT(ap::rotationAngle(a[k], b[k]), 1e-12);
+}
+
+/// 200 Hz IMU messages in imu_link, its mount base_link -> imu_link published on /tf at 10 Hz
+/// (a driver's broadcaster, not /tf_static), the first one recorded before the first IMU message;
+/// and a gyro bias of zero in `bias_frame`.
+void writeTfMountedImuBag(const std::string& path, double duration, const std::string& bias_frame) {
+  rosbag::Bag bag(path, rosbag::bagmode::Write);
+  const Motion body = coning();
+  const Eigen::Quaterniond q_BI = kPlate * kImuOnPlate;
+  geometry_msgs::Vector3Stamped bias;
+  bias.header.stamp = rosTime(stampAt(0.0));
+  bias.header.frame_id = bias_frame;
+  bag.write("/gyro_bias", bias.header.stamp, bias);
+  for (long k = 0; k <= std::lround(duration * 200); ++k) {
+    const double t = k / 200.0;
+    if (k % 20 == 0) {
+      tf2_msgs::TFMessage tf;
+      tf.transforms.push_back(edge("base_link", "imu_link", q_BI, Eigen::Vector3d(0.1, 0, 0)));
+      // Recorded 1 ms before the IMU message of its instant (a tie in record time has no order).
+      tf.transforms.back().header.stamp = rosTime(stampAt(t - 0.001));
+      bag.write("/tf", rosTime(stampAt(t - 0.001)), tf);
+    }
+    sensor_msgs::Imu m;
+    m.header.stamp = rosTime(stampAt(t));
+    m.header.frame_id = "imu_link";
+    toMsg(q_BI.conjugate() * body.rate(t), m.angular_velocity);
+    bag.write("/imu/data_raw", m.header.stamp, m);
+  }
+  bag.close();
+}
+
+std::vector<Eigen::Quaterniond> states(const std::string& path) {
+  rosbag::Bag bag(path, rosbag::bagmode::Read);
+  std::vector<Eigen::Quaterniond> q;
+  for (const auto& s : rosbag::View(bag, rosbag::TopicQuery("/attitude_state")))
+    q.push_back(toEigen(s.instantiate<ap::AttitudeState>()->orientation));
+  return q;
+}
+
+// A mount on /tf is heard as the node's listener hears it: every message is propagated, to the
+// states the same mount on /tf_static gives; /tf is no input (not in the summary's count).
+TEST(Frames, MountOnTfAsTheNodeHearsIt) {
+  TempDir dir;
+  writeTfMountedImuBag(dir.file("tf.bag"), 2.0, "base_link");
+  writeMountedImuBag(dir.file("static.bag"), 2.0);
+  const std::string options = " --set integrator=cf4 --no-progress";
+  const RunResult r =
+      run(kPropagate + " " + dir.file("tf.bag") + " -o " + dir.file("tf_out.bag") + options);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("402 messages (/gyro_bias 1, /imu/data_raw 401), 401 accepted, "
+                          "dropped: none"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("gyro bias: 1 used, 0 refused"), std::string::npos) << r.output;
+  const RunResult s = run(kPropagate + " " + dir.file("static.bag") + " -o " +
+                          dir.file("static_out.bag") + options);
+  ASSERT_EQ(s.status, 0) << s.output;
+  const std::vector<Eigen::Quaterniond> a = states(dir.file("tf_out.bag"));
+  const std::vector<Eigen::Quaterniond> b = states(dir.file("static_out.bag"));
+  ASSERT_EQ(a.size(), 401u);
+  ASSERT_EQ(a.size(), b.size());
+  // One mount composed by tf2 from one edge or from two: round-off only.
+  for (std::size_t k = 0; k < a.size(); ++k) EXPECT_LT(ap::rotationAngle(a[k], b[k]), 1e-12);
+}
+
+// A gyro bias in a frame that is neither the body nor the rates' mount is refused, as the node
+// refuses it, and counted once: as a refused bias, not as a dropped input.
+TEST(Frames, BiasInAnotherFrameRefusedOnce) {
+  TempDir dir;
+  writeTfMountedImuBag(dir.file("in.bag"), 1.0, "elsewhere");
+  const RunResult r =
+      run(kPropagate + " " + dir.file("in.bag") + " -o " + dir.file("out.bag") + " --no-progress");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("201 accepted, dropped: none"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("gyro bias: 0 used, 1 refused"), std::string::npos) << r.output;
 }
 
 /// The numbers of the summary's "inputs: N = A accepted + D dropped + P pending" line, and

@@ -1,12 +1,11 @@
-// The rate an IMU message carries, as the engine's input: the one reading of sensor_msgs/Imu
-// shared by the node and the bag tools, so both refuse and rotate alike.
+// What an IMU message's rate covariance says before anything else is read: REP-145's "no
+// rate" and covariances that are not ones. The decoder (input_decoders.h: readImu,
+// InputDecoders::imu) applies it first.
 #pragma once
 
 #include <optional>
 
 #include <sensor_msgs/Imu.h>
-
-#include <Eigen/Geometry>
 
 #include "attitude_propagator/engine.h"
 #include "attitude_propagator/orientation_covariance.h"
@@ -22,9 +21,5 @@ struct ImuRefusal {
   RateCovarianceCheck check = RateCovarianceCheck::Ok;
 };
 std::optional<ImuRefusal> refuseImuRate(const sensor_msgs::Imu& msg);
-
-/// The body-frame rate input of a message refuseImuRate() let through: ω_B = q_BS ω_S and
-/// R_B = C_BS R_S C_BSᵀ (zero when the message gives none), at `stamp`.
-Input imuRateInput(const sensor_msgs::Imu& msg, const Eigen::Quaterniond& q_BS, Stamp stamp);
 
 }  // namespace attitude_propagator

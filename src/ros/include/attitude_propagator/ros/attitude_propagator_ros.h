@@ -1,9 +1,10 @@
-// The ROS wrapper shared by attitude_propagator_node and the nodelet: decodes input messages
-// into the core engine's inputs, tells the engine what time it is, and publishes what the
-// engine hands back as tf, imu/data, attitude_state and diagnostics. Every policy (time,
-// queueing, publish grid, covariance, counting) is the engine's (attitude_propagator/engine.h);
-// this class owns the ROS side only: parameters, topics, tf lookups of sensor frames, timers,
-// services and logging.
+// The ROS wrapper shared by attitude_propagator_node and the nodelet: hands input messages to
+// the message layer's decoders (input_decoders.h) and their inputs to the core engine, tells the
+// engine what time it is, and publishes what the engine hands back as tf, imu/data,
+// attitude_state and diagnostics. Every policy (time, queueing, publish grid, covariance,
+// counting) is the engine's (attitude_propagator/engine.h), every reading of a message the
+// message layer's; this class owns the ROS side only: parameters, topics, the tf listener the
+// decoders look sensor frames up in, timers, services and logging.
 //
 // Threading: every callback (subscriptions, timers, services) runs on the callback queue of
 // the node handles given to the constructor. The node spins one thread; the nodelet passes
@@ -22,11 +23,7 @@
 
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
-#include <geometry_msgs/Twist.h>
-#include <geometry_msgs/TwistStamped.h>
 #include <geometry_msgs/Vector3Stamped.h>
-#include <geometry_msgs/Wrench.h>
-#include <geometry_msgs/WrenchStamped.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Clock.h>
 #include <sensor_msgs/Imu.h>
@@ -42,6 +39,7 @@
 #include "attitude_propagator/SetState.h"
 #include "attitude_propagator/config/parameters.h"
 #include "attitude_propagator/engine.h"
+#include "attitude_propagator/messages/input_decoders.h"
 #include "attitude_propagator/messages/outputs.h"
 
 namespace attitude_propagator {
@@ -87,36 +85,11 @@ class AttitudePropagatorRos : public EngineSink {
   /// A gyro bias, in force for rates stamped at or after its stamp.
   void onGyroBias(const geometry_msgs::Vector3Stamped::ConstPtr& msg);
 
-  /// The vector a Twist/Wrench input carries, with the header of its stamped form if it had one.
-  struct VectorInput {
-    const geometry_msgs::Vector3* value = nullptr;
-    ros::Time stamp;                        // zero when unstamped
-    const std::string* frame_id = nullptr;  // null when unstamped
-  };
-  /// One type per topic: the first message's type is the topic's; another one later is
-  /// rejected, counted and warned (ROS 1 connects a topic to one type).
-  struct TopicType {
-    std::string datatype;
-  };
-  template <class Stamped, class Plain, class Inner, class Field>
-  bool decodeVectorInput(const topic_tools::ShapeShifter& msg, TopicType& type, const char* topic,
-                         Stamped& stamped, Plain& plain, Inner inner, Field field,
-                         VectorInput& out);
-  /// Rotation from the frame of a rate message to the body frame; nullptr while tf does not
-  /// know it yet. Looked up once per frame id and cached (a sensor mount is static).
-  const Eigen::Quaterniond* mountRotation(const std::string& frame_id);
-  /// Rotation of a torque frame into the body frame, looked up per message (rare: a stamped
-  /// torque in neither the body nor the fixed frame).
-  std::optional<Eigen::Quaterniond> torqueFrameRotation(const std::string& frame_id);
-  /// Sets input.value and input.frame from a torque tau given in frame_id (empty: the
-  /// torque_frame parameter). False when the frame is not known to tf yet.
-  bool resolveTorqueFrame(const std::string& frame_id, const Eigen::Vector3d& tau, Input& input);
+  /// Counts and logs a refused input (false), or logs a newly looked-up mount (true).
+  bool taken(const DecodedInput& in, const char* topic);
+  /// Counts a refusal once and logs it, throttled per kind.
+  void refused(const Refusal& refusal, const char* topic);
   void ensureTfListener();
-  /// The message stamp, or the receipt time for unstamped (zero-stamped) messages; nullopt
-  /// (counted, warned) when there is no time at all (sim time before any /clock).
-  std::optional<Stamp> stampOf(const ros::Time& stamp, const ros::Time& receipt, const char* input);
-  /// A body rate from body_twist (no covariance: the configured default).
-  void onTwistRate(Stamp stamp, const Eigen::Vector3d& w_B);
   /// Hands an input to the engine and notes when input last arrived (diagnostics).
   void submit(const Input& input);
 
@@ -168,21 +141,21 @@ class AttitudePropagatorRos : public EngineSink {
   std::optional<OutputEncoder> encoder_;  // rebuilt when the frames or the integrator change
   bool sim_time_ = false;
 
-  // Sensor mount (frame of the rate messages -> body), cached.
-  std::string sensor_frame_;
-  Eigen::Quaterniond q_BS_ = Eigen::Quaterniond::Identity();
-  bool mount_known_ = false;
+  // The decoders (each topic's type, the rates' mount) and tf for them: the listener is
+  // created at the first lookup and dropped once the mount is known (unless torque input may
+  // need it), so the node does not digest its own /tf stream.
+  std::optional<InputDecoders> decoders_;
+  class TfFrames : public FrameSource {
+   public:
+    explicit TfFrames(AttitudePropagatorRos& node) : node_(node) {}
+    std::optional<Eigen::Quaterniond> rotation(const std::string& target, const std::string& source,
+                                               const ros::Time& stamp, std::string* error) override;
+
+   private:
+    AttitudePropagatorRos& node_;
+  } tf_frames_{*this};
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
-
-  // Scratch space for decoding ShapeShifter messages without allocating per message.
-  std::vector<std::uint8_t> decode_buffer_;
-  geometry_msgs::TwistStamped twist_stamped_;
-  geometry_msgs::Twist twist_;
-  geometry_msgs::WrenchStamped wrench_stamped_;
-  geometry_msgs::Wrench wrench_;
-  TopicType twist_type_;
-  TopicType torque_type_;
 
   ros::Subscriber rate_sub_;
   ros::Subscriber torque_sub_;

@@ -1,0 +1,232 @@
+// The decoders of every input message, shared by the node and the bag tools so both take and
+// refuse alike: sensor_msgs/Imu, geometry_msgs/Twist and TwistStamped (body_twist), Wrench and
+// WrenchStamped (torque), and the gyro bias (Vector3Stamped). Each turns a message, the time it
+// arrived (receipt time in the node, record time in a bag) and a FrameSource into an engine
+// Input, or into a named Refusal that the caller counts once (countRefusal) and reports.
+//
+// The rules (docs/design.md §5.4, §7.5):
+// - stamps: a zero header stamp (or no header) means the arrival time; none at all (sim time
+//   before the first /clock): refused, NoTime;
+// - rates (Imu, Twist): frame empty or body_frame: as they are; another frame S: rotated by the
+//   mount q_BS = lookupTransform(body_frame, S, latest), looked up once and kept until the rates
+//   come in yet another frame; an IMU's covariance becomes C_BS R_S C_BSᵀ; unknown: NoTransform;
+// - torque (Wrench, WrenchStamped): body_frame: a body torque; fixed_frame: a fixed-frame
+//   torque; empty or unstamped: the torque_frame parameter; a third frame F: rotated into the
+//   body through the latest transform (looked up per message: a torque sensor may move) and
+//   then a body torque; unknown: NoTransform. A non-finite torque is passed to the engine
+//   without a lookup (it rejects and counts it);
+// - gyro bias: frame empty or body_frame: as it is; the rates' mount frame once known: rotated
+//   by q_BS; any other frame: refused, BiasFrame;
+// - types: a topic that takes a plain and a stamped type (body_twist, torque) takes the type of
+//   its first message of either; a message of another type is refused, WrongType.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <geometry_msgs/Twist.h>
+#include <geometry_msgs/TwistStamped.h>
+#include <geometry_msgs/Vector3Stamped.h>
+#include <geometry_msgs/Wrench.h>
+#include <geometry_msgs/WrenchStamped.h>
+#include <ros/message_traits.h>
+#include <ros/serialization.h>
+#include <ros/time.h>
+#include <sensor_msgs/Imu.h>
+
+#include <Eigen/Geometry>
+
+#include "attitude_propagator/config/parameters.h"
+#include "attitude_propagator/engine.h"
+#include "attitude_propagator/messages/frame_source.h"
+#include "attitude_propagator/orientation_covariance.h"
+
+namespace attitude_propagator {
+
+/// Why a decoder refused a message. Each goes to one engine counter (refusedCounter).
+enum class Refused { NoRate, BadCovariance, WrongType, NoTransform, NoTime, BiasFrame };
+/// The counter a refusal is counted in: rejected_no_rate, rejected_covariance, rejected_type,
+/// dropped_no_tf, dropped_no_time, rejected_bias.
+const char* refusedCounter(Refused why);
+/// Counts a refusal in the engine's counters, once.
+void countRefusal(AttitudeEngine& engine, Refused why);
+
+struct Refusal {
+  Refused why = Refused::NoTime;
+  RateCovarianceCheck check = RateCovarianceCheck::Ok;  ///< BadCovariance: which test failed
+  std::string frame;   ///< NoTransform, BiasFrame: the frame refused
+  std::string detail;  ///< NoTransform: tf's error; WrongType: the type received
+};
+
+/// A value or the reason there is none.
+template <class T>
+struct Decoded {
+  std::optional<T> value;
+  std::optional<Refusal> refusal;  ///< set exactly when value is not
+  explicit operator bool() const { return value.has_value(); }
+  const T& operator*() const { return *value; }
+  const T* operator->() const { return &*value; }
+};
+
+/// The frames the rules name.
+struct DecoderFrames {
+  std::string body;                              ///< body_frame
+  std::string fixed;                             ///< fixed_frame
+  TorqueFrame torque_frame = TorqueFrame::Body;  ///< torque_frame: unstamped torques
+  static DecoderFrames of(const NodeConfig& config);
+};
+
+/// A message read, in its own frame, before the frame rules: what the bag tool that estimates
+/// the mount itself (evaluate_bag) takes, and what the rules start from.
+struct Reading {
+  Source source = Source::Imu;
+  Stamp stamp = 0;
+  Eigen::Vector3d value = Eigen::Vector3d::Zero();       ///< ω_S (rad/s) or τ (N m)
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  ///< Imu: R_S; zero: none given
+  std::string frame_id;                                  ///< empty: none or unstamped
+};
+
+/// A rate or torque decoded for the engine.
+struct DecodedInput : Decoded<Input> {
+  Eigen::Quaterniond q_BS = Eigen::Quaterniond::Identity();  ///< rates: the mount applied
+  bool new_mount = false;  ///< rates: q_BS was looked up for this message (a new mount frame)
+};
+
+/// A gyro bias in the body frame, in force from `stamp`.
+struct BiasSample {
+  Stamp stamp = 0;
+  Eigen::Vector3d b_B = Eigen::Vector3d::Zero();
+};
+
+/// The stamp rule: the header stamp, or `arrival` when it is zero; none when both are zero.
+std::optional<Stamp> stampOf(const ros::Time& header, const ros::Time& arrival);
+
+/// An Imu's rate in its own frame, or NoRate (REP-145), BadCovariance, NoTime.
+Decoded<Reading> readImu(const sensor_msgs::Imu& msg, const ros::Time& arrival);
+Decoded<Reading> readTwist(const geometry_msgs::Twist& msg, const ros::Time& arrival);
+Decoded<Reading> readTwist(const geometry_msgs::TwistStamped& msg, const ros::Time& arrival);
+Decoded<Reading> readWrench(const geometry_msgs::Wrench& msg, const ros::Time& arrival);
+Decoded<Reading> readWrench(const geometry_msgs::WrenchStamped& msg, const ros::Time& arrival);
+
+/// Deserialises a serialised message (topic_tools::ShapeShifter, rosbag::MessageInstance)
+/// into an existing one through a reused buffer: a steady stream allocates nothing here.
+template <class Serialized, class M>
+void deserializeInto(const Serialized& message, std::vector<std::uint8_t>& buffer, M& out) {
+  const std::uint32_t size = message.size();
+  buffer.resize(size);
+  ros::serialization::OStream write(buffer.data(), size);
+  message.write(write);
+  ros::serialization::IStream read(buffer.data(), size);
+  ros::serialization::deserialize(read, out);
+}
+
+/// One type per topic that takes a plain and a stamped type: the first message of either fixes
+/// it; a message of any other type, or of the other one later, is WrongType.
+class TopicType {
+ public:
+  template <class Plain, class Stamped>
+  static TopicType of() {
+    return TopicType(ros::message_traits::datatype<Plain>(), ros::message_traits::md5sum<Plain>(),
+                     ros::message_traits::datatype<Stamped>(),
+                     ros::message_traits::md5sum<Stamped>());
+  }
+  /// Nothing when the message's type is the topic's (fixing it at the first), else WrongType
+  /// naming the type received.
+  std::optional<Refusal> admit(const std::string& datatype, const std::string& md5);
+  /// The topic's type; empty before its first message of an accepted type.
+  const std::string& datatype() const { return datatype_; }
+  bool stamped() const { return datatype_ == stamped_; }
+  /// The two types accepted, for messages.
+  const std::string& plainType() const { return plain_; }
+  const std::string& stampedType() const { return stamped_; }
+
+ private:
+  TopicType(std::string plain, std::string plain_md5, std::string stamped, std::string stamped_md5);
+  std::string plain_, plain_md5_, stamped_, stamped_md5_;
+  std::string datatype_;
+};
+
+/// Every input of one node (or one bag run): the frames, the rates' mount, each topic's type,
+/// and scratch messages reused for serialised input.
+class InputDecoders {
+ public:
+  explicit InputDecoders(DecoderFrames frames);
+
+  /// `frames` is asked only when a rule needs a transform; it may be null (then such a message
+  /// is NoTransform).
+  DecodedInput imu(const sensor_msgs::Imu& msg, const ros::Time& arrival, FrameSource* frames);
+  DecodedInput twist(const geometry_msgs::Twist& msg, const ros::Time& arrival);
+  DecodedInput twist(const geometry_msgs::TwistStamped& msg, const ros::Time& arrival,
+                     FrameSource* frames);
+  DecodedInput torque(const geometry_msgs::Wrench& msg, const ros::Time& arrival);
+  DecodedInput torque(const geometry_msgs::WrenchStamped& msg, const ros::Time& arrival,
+                      FrameSource* frames);
+  /// `now`: the time an unstamped bias takes effect from (ROS time in the node, zero before
+  /// the first /clock: from the start; the record time in a bag).
+  Decoded<BiasSample> bias(const geometry_msgs::Vector3Stamped& msg, const ros::Time& now) const;
+
+  /// body_twist and torque as they arrive on a topic of either type (ShapeShifter in the node,
+  /// rosbag::MessageInstance in a bag): the type rule, then twist() or torque().
+  template <class Serialized>
+  DecodedInput twistTopic(const Serialized& m, const ros::Time& arrival, FrameSource* frames) {
+    if (auto refused = twist_type_.admit(m.getDataType(), m.getMD5Sum())) return refuse(*refused);
+    if (twist_type_.stamped()) {
+      deserializeInto(m, buffer_, twist_stamped_);
+      return twist(twist_stamped_, arrival, frames);
+    }
+    deserializeInto(m, buffer_, twist_);
+    return twist(twist_, arrival);
+  }
+  template <class Serialized>
+  DecodedInput torqueTopic(const Serialized& m, const ros::Time& arrival, FrameSource* frames) {
+    if (auto refused = torque_type_.admit(m.getDataType(), m.getMD5Sum())) return refuse(*refused);
+    if (torque_type_.stamped()) {
+      deserializeInto(m, buffer_, wrench_stamped_);
+      return torque(wrench_stamped_, arrival, frames);
+    }
+    deserializeInto(m, buffer_, wrench_);
+    return torque(wrench_, arrival);
+  }
+  /// body_twist read in its own frame (the type rule, the stamp rule): evaluate_bag.
+  template <class Serialized>
+  Decoded<Reading> readTwistTopic(const Serialized& m, const ros::Time& arrival) {
+    if (auto refused = twist_type_.admit(m.getDataType(), m.getMD5Sum())) {
+      return {std::nullopt, std::move(refused)};
+    }
+    if (twist_type_.stamped()) {
+      deserializeInto(m, buffer_, twist_stamped_);
+      return readTwist(twist_stamped_, arrival);
+    }
+    deserializeInto(m, buffer_, twist_);
+    return readTwist(twist_, arrival);
+  }
+
+  const DecoderFrames& frames() const { return frames_; }
+  const TopicType& twistType() const { return twist_type_; }
+  const TopicType& torqueType() const { return torque_type_; }
+  /// The rates' mount: its frame (empty until one is looked up) and q_BS.
+  const std::string& mountFrame() const { return mount_frame_; }
+  const Eigen::Quaterniond& mount() const { return q_BS_; }
+
+ private:
+  static DecodedInput refuse(Refusal refusal);
+  /// The rate rule: a reading in its frame to a body rate input.
+  DecodedInput rate(const Decoded<Reading>& read, FrameSource* frames);
+  /// The torque rule.
+  DecodedInput torque(const Decoded<Reading>& read, FrameSource* frames);
+
+  DecoderFrames frames_;
+  std::string mount_frame_;  // empty: no mount looked up yet
+  Eigen::Quaterniond q_BS_ = Eigen::Quaterniond::Identity();
+  TopicType twist_type_;
+  TopicType torque_type_;
+  std::vector<std::uint8_t> buffer_;
+  geometry_msgs::Twist twist_;
+  geometry_msgs::TwistStamped twist_stamped_;
+  geometry_msgs::Wrench wrench_;
+  geometry_msgs::WrenchStamped wrench_stamped_;
+};
+
+}  // namespace attitude_propagator

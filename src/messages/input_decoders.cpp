@@ -1,0 +1,245 @@
+#include "attitude_propagator/messages/input_decoders.h"
+
+#include <utility>
+
+#include "attitude_propagator/messages/conversions.h"
+#include "attitude_propagator/messages/imu_input.h"
+
+namespace attitude_propagator {
+
+const char* refusedCounter(Refused why) {
+  switch (why) {
+    case Refused::NoRate:
+      return "rejected_no_rate";
+    case Refused::BadCovariance:
+      return "rejected_covariance";
+    case Refused::WrongType:
+      return "rejected_type";
+    case Refused::NoTransform:
+      return "dropped_no_tf";
+    case Refused::NoTime:
+      return "dropped_no_time";
+    case Refused::BiasFrame:
+      return "rejected_bias";
+  }
+  return "?";
+}
+
+void countRefusal(AttitudeEngine& engine, Refused why) {
+  switch (why) {
+    case Refused::NoRate:
+      return engine.reject(Rejection::NoRate);
+    case Refused::BadCovariance:
+      return engine.reject(Rejection::BadCovariance);
+    case Refused::WrongType:
+      return engine.reject(Rejection::WrongType);
+    case Refused::NoTransform:
+      return engine.reject(Rejection::NoTransform);
+    case Refused::NoTime:
+      return engine.reject(Rejection::NoTime);
+    case Refused::BiasFrame:
+      return engine.rejectBias();
+  }
+}
+
+DecoderFrames DecoderFrames::of(const NodeConfig& config) {
+  return {config.parameters.body_frame, config.parameters.fixed_frame, config.torque_frame};
+}
+
+std::optional<Stamp> stampOf(const ros::Time& header, const ros::Time& arrival) {
+  const ros::Time time = header.isZero() ? arrival : header;
+  if (time.isZero()) return std::nullopt;
+  return toStamp(time);
+}
+
+namespace {
+
+Refusal refusal(Refused why) {
+  Refusal r;
+  r.why = why;
+  return r;
+}
+
+Decoded<Reading> reading(Source source, const ros::Time& header, const ros::Time& arrival,
+                         const geometry_msgs::Vector3& value, const std::string& frame_id) {
+  const auto stamp = stampOf(header, arrival);
+  if (!stamp) return {std::nullopt, refusal(Refused::NoTime)};
+  Reading r;
+  r.source = source;
+  r.stamp = *stamp;
+  r.value = toEigen(value);
+  r.frame_id = frame_id;
+  return {std::move(r), std::nullopt};
+}
+
+const std::string kNoFrame;
+
+}  // namespace
+
+Decoded<Reading> readImu(const sensor_msgs::Imu& msg, const ros::Time& arrival) {
+  if (const auto refused = refuseImuRate(msg)) {
+    Refusal r =
+        refusal(refused->why == Rejection::NoRate ? Refused::NoRate : Refused::BadCovariance);
+    r.check = refused->check;
+    return {std::nullopt, r};
+  }
+  auto read =
+      reading(Source::Imu, msg.header.stamp, arrival, msg.angular_velocity, msg.header.frame_id);
+  if (read) read.value->covariance = covarianceFromMsg(msg.angular_velocity_covariance);
+  return read;
+}
+
+Decoded<Reading> readTwist(const geometry_msgs::Twist& msg, const ros::Time& arrival) {
+  return reading(Source::Twist, ros::Time(), arrival, msg.angular, kNoFrame);
+}
+
+Decoded<Reading> readTwist(const geometry_msgs::TwistStamped& msg, const ros::Time& arrival) {
+  return reading(Source::Twist, msg.header.stamp, arrival, msg.twist.angular, msg.header.frame_id);
+}
+
+Decoded<Reading> readWrench(const geometry_msgs::Wrench& msg, const ros::Time& arrival) {
+  return reading(Source::Torque, ros::Time(), arrival, msg.torque, kNoFrame);
+}
+
+Decoded<Reading> readWrench(const geometry_msgs::WrenchStamped& msg, const ros::Time& arrival) {
+  return reading(Source::Torque, msg.header.stamp, arrival, msg.wrench.torque, msg.header.frame_id);
+}
+
+TopicType::TopicType(std::string plain, std::string plain_md5, std::string stamped,
+                     std::string stamped_md5)
+    : plain_(std::move(plain)),
+      plain_md5_(std::move(plain_md5)),
+      stamped_(std::move(stamped)),
+      stamped_md5_(std::move(stamped_md5)) {}
+
+std::optional<Refusal> TopicType::admit(const std::string& datatype, const std::string& md5) {
+  const bool known =
+      (datatype == plain_ && md5 == plain_md5_) || (datatype == stamped_ && md5 == stamped_md5_);
+  if (known && datatype_.empty()) datatype_ = datatype;
+  if (known && datatype == datatype_) return std::nullopt;
+  Refusal r = refusal(Refused::WrongType);
+  r.detail = datatype;
+  return r;
+}
+
+InputDecoders::InputDecoders(DecoderFrames frames)
+    : frames_(std::move(frames)),
+      twist_type_(TopicType::of<geometry_msgs::Twist, geometry_msgs::TwistStamped>()),
+      torque_type_(TopicType::of<geometry_msgs::Wrench, geometry_msgs::WrenchStamped>()) {}
+
+DecodedInput InputDecoders::refuse(Refusal refusal) {
+  DecodedInput out;
+  out.refusal = std::move(refusal);
+  return out;
+}
+
+DecodedInput InputDecoders::imu(const sensor_msgs::Imu& msg, const ros::Time& arrival,
+                                FrameSource* frames) {
+  return rate(readImu(msg, arrival), frames);
+}
+
+DecodedInput InputDecoders::twist(const geometry_msgs::Twist& msg, const ros::Time& arrival) {
+  return rate(readTwist(msg, arrival), nullptr);
+}
+
+DecodedInput InputDecoders::twist(const geometry_msgs::TwistStamped& msg, const ros::Time& arrival,
+                                  FrameSource* frames) {
+  return rate(readTwist(msg, arrival), frames);
+}
+
+DecodedInput InputDecoders::torque(const geometry_msgs::Wrench& msg, const ros::Time& arrival) {
+  return torque(readWrench(msg, arrival), nullptr);
+}
+
+DecodedInput InputDecoders::torque(const geometry_msgs::WrenchStamped& msg,
+                                   const ros::Time& arrival, FrameSource* frames) {
+  return torque(readWrench(msg, arrival), frames);
+}
+
+DecodedInput InputDecoders::rate(const Decoded<Reading>& read, FrameSource* frames) {
+  if (!read) return refuse(*read.refusal);
+  const Reading& r = *read;
+  DecodedInput out;
+  const std::string& frame = r.frame_id;
+  if (!frame.empty() && frame != frames_.body && frame != mount_frame_) {
+    // A frame not seen before (or another one than the mount's): the mount looked up once.
+    std::string error = "no frame source";
+    const auto q =
+        frames ? frames->rotation(frames_.body, frame, ros::Time(), &error) : std::nullopt;
+    if (!q) {
+      Refusal refused = refusal(Refused::NoTransform);
+      refused.frame = frame;
+      refused.detail = error;
+      return refuse(std::move(refused));
+    }
+    mount_frame_ = frame;
+    q_BS_ = *q;
+    out.new_mount = true;
+  }
+  const bool in_body = frame.empty() || frame == frames_.body;
+  out.q_BS = in_body ? Eigen::Quaterniond::Identity() : q_BS_;
+  Input input;
+  input.source = r.source;
+  input.stamp = r.stamp;
+  input.value = out.q_BS * r.value;
+  const Eigen::Matrix3d& R_S = r.covariance;
+  input.rate_covariance_B = in_body || R_S.isZero(0.0) || !R_S.allFinite()
+                                ? R_S
+                                : rotateCovariance(R_S, out.q_BS.toRotationMatrix());
+  out.value = std::move(input);
+  return out;
+}
+
+DecodedInput InputDecoders::torque(const Decoded<Reading>& read, FrameSource* frames) {
+  if (!read) return refuse(*read.refusal);
+  const Reading& r = *read;
+  Input input;
+  input.source = Source::Torque;
+  input.stamp = r.stamp;
+  input.value = r.value;
+  input.frame = frames_.torque_frame;  // unstamped, or stamped with an empty frame_id
+  const std::string& frame = r.frame_id;
+  if (frame == frames_.body && !frame.empty()) {
+    input.frame = TorqueFrame::Body;
+  } else if (frame == frames_.fixed && !frame.empty()) {
+    input.frame = TorqueFrame::Fixed;
+  } else if (!frame.empty() && r.value.allFinite()) {
+    // A third frame: rotated into the body now (the latest transform: a torque sensor may
+    // move); the core takes it as a body torque. A non-finite torque needs no lookup: the
+    // engine rejects and counts it.
+    std::string error = "no frame source";
+    const auto q_BF =
+        frames ? frames->rotation(frames_.body, frame, ros::Time(), &error) : std::nullopt;
+    if (!q_BF) {
+      Refusal refused = refusal(Refused::NoTransform);
+      refused.frame = frame;
+      refused.detail = error;
+      return refuse(std::move(refused));
+    }
+    input.value = *q_BF * r.value;
+    input.frame = TorqueFrame::Body;
+  }
+  DecodedInput out;
+  out.value = std::move(input);
+  return out;
+}
+
+Decoded<BiasSample> InputDecoders::bias(const geometry_msgs::Vector3Stamped& msg,
+                                        const ros::Time& now) const {
+  const std::string& frame = msg.header.frame_id;
+  const bool in_body = frame.empty() || frame == frames_.body;
+  const bool in_mount = !mount_frame_.empty() && frame == mount_frame_;
+  if (!in_body && !in_mount) {
+    Refusal refused = refusal(Refused::BiasFrame);
+    refused.frame = frame;
+    return {std::nullopt, std::move(refused)};
+  }
+  BiasSample b;
+  const Eigen::Vector3d value = toEigen(msg.vector);
+  b.b_B = in_mount ? Eigen::Vector3d(q_BS_ * value) : value;
+  // Unstamped: from `now` on (zero: from the start).
+  b.stamp = toStamp(msg.header.stamp.isZero() ? now : msg.header.stamp);
+  return {b, std::nullopt};
+}
+
+}  // namespace attitude_propagator
