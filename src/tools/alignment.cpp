@@ -92,6 +92,25 @@ Eigen::Quaterniond slerp(const Eigen::Quaterniond& a, const Eigen::Quaterniond& 
   return a * expMap(s * logMap(a.conjugate() * b));
 }
 
+Eigen::Quaterniond interpolateAttitude(const TimedAttitude* nodes, std::size_t n, double t) {
+  std::size_t b = 0;
+  for (std::size_t i = 1; i < n; ++i) {
+    if (std::abs(nodes[i].t - t) < std::abs(nodes[b].t - t)) b = i;
+  }
+  if (n == 1 || nodes[b].t == t) return nodes[b].q;
+  const Eigen::Quaterniond base_c = nodes[b].q.conjugate();
+  Eigen::Vector3d phi = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i == b) continue;  // its rotation vector is zero
+    double l = 1.0;        // the Lagrange basis polynomial of node i at t
+    for (std::size_t j = 0; j < n; ++j) {
+      if (j != i) l *= (t - nodes[j].t) / (nodes[i].t - nodes[j].t);
+    }
+    phi += l * logMap(base_c * nodes[i].q);
+  }
+  return (nodes[b].q * expMap(phi)).normalized();
+}
+
 std::vector<TimedRate> differentiate(const std::vector<TimedAttitude>& attitudes, double gap) {
   std::vector<TimedRate> rates;
   for (std::size_t k = 1; k < attitudes.size(); ++k) {
