@@ -487,8 +487,10 @@ Method::Found Method::stateAt(Stamp stamp, bool at_end, Eigen::Quaterniond& q) {
   std::size_t lo = k;
   while (lo > 0 && k - lo < 2 && states_[lo - 1].segment == segment) --lo;
   while (lo > 0 && hi - lo + 1 < kInterpolationNodes && states_[lo - 1].segment == segment) --lo;
-  TimedAttitude nodes[kInterpolationNodes];
   const std::size_t count = hi - lo + 1;
+  // A segment of one state is a restart alone (the state held): nothing integrated to compare.
+  if (count < 2) return Found::Gap;
+  TimedAttitude nodes[kInterpolationNodes];
   for (std::size_t i = 0; i < count; ++i) {
     nodes[i] = {double(states_[lo + i].stamp - stamp) * kNs, states_[lo + i].q};
   }
@@ -605,8 +607,9 @@ class Evaluation {
   /// smallest among the scored methods: the truth's noise), and never below the round-off
   /// floor 10 eps sqrt(N). Errors below it cannot be told apart.
   double resolutionFloor() const;
-  /// Costs closer than this (relative) count as equal: the larger of kCostNoise and the largest
-  /// difference between the two readings of one integrator (about the same work per sample).
+  /// Costs closer than this (relative) count as equal: the larger of kCostNoise and the median
+  /// over the integrators of the difference between their two readings (about the same work
+  /// per sample: the difference is timing noise).
   double costTolerance() const;
 
   const Options& o_;
@@ -944,15 +947,23 @@ double Evaluation::resolutionFloor() const {
 }
 
 double Evaluation::costTolerance() const {
-  double tolerance = kCostNoise;
+  // The median over the integrators run with both readings (one descheduled batch can spoil
+  // one method's cost: the median keeps it from setting the tolerance).
+  std::vector<double> differences;
   for (const auto& a : methods_) {
+    if (a->averaged()) continue;
     for (const auto& b : methods_) {
-      if (a->integrator() != b->integrator() || a->samples() == b->samples()) continue;
+      if (a->integrator() != b->integrator() || !b->averaged()) continue;
       const double lo = std::min(a->costNs(), b->costNs()), hi = std::max(a->costNs(), b->costNs());
-      if (lo > 0.0) tolerance = std::max(tolerance, hi / lo - 1.0);
+      if (lo > 0.0) differences.push_back(hi / lo - 1.0);
     }
   }
-  return tolerance;
+  if (differences.empty()) return kCostNoise;
+  std::sort(differences.begin(), differences.end());
+  const std::size_t n = differences.size();
+  const double median =
+      n % 2 ? differences[n / 2] : 0.5 * (differences[n / 2 - 1] + differences[n / 2]);
+  return std::max(kCostNoise, median);
 }
 
 std::size_t Evaluation::recommended() const {
