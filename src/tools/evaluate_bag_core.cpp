@@ -879,9 +879,12 @@ void Evaluation::applyDelayModel() {
     return;
   }
   if (!offset_estimate_.observable) {
-    for (auto& m : methods_)
-      m->start(m->configuredRateDelay(), o + own(*m) + m->configuredRateDelay());
-    delay_note_ = "not estimated (the offset is not observable; the configured rate_delay used)";
+    // Nothing found: the clocks taken as one and the configured rate_delay as the lag, so every
+    // state meets the truth at its own stamp (offset 0), whatever its reading.
+    for (auto& m : methods_) m->start(m->configuredRateDelay(), 0.0);
+    delay_note_ =
+        "not estimated (the offset is not observable: every method compared at offset 0, with "
+        "the configured rate_delay)";
     return;
   }
   std::string fallback;
