@@ -879,12 +879,15 @@ void Evaluation::applyDelayModel() {
     return;
   }
   if (!offset_estimate_.observable) {
-    // Nothing found: the clocks taken as one and the configured rate_delay as the lag, so every
-    // state meets the truth at its own stamp (offset 0), whatever its reading.
-    for (auto& m : methods_) m->start(m->configuredRateDelay(), 0.0);
+    // Nothing found: offset 0 for samples at their stamps, which is also where the mount was
+    // fitted (for a motion whose time shift is a rotation, the mount takes that shift up); an
+    // interval-average reading places its samples half a period earlier, so it meets the
+    // truth half a period later.
+    for (auto& m : methods_)
+      m->start(m->configuredRateDelay(), o + own(*m) + m->configuredRateDelay());
     delay_note_ =
-        "not estimated (the offset is not observable: every method compared at offset 0, with "
-        "the configured rate_delay)";
+        "not estimated (the offset is not observable: samples at their stamps taken at offset "
+        "0, where the mount was fitted; the configured rate_delay used)";
     return;
   }
   std::string fallback;
