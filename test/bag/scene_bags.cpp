@@ -180,6 +180,7 @@ Written writeSceneBag(const std::string& path, const SceneBag& s) {
                                                          : rosbag::compression::Uncompressed);
   Written out;
   std::uint64_t random = s.seed;
+  std::uint64_t truth_random = s.seed + 1;  // apart, so that the rates stay those without noise
   const double h = 1.0 / s.rate_hz;
   const long n = std::lround(s.duration * s.rate_hz);
   const double dt_truth = 1.0 / s.truth_hz;
@@ -204,7 +205,13 @@ Written writeSceneBag(const std::string& path, const SceneBag& s) {
       const double stamped = tt + s.truth_offset;
       if (stamped > s.gap_from && stamped < s.gap_to) continue;
       const Stamp stamp = stampAt(stamped);
-      writeTruth(bag, s, stamp, s.fixed * s.motion.attitude(tt) * s.mount);
+      Eigen::Quaterniond q = s.fixed * s.motion.attitude(tt) * s.mount;
+      if (s.truth_noise > 0.0) {
+        const Eigen::Vector3d n(normalRandom(truth_random), normalRandom(truth_random),
+                                normalRandom(truth_random));
+        q = q * ap::expMap(s.truth_noise * n);
+      }
+      writeTruth(bag, s, stamp, q);
       if (s.truth != TruthType::None) out.truth_stamps.push_back(stamp);
     }
     Eigen::Vector3d w = lowpass ? (*lowpass)(sampled(t)) : sampled(t);

@@ -58,7 +58,9 @@ struct SceneBag {
   TruthType truth = TruthType::Pose;
   std::string truth_topic = "/truth";
   double truth_hz = 200.0;
-  double truth_offset = 0.0;              ///< s: the truth of instant t is stamped t + truth_offset
+  double truth_offset = 0.0;  ///< s: the truth of instant t is stamped t + truth_offset
+  /// rad: each truth sample turned by Exp(n), n with this standard deviation per axis
+  double truth_noise = 0.0;
   double gap_from = -1.0, gap_to = -1.0;  ///< s: no truth sample stamped in between
   Eigen::Quaterniond fixed = Eigen::Quaterniond::Identity();  ///< A = q_VW
   Eigen::Quaterniond mount = Eigen::Quaterniond::Identity();  ///< q_ST

@@ -623,6 +623,35 @@ TEST(EvaluateBag, TruthBetweenTheRatesStampsRecommendsTheSame) {
   EXPECT_EQ(e.recommended(), "cf4/instantaneous") << e.run.output;
 }
 
+// A truth with white noise (1e-5 rad per axis, 1.7e-5 rad RMS as an angle) against cf4, whose
+// own error is 3e-8: the truth cannot resolve it. The report states the floor (twice the white
+// part of the residuals: 3.5e-5 rad) and warns that cf4's error is below it (measured 2.6e-5:
+// the noise, once more through the fixed frame aligned on the first pair); rk4 and exp2 (8.7e-5
+// and 1.6e-4 rad) are resolved.
+TEST(EvaluateBag, NoisyTruthCannotResolveTheBestErrors) {
+  TempDir dir;
+  SceneBag scene;
+  scene.motion = coning();
+  scene.truth_noise = 1e-5;
+  writeSceneBag(dir.file("in.bag"), scene);
+  const Evaluation e = evaluate(dir, "--truth /truth --offset 0 --mount 0 0 0 1");
+  ASSERT_EQ(e.run.status, 0) << e.run.output;
+  std::smatch m;
+  ASSERT_TRUE(
+      std::regex_search(e.run.output, m, std::regex(R"(resolves RMS errors down to (\S+) rad)")))
+      << e.run.output;
+  const double floor = std::stod(m[1]);
+  EXPECT_NEAR(floor, 2.0 * std::sqrt(3.0) * 1e-5, 0.2 * 2.0 * std::sqrt(3.0) * 1e-5)
+      << e.run.output;
+  ASSERT_TRUE(std::regex_search(
+      e.run.output, m, std::regex("warning: the truth cannot resolve the errors of ([^\n]*)")))
+      << e.run.output;
+  EXPECT_NE(std::string(m[1]).find("cf4/instantaneous"), std::string::npos) << e.run.output;
+  EXPECT_EQ(std::string(m[1]).find("rk4/instantaneous"), std::string::npos) << e.run.output;
+  EXPECT_LT(e.number("cf4/instantaneous", "rms_error_rad"), floor);
+  EXPECT_GT(e.number("rk4/instantaneous", "rms_error_rad"), floor);
+}
+
 /// The rate_delay of the recommendation's settings block.
 double recommendedRateDelay(const std::string& output) {
   std::smatch m;
