@@ -92,13 +92,74 @@ Eigen::Quaterniond slerp(const Eigen::Quaterniond& a, const Eigen::Quaterniond& 
   return a * expMap(s * logMap(a.conjugate() * b));
 }
 
+Eigen::Quaterniond interpolateAttitude(const TimedAttitude* nodes, std::size_t n, double t) {
+  std::size_t b = 0;
+  for (std::size_t i = 1; i < n; ++i) {
+    if (std::abs(nodes[i].t - t) < std::abs(nodes[b].t - t)) b = i;
+  }
+  if (n == 1 || nodes[b].t == t) return nodes[b].q;
+  const Eigen::Quaterniond base_c = nodes[b].q.conjugate();
+  Eigen::Vector3d phi = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i == b) continue;  // its rotation vector is zero
+    double l = 1.0;        // the Lagrange basis polynomial of node i at t
+    for (std::size_t j = 0; j < n; ++j) {
+      if (j != i) l *= (t - nodes[j].t) / (nodes[i].t - nodes[j].t);
+    }
+    phi += l * logMap(base_c * nodes[i].q);
+  }
+  return (nodes[b].q * expMap(phi)).normalized();
+}
+
+namespace {
+
+/// d/dx of the Lagrange basis polynomial of node i at x, for nodes x[0..n).
+double lagrangeDerivative(const double* x, std::size_t n, std::size_t i, double at) {
+  double sum = 0.0;
+  for (std::size_t m = 0; m < n; ++m) {
+    if (m == i) continue;
+    double term = 1.0 / (x[i] - x[m]);
+    for (std::size_t j = 0; j < n; ++j) {
+      if (j != i && j != m) term *= (at - x[j]) / (x[i] - x[j]);
+    }
+    sum += term;
+  }
+  return sum;
+}
+
+}  // namespace
+
 std::vector<TimedRate> differentiate(const std::vector<TimedAttitude>& attitudes, double gap) {
+  const std::size_t n = attitudes.size();
+  // close[k]: attitudes k and k + 1 are close enough to differentiate between.
+  std::vector<bool> close(n > 0 ? n - 1 : 0);
+  for (std::size_t k = 0; k + 1 < n; ++k) {
+    const double h = attitudes[k + 1].t - attitudes[k].t;
+    close[k] = h > 0.0 && h <= gap;
+  }
+  auto full = [&](std::size_t k) {  // a five-point stencil about k
+    return k >= 2 && k + 2 < n && close[k - 2] && close[k - 1] && close[k] && close[k + 1];
+  };
   std::vector<TimedRate> rates;
-  for (std::size_t k = 1; k < attitudes.size(); ++k) {
-    const double h = attitudes[k].t - attitudes[k - 1].t;
-    if (!(h > 0.0) || h > gap) continue;
-    const Eigen::Vector3d w = logMap(attitudes[k - 1].q.conjugate() * attitudes[k].q) / h;
-    rates.push_back({attitudes[k - 1].t + 0.5 * h, w});
+  for (std::size_t k = 0; k < n; ++k) {
+    if (full(k)) {
+      // phi(t) = Log(q_k^c q(t)) has phi'(t_k) = w(t_k) exactly (the right Jacobian is the
+      // identity at 0): its derivative through five points is the rate at t_k to O(h^4).
+      const Eigen::Quaterniond base_c = attitudes[k].q.conjugate();
+      double x[5];
+      for (std::size_t i = 0; i < 5; ++i) x[i] = attitudes[k + i - 2].t - attitudes[k].t;
+      Eigen::Vector3d w = Eigen::Vector3d::Zero();
+      for (std::size_t i = 0; i < 5; ++i) {
+        if (i != 2) w += lagrangeDerivative(x, 5, i, 0.0) * logMap(base_c * attitudes[k + i - 2].q);
+      }
+      rates.push_back({attitudes[k].t, w});
+    }
+    // Where a stencil is missing on either side: the interval's mean rate at its mid-time.
+    if (k + 1 < n && close[k] && (!full(k) || !full(k + 1))) {
+      const double h = attitudes[k + 1].t - attitudes[k].t;
+      rates.push_back(
+          {attitudes[k].t + 0.5 * h, logMap(attitudes[k].q.conjugate() * attitudes[k + 1].q) / h});
+    }
   }
   return rates;
 }
@@ -113,9 +174,26 @@ std::optional<Eigen::Vector3d> RateTrack::at(double t) const {
   }
   while (cursor_ + 1 < n && rates_[cursor_ + 1].t <= t) ++cursor_;
   if (cursor_ + 1 >= n) return rates_.back().w;  // t is the last time exactly
-  const TimedRate& a = rates_[cursor_];
-  const TimedRate& b = rates_[cursor_ + 1];
-  if (b.t - a.t > gap_) return std::nullopt;
+  const std::size_t c = cursor_;
+  auto near = [&](std::size_t i) { return rates_[i + 1].t - rates_[i].t <= gap_; };
+  if (!near(c)) return std::nullopt;
+  if (c >= 1 && c + 2 < n && near(c - 1) && near(c + 1)) {
+    // A cubic through the four rates about t: O(h^4), where a line would be off by up to
+    // h^2 |w''| / 8 (enough, with the mount fitted at each offset, to bias the offset).
+    double x[4];
+    for (std::size_t i = 0; i < 4; ++i) x[i] = rates_[c - 1 + i].t;
+    Eigen::Vector3d w = Eigen::Vector3d::Zero();
+    for (std::size_t i = 0; i < 4; ++i) {
+      double l = 1.0;
+      for (std::size_t j = 0; j < 4; ++j) {
+        if (j != i) l *= (t - x[j]) / (x[i] - x[j]);
+      }
+      w += l * rates_[c - 1 + i].w;
+    }
+    return w;
+  }
+  const TimedRate& a = rates_[c];
+  const TimedRate& b = rates_[c + 1];
   const double s = (t - a.t) / (b.t - a.t);
   return (1.0 - s) * a.w + s * b.w;
 }

@@ -34,12 +34,23 @@ double medianInterval(const std::vector<double>& times);
 /// shorter arc (slerp, through the accurate log and exp maps).
 Eigen::Quaterniond slerp(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b, double s);
 
-/// Body rates from consecutive attitudes, w_k = Log(q_k^c q_{k+1}) / (t_{k+1} - t_k), placed
-/// at the mid-time (the interval's mean rate, accurate to O(h^2) there). Pairs further apart
-/// than `gap` give none.
+/// The attitude at t from n attitudes (1 to kInterpolationNodes) at distinct times around
+/// it: the polynomial of degree n - 1 through their rotation vectors Log(q_b^c q_i) relative
+/// to the node nearest t (Lagrange), mapped back, q_b Exp(phi(t)). With six nodes at spacing h
+/// about t its error is about 0.005 h^6 |phi^(6)|: 1e-12 rad for the coning scene at 200 Hz,
+/// far below any integrator's error there (cf4: 1e-8 to 1e-7). Times in seconds, best
+/// relative to t (the arithmetic then keeps full precision).
+constexpr std::size_t kInterpolationNodes = 6;
+Eigen::Quaterniond interpolateAttitude(const TimedAttitude* nodes, std::size_t n, double t);
+
+/// Body rates from attitudes: at each attitude with two neighbours on either side, none further
+/// than `gap` from the next, the derivative at t_k of the degree-4 polynomial through
+/// Log(q_k^c q_i) (the rate at t_k to O(h^4)); elsewhere, between two attitudes closer than
+/// `gap`, w = Log(q_k^c q_(k+1)) / (t_(k+1) - t_k) at the mid-time (O(h^2)). In time order.
 std::vector<TimedRate> differentiate(const std::vector<TimedAttitude>& attitudes, double gap);
 
-/// Piecewise-linear interpolation of rates between neighbours closer than `gap`.
+/// Interpolation of rates between neighbours closer than `gap`: a cubic through the four about
+/// t where they are all that close, else a line.
 class RateTrack {
  public:
   RateTrack(const std::vector<TimedRate>& rates, double gap) : rates_(rates), gap_(gap) {}

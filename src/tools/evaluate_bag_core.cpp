@@ -4,10 +4,12 @@
 // the largest per bin); nodes/evaluate_bag draws the charts from them.
 //
 // The pass: the first --calibration seconds of rates and truth are kept to align them (time
-// offset, mount: alignment.h); then those rates and every later one go in batches to all the
-// engines (one per method, each timed over the batch for its cost per sample), and each
-// engine's states wait until the truth covers their stamps. Memory holds the calibration
-// window, the batch, and the truth and states between the two streams' latest stamps.
+// offset, mount: alignment.h) and to set each method's rate_delay (the delay model:
+// applyDelayModel); then those rates and every later one go in batches to all the engines (one
+// per method, each timed over the batch for its cost per sample), and each truth sample waits
+// until every method's states reach past its stamp, where they are interpolated to it. Memory
+// holds the calibration window, the batch, and the truth and states between the two streams'
+// latest stamps.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -45,8 +47,9 @@ const char* const kUsage =
                          (--truth TOPIC | --truth-tf PARENT CHILD) [options]
 
 Runs every kinematic integrator with each rate_samples choice over the rate topic, compares
-each with the truth attitude and reports, per method: largest and RMS attitude error, error
-drift rate, relative rotation error over 1 s and 10 s, cost per sample, and a recommendation.
+each with the truth attitude at the truth's stamps (the method's states interpolated to them)
+and reports, per method: largest and RMS attitude error, error drift rate, relative rotation
+error over 1 s and 10 s, cost per sample, the rate_delay it ran with, and a recommendation.
 Several bags (the parts of `rosbag record --split`) are read as one stream merged by record
 time, in whatever order they are given.
 
@@ -56,11 +59,20 @@ time, in whatever order they are given.
   --truth-tf P C       the transform P -> C from tf2_msgs/TFMessage on --tf-topic (default /tf)
   --mount X Y Z W      q_ST, the truth body's orientation in the rate sensor's frame
                        (default: estimated from the data)
-  --offset S           truth stamp minus rate stamp of the same instant, s (default: estimated)
+  --truth-clock same|separate
+                       same (default): the truth is stamped at its instants on the rates'
+                       clock, so the offset found is the rates' lag (an on-chip filter's group
+                       delay): estimated, recommended as rate_delay, every method run with it
+                       and compared at offset 0. separate: the offset is the clocks' and holds
+                       any rate delay, which the data cannot tell apart (none is estimated).
+                       With `same`, a truth found later than the rates (no delay can explain
+                       it) is compared as `separate`, and the report says so
+  --offset S           truth stamp minus rate stamp of the same instant, s (default:
+                       estimated); every method compared at it, with the configured rate_delay
   --max-offset S       offsets searched, +-S (default 0.5)
   --calibration S      seconds of truth used to estimate offset and mount (default 60)
-  --truth-gap S        truth samples further apart are a gap: no comparison inside (default
-                       2.5 truth periods)
+  --truth-gap S        truth samples further apart are not differentiated across when
+                       aligning (default 2.5 truth periods)
   --integrators LIST   comma-separated (default euler,rk4,exp,exp2,cf4)
   --rate-samples LIST  comma-separated (default instantaneous,interval_average)
   --config FILE.yaml   node parameters shared by every method (e.g. stamp_filter, gyro_bias)
@@ -75,9 +87,11 @@ of ROS time. The offset search tries only offsets at which rates and truth overl
 about 5e7 / (calibration samples) points. Rate samples with a non-finite component, and truth
 samples that are no rotation, are skipped and counted.
 
-A method is scored when at least half of the samples it compared with the truth, and at least
-100, were integrated from the sample before (not after a gap longer than max_dt or a reset);
-only scored methods are recommended.
+A method is scored when at least half of the truth samples its states meet, and at least 100,
+are compared with states integrated one from the other (not across a gap longer than max_dt or
+a reset); only scored methods are recommended: among those within 10 % of the lowest RMS error
+(or of the smallest error the truth resolves), the cheapest, costs within the timing noise
+counting as equal, ties in the integrator table's order, instantaneous first.
 
 Exit codes:
   0    the table and both CSVs are complete, with a recommendation
@@ -90,6 +104,7 @@ Exit codes:
 
 constexpr double kNs = 1e-9;
 constexpr std::size_t kBatch = 512;
+constexpr std::size_t kTimedChunk = 32;      // samples per timing of an engine
 constexpr std::size_t kSeriesPoints = 2048;  // per method, before bins merge
 const double kWindows[2] = {1.0, 10.0};      // relative rotation error windows, s
 constexpr std::uint64_t kWindowStride = 4;
@@ -100,6 +115,12 @@ constexpr double kMaxSeconds = 4294967296.0;
 // kMinScored of them, integrated from the sample before.
 constexpr double kMinScoredShare = 0.5;
 constexpr std::uint64_t kMinScored = 100;
+// Costs closer than this (relative) count as equal, at least: twice the run-to-run spread of a
+// method's cost per sample on a shared machine (measured: up to 25 % between runs under a load
+// average of 24 on 2 cores, the ratios between methods within one run moving by 5 %), so that
+// a ratio between two methods does not sit at the boundary. The kinematic methods cost within
+// 1.3x of each other (the engine's per-sample work dominates): their order decides.
+constexpr double kCostNoise = 0.5;
 
 struct Options {
   std::vector<std::string> inputs;
@@ -110,6 +131,7 @@ struct Options {
   std::string tf_parent, tf_child;
   std::optional<Eigen::Quaterniond> mount;
   std::optional<double> offset;
+  bool truth_clock_same = true;
   double max_offset = 0.5;
   double calibration = 60.0;
   std::optional<double> truth_gap;
@@ -161,6 +183,10 @@ Options parseOptions(int argc, char** argv) {
       o.mount = *q;
     } else if (a == "--offset") {
       o.offset = parseNumber(a, optionValue(argc, argv, i), kMaxSeconds, "the range of ROS time");
+    } else if (a == "--truth-clock") {
+      const std::string v = optionValue(argc, argv, i);
+      if (v != "same" && v != "separate") throw UsageError("--truth-clock: same or separate");
+      o.truth_clock_same = v == "same";
     } else if (a == "--max-offset") {
       o.max_offset =
           parseNumber(a, optionValue(argc, argv, i), kMaxSeconds, "the range of ROS time");
@@ -242,61 +268,8 @@ struct TruthSample {
   Eigen::Quaterniond q;
 };
 
-/// The truth at a stamp: slerp between its neighbours, nothing inside a gap. The methods of
-/// one reading ask for the same stamps one after the other, so results are kept in a small
-/// direct-mapped table: the interpolation is done once per stamp, not once per method.
-class TruthLookup {
- public:
-  enum class Status { Wait, Outside, Gap, Ok };
-  TruthLookup(const std::deque<TruthSample>& truth, double gap) : truth_(truth), gap_(gap) {}
-
-  /// The truth at tau; Wait when the truth has not reached it yet (unless at the end).
-  Status at(Stamp tau, bool at_end, Eigen::Quaterniond& q) {
-    // Fibonacci hashing: stamps on a regular grid spread over all slots (tau % kSlots would
-    // fold a 5 ms grid onto 64 of them).
-    Slot& slot = slots_[(static_cast<std::uint64_t>(tau) * 0x9E3779B97F4A7C15ULL) >> (64 - kBits)];
-    if (slot.tau == tau) {
-      q = slot.q;
-      return slot.status;
-    }
-    if (truth_.empty() || (!at_end && truth_.back().stamp < tau)) return Status::Wait;
-    if (tau < truth_.front().stamp || tau > truth_.back().stamp) return Status::Outside;
-    // Known from here on: later truth samples cannot change a stamp's neighbours.
-    slot.tau = tau;
-    slot.status = interpolate(tau, slot.q);
-    q = slot.q;
-    return slot.status;
-  }
-
- private:
-  static constexpr int kBits = 12;
-  static constexpr std::size_t kSlots = std::size_t(1) << kBits;
-  struct Slot {
-    Stamp tau = std::numeric_limits<Stamp>::min();
-    Status status = Status::Wait;
-    Eigen::Quaterniond q;
-  };
-
-  Status interpolate(Stamp tau, Eigen::Quaterniond& q) const {
-    const auto b = std::lower_bound(truth_.begin(), truth_.end(), tau,
-                                    [](const TruthSample& s, Stamp t) { return s.stamp < t; });
-    if (b->stamp == tau) {
-      q = b->q;
-      return Status::Ok;
-    }
-    const auto a = std::prev(b);
-    const double h = double(b->stamp - a->stamp) * kNs;
-    if (h > gap_) return Status::Gap;
-    q = slerp(a->q, b->q, double(tau - a->stamp) * kNs / h);
-    return Status::Ok;
-  }
-
-  const std::deque<TruthSample>& truth_;
-  double gap_;
-  std::vector<Slot> slots_ = std::vector<Slot>(kSlots);
-};
-
-/// A compared instant: the estimate mapped onto the truth (A q_WS q_ST) and the truth.
+/// A compared instant (a truth stamp): the estimate mapped onto the truth (A q_WS q_ST) and the
+/// truth.
 struct Compared {
   Stamp stamp;
   Eigen::Quaterniond estimate;
@@ -345,75 +318,124 @@ struct WindowStats {
   double rms() const { return n > 0 ? std::sqrt(sum_sq / double(n)) : std::nan(""); }
 };
 
+/// One method: an engine, its states, and their comparison with the truth at the truth's own
+/// stamps. The states (at the rate stamps, moved back by rate_delay) are interpolated to each
+/// truth stamp (interpolateAttitude: degree 5 through the six states around it, from one
+/// segment: a gap longer than max_dt or a reset starts a new one), so the truth is never
+/// interpolated and its sample spacing adds no error of its own.
 class Method : public EngineSink {
  public:
   Method(const std::string& integrator, const std::string& samples, Parameters p)
-      : integrator_(integrator), samples_(samples) {
-    p.model = "kinematic";
-    p.integrator = integrator;
-    p.rate_samples = samples;
-    engine_ = std::make_unique<AttitudeEngine>(engineConfig(validateParameters(p)), *this);
+      : integrator_(integrator), samples_(samples), parameters_(std::move(p)) {
+    parameters_.model = "kinematic";
+    parameters_.integrator = integrator;
+    parameters_.rate_samples = samples;
+    validateParameters(parameters_);
   }
 
   std::string name() const { return integrator_ + "/" + samples_; }
   const std::string& integrator() const { return integrator_; }
   const std::string& samples() const { return samples_; }
   bool averaged() const { return samples_ == "interval_average"; }
+  /// The fixed tie-break order: the integrator table's, instantaneous before interval_average.
+  std::pair<int, int> order() const {
+    return {static_cast<int>(integratorFromName(integrator_)), averaged() ? 1 : 0};
+  }
+  double configuredRateDelay() const { return parameters_.rate_delay; }
+  double maxDt() const { return parameters_.max_dt; }
 
-  /// Feeds the batch (from the first sample the truth covers), timing the engine alone.
-  void feed(const std::vector<RateSample>& batch, Stamp truth_start) {
-    const auto start = std::chrono::steady_clock::now();
+  /// Creates the engine, with the rate_delay this method runs with (in [0, max_dt]) and the
+  /// offset at which its states meet the truth (truth stamp minus the states' stamp).
+  void start(double rate_delay, double compare_offset) {
+    parameters_.rate_delay = rate_delay;
+    offset = compare_offset;
+    engine_ =
+        std::make_unique<AttitudeEngine>(engineConfig(validateParameters(parameters_)), *this);
+  }
+  double rateDelay() const { return parameters_.rate_delay; }
+
+  /// Feeds the batch (from a few samples before the truth's start), timing the engine alone.
+  void feed(const std::vector<RateSample>& batch, Stamp truth_start, double lead) {
     Input input;
-    std::size_t n = 0;
-    for (const RateSample& s : batch) {
-      if (!started_ && double(s.stamp - truth_start) * kNs + offset < 0.0) continue;
-      started_ = true;
-      input.stamp = s.stamp;
-      input.value = s.w;
-      engine_->submit(input);
-      ++n;
+    const double shift = offset - parameters_.rate_delay;  // truth time - rate stamp
+    auto first = batch.begin();
+    while (!started_ && first != batch.end() &&
+           double(first->stamp - truth_start) * kNs + shift < -lead) {
+      ++first;
     }
-    fed_ += n;
-    const double ns =
-        std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - start).count();
-    if (n > 0) batch_costs_.push_back(static_cast<float>(ns / double(n)));
+    if (first != batch.end()) started_ = true;
+    // Timed in chunks of kTimedChunk samples: many timings, so that those spoilt by the
+    // machine's load are a minority whatever the bag's length.
+    while (first != batch.end()) {
+      const auto last =
+          batch.end() - first > std::ptrdiff_t(kTimedChunk) ? first + kTimedChunk : batch.end();
+      const auto start = std::chrono::steady_clock::now();
+      for (auto s = first; s != last; ++s) {
+        input.stamp = s->stamp;
+        input.value = s->w;
+        engine_->submit(input);
+      }
+      const double ns =
+          std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - start)
+              .count();
+      const auto n = static_cast<std::size_t>(last - first);
+      fed_ += n;
+      if (n == kTimedChunk) chunk_costs_.push_back(static_cast<float>(ns / double(n)));
+      first = last;
+    }
+    cost_.reset();
   }
 
-  /// Compares the states the truth covers; at the end, every state left.
-  void compare(TruthLookup& truth, bool at_end);
-  /// The stamp (in the truth's time) of the oldest state still waiting, or nothing.
-  std::optional<Stamp> oldestNeeded() const {
-    if (pending_.empty()) return std::nullopt;
-    return pending_.front().first + static_cast<Stamp>(std::llround(offset / kNs));
-  }
+  /// Compares the truth samples from the first not yet compared, as far as the states reach;
+  /// at the end, every one left.
+  void compare(const std::deque<TruthSample>& truth, bool at_end);
+  /// The first truth stamp this method has not compared yet.
+  Stamp nextTruth() const { return next_truth_; }
 
-  void publishState(const EngineState& s) override { pending_.emplace_back(s.stamp, s.q_WB); }
+  void publishState(const EngineState& s) override {
+    if (!states_.empty() && s.stamp <= states_.back().stamp) {
+      // Stamps went back (a reset): the older states cannot be interpolated with these.
+      states_.clear();
+      ++segment_;
+    } else if (!states_.empty() &&
+               double(s.stamp - states_.back().stamp) * kNs > parameters_.max_dt) {
+      ++segment_;
+    }
+    states_.push_back({s.stamp, s.q_WB, segment_});
+  }
   void inputApplied(const Input&, const EngineState&) override {}
-  void note(const EngineNote&) override {}
+  void note(const EngineNote& n) override {
+    // The state is held across a gap or starts again after a reset: a new segment.
+    if (n.kind == EngineNote::Gap || n.kind == EngineNote::StampsJumpedBack ||
+        n.kind == EngineNote::ClockJumpedBack) {
+      ++segment_;
+    }
+  }
 
-  double offset = 0.0;  ///< s, truth stamp minus rate stamp for this interpretation
+  double offset = 0.0;  ///< s, truth stamp minus the states' stamp
   Eigen::Quaterniond mount = Eigen::Quaterniond::Identity();  ///< q_ST
 
-  // Results
+  // Results: truth samples compared, between two segments of states (a gap of the rates
+  // longer than max_dt, or a reset), outside the states.
   std::uint64_t compared = 0, in_gap = 0, outside = 0;
-  /// Compared samples integrated from the one before: those after a gap longer than max_dt or
-  /// a reset only restart the integration (the state is held), so they do not score a method.
-  std::uint64_t integrated() const {
-    const EngineCounters& c = engine_->counters();
-    const std::uint64_t restarts = c.gaps + c.resets + (fed_ > 0 ? 1 : 0);  // the first too
-    return compared > restarts ? compared - restarts : 0;
-  }
+  /// Scored: enough truth samples met states integrated one from the other (within one
+  /// segment), not across a gap longer than max_dt or a reset.
   bool scored() const {
-    return integrated() >= kMinScored && double(integrated()) >= kMinScoredShare * double(compared);
+    return compared >= kMinScored &&
+           double(compared) >= kMinScoredShare * double(compared + in_gap);
   }
   double max_error = 0.0;
-  /// The median over the batches of the time per sample: a batch during which the process
-  /// was descheduled (the machine is shared) does not count.
+  /// The lower quartile over the timed chunks of the time per sample: the machine's load
+  /// (other processes, descheduling) only ever adds time, so the lower quartile is what the
+  /// method costs, steadier from run to run than the median.
   double costNs() const {
-    if (batch_costs_.empty()) return 0.0;
-    std::vector<float> c = batch_costs_;
-    std::nth_element(c.begin(), c.begin() + c.size() / 2, c.end());
-    return c[c.size() / 2];
+    if (!cost_) {
+      std::vector<float> c = chunk_costs_;
+      if (c.empty()) return 0.0;
+      std::nth_element(c.begin(), c.begin() + c.size() / 4, c.end());
+      cost_ = c[c.size() / 4];
+    }
+    return *cost_;
   }
   double rms() const { return compared > 0 ? std::sqrt(sum_sq_ / double(compared)) : std::nan(""); }
   /// Least-squares slope of the error against time, rad/s.
@@ -422,48 +444,101 @@ class Method : public EngineSink {
     const double d = n * stt_ - st_ * st_;
     return compared > 2 && d > 0.0 ? (n * ste_ - st_ * se_) / d : std::nan("");
   }
+  /// The white part of the residual between this method and the truth, rad (RMS angle):
+  /// from the second differences of the residual rotation vectors at consecutive truth
+  /// samples, sqrt(mean |r_i - 2 r_(i-1) + r_(i-2)|^2 / 6). A smooth error (the method's)
+  /// barely enters; the truth's own noise, and the jitter of its stamps, do. NaN: too few.
+  double whiteResidual() const {
+    return d2_count_ >= 10 ? std::sqrt(d2_sum_ / double(d2_count_) / 6.0) : std::nan("");
+  }
   const WindowStats& window(int i) const { return windows_[i]; }
   BinnedSeries series;
   const EngineCounters& counters() const { return engine_->counters(); }
+  bool started() const { return engine_ != nullptr; }
 
  private:
+  struct State {
+    Stamp stamp;
+    Eigen::Quaterniond q;
+    std::uint64_t segment;
+  };
+  enum class Found { Wait, Outside, Gap, Ok };
+  /// The state interpolated to `stamp` (the states' time).
+  Found stateAt(Stamp stamp, bool at_end, Eigen::Quaterniond& q);
   void record(Stamp stamp, const Eigen::Quaterniond& q_WS, const Eigen::Quaterniond& q_VT);
   void relativeErrors(const Compared& c);
   void trimRecent(const Compared& c);
 
   std::string integrator_, samples_;
+  Parameters parameters_;
   std::unique_ptr<AttitudeEngine> engine_;
   bool started_ = false;
   std::uint64_t fed_ = 0;
-  std::vector<float> batch_costs_;                            // ns per sample, one per batch
-  std::deque<std::pair<Stamp, Eigen::Quaterniond>> pending_;  // states awaiting the truth
-  std::optional<Eigen::Quaterniond> align_;                   // A = q_VW
+  std::vector<float> chunk_costs_;  // ns per sample, one per timed chunk
+  mutable std::optional<double> cost_;
+  std::deque<State> states_;  // states the truth may still need
+  std::uint64_t segment_ = 0;
+  Stamp next_truth_ = std::numeric_limits<Stamp>::min();
+  std::optional<Eigen::Quaterniond> align_;  // A = q_VW
   std::optional<Stamp> t0_;
   double sum_sq_ = 0.0, st_ = 0.0, se_ = 0.0, stt_ = 0.0, ste_ = 0.0;
   std::deque<Compared> recent_;  // the last 10 s, for the relative errors
   std::size_t cursor_[2] = {0, 0};
   WindowStats windows_[2];
+  // Residual rotation vectors of the last two consecutive compared truth samples.
+  std::vector<Eigen::Vector3d> residuals_;
+  double d2_sum_ = 0.0;
+  std::uint64_t d2_count_ = 0;
 };
 
-void Method::compare(TruthLookup& truth, bool at_end) {
+Method::Found Method::stateAt(Stamp stamp, bool at_end, Eigen::Quaterniond& q) {
+  if (states_.empty()) return at_end ? Found::Outside : Found::Wait;
+  const auto after = std::upper_bound(states_.begin(), states_.end(), stamp,
+                                      [](Stamp t, const State& s) { return t < s.stamp; });
+  if (after == states_.begin()) return Found::Outside;  // before the first state
+  const std::size_t k = static_cast<std::size_t>(after - states_.begin()) - 1;
+  const std::size_t n = states_.size();
+  const std::uint64_t segment = states_[k].segment;
+  // Up to three states after k in its segment; fewer only when the segment has ended.
+  std::size_t hi = k;
+  while (hi + 1 < n && hi - k < 3 && states_[hi + 1].segment == segment) ++hi;
+  const bool ended = hi + 1 < n || at_end;
+  if (hi - k < 3 && !ended) return Found::Wait;
+  if (hi == k && states_[k].stamp != stamp) return hi + 1 < n ? Found::Gap : Found::Outside;
+  // Two states before k, more when fewer follow: six nodes where the segment has them.
+  std::size_t lo = k;
+  while (lo > 0 && k - lo < 2 && states_[lo - 1].segment == segment) --lo;
+  while (lo > 0 && hi - lo + 1 < kInterpolationNodes && states_[lo - 1].segment == segment) --lo;
+  const std::size_t count = hi - lo + 1;
+  // A segment of one state is a restart alone (the state held): nothing integrated to compare.
+  if (count < 2) return Found::Gap;
+  TimedAttitude nodes[kInterpolationNodes];
+  for (std::size_t i = 0; i < count; ++i) {
+    nodes[i] = {double(states_[lo + i].stamp - stamp) * kNs, states_[lo + i].q};
+  }
+  q = interpolateAttitude(nodes, count, 0.0);
+  // Later truth stamps are later: the states before k - 5 are not needed again.
+  const std::size_t keep_from = k > kInterpolationNodes ? k - kInterpolationNodes : 0;
+  states_.erase(states_.begin(), states_.begin() + static_cast<std::ptrdiff_t>(keep_from));
+  return Found::Ok;
+}
+
+void Method::compare(const std::deque<TruthSample>& truth, bool at_end) {
+  if (!engine_) return;
   const Stamp shift = static_cast<Stamp>(std::llround(offset / kNs));
-  Eigen::Quaterniond q_VT;
-  while (!pending_.empty()) {
-    const auto& [stamp, q_WS] = pending_.front();
-    switch (truth.at(stamp + shift, at_end, q_VT)) {
-      case TruthLookup::Status::Wait:
-        return;
-      case TruthLookup::Status::Outside:
-        ++outside;
-        break;
-      case TruthLookup::Status::Gap:
-        ++in_gap;
-        break;
-      case TruthLookup::Status::Ok:
-        record(stamp, q_WS, q_VT);
-        break;
+  auto it = std::lower_bound(truth.begin(), truth.end(), next_truth_,
+                             [](const TruthSample& s, Stamp t) { return s.stamp < t; });
+  Eigen::Quaterniond q_WS;
+  for (; it != truth.end(); ++it) {
+    const Found found = stateAt(it->stamp - shift, at_end, q_WS);
+    if (found == Found::Wait) return;
+    next_truth_ = it->stamp + 1;
+    if (found == Found::Ok) {
+      record(it->stamp, q_WS, it->q);
+      continue;
     }
-    pending_.pop_front();
+    ++(found == Found::Gap ? in_gap : outside);
+    residuals_.clear();  // the next residual does not follow on from the last
   }
 }
 
@@ -479,6 +554,12 @@ void Method::record(Stamp stamp, const Eigen::Quaterniond& q_WS, const Eigen::Qu
   sum_sq_ += e * e;
   st_ += t, se_ += e, stt_ += t * t, ste_ += t * e;
   series.add(t, e);
+  residuals_.push_back(logMap(c.truth.conjugate() * c.estimate));
+  if (residuals_.size() == 3) {
+    d2_sum_ += (residuals_[2] - 2.0 * residuals_[1] + residuals_[0]).squaredNorm();
+    ++d2_count_;
+    residuals_.erase(residuals_.begin());
+  }
   relativeErrors(c);
   trimRecent(c);
 }
@@ -540,14 +621,18 @@ class Evaluation {
   void calibrate();
   void push(const RateSample& s);
   void flush(bool at_end);
+  /// Each method's rate_delay and comparison offset, from the offset and the delay model.
+  void applyDelayModel();
   /// The recommended method (among the scored ones; see noRecommendation()).
   std::size_t recommended() const;
-  /// One truth lookup per reading (the two readings look at different offsets).
-  TruthLookup& lookup(const Method& m) {
-    auto& l = m.averaged() ? lookup_averaged_ : lookup_instantaneous_;
-    if (!l) l = std::make_unique<TruthLookup>(truth_, truth_gap_);
-    return *l;
-  }
+  /// The smallest RMS error the truth resolves: twice the white part of the residuals (the
+  /// smallest among the scored methods: the truth's noise), and never below the round-off
+  /// floor 10 eps sqrt(N). Errors below it cannot be told apart.
+  double resolutionFloor() const;
+  /// Costs closer than this (relative) count as equal: the larger of kCostNoise and the median
+  /// over the integrators of the difference between their two readings (about the same work
+  /// per sample: the difference is timing noise).
+  double costTolerance() const;
 
   const Options& o_;
   std::vector<std::unique_ptr<Method>> methods_;
@@ -568,12 +653,14 @@ class Evaluation {
   std::deque<TruthSample> truth_;
   std::optional<Stamp> truth_start_;
   std::vector<RateSample> batch_;
-  std::unique_ptr<TruthLookup> lookup_instantaneous_, lookup_averaged_;
   double truth_gap_ = 0.0;
   double rate_period_ = 0.0, truth_period_ = 0.0;
-  double offset_instantaneous_ = 0.0;
-  double offset_averaged_ = 0.0;
   OffsetEstimate offset_estimate_;
+  // The delay model: with one clock (--truth-clock same) the offset found with the samples at
+  // their stamps is minus the rates' lag, total_delay_; otherwise it is the clocks' offset.
+  bool delay_estimated_ = false;
+  double total_delay_ = 0.0;
+  std::string delay_note_;
   std::string mount_note_;
   Eigen::Quaterniond mount_ = Eigen::Quaterniond::Identity();
   std::uint64_t rate_count_ = 0, truth_count_ = 0, truth_unordered_ = 0, before_truth_ = 0;
@@ -716,20 +803,11 @@ void Evaluation::addTruth(const TruthSample& s) {
     truth_.back().q.coeffs() *= -1.0;
   }
   if (!calibrating_) {
-    for (auto& method : methods_) method->compare(lookup(*method), false);
-    // Drop the truth no waiting state needs (keep one sample before the oldest need).
-    std::optional<Stamp> need;
-    for (const auto& method : methods_) {
-      if (const auto n = method->oldestNeeded()) need = need ? std::min(*need, *n) : *n;
-    }
-    // Rates not yet turned into states need the truth from their stamps on (a second of
-    // margin for filtered stamps, which may precede the input's).
-    const Stamp next_rate = batch_.empty() ? last_rate_ : batch_.front().stamp;
-    double smallest_offset = 0.0;
-    for (const auto& method : methods_) smallest_offset = std::min(smallest_offset, method->offset);
-    const Stamp upcoming = next_rate + static_cast<Stamp>((smallest_offset - 1.0) / kNs);
-    const Stamp keep = need ? std::min(*need, upcoming) : upcoming;
-    while (truth_.size() > 2 && truth_[1].stamp <= keep) truth_.pop_front();
+    for (auto& method : methods_) method->compare(truth_, false);
+    // Drop the truth every method has compared.
+    Stamp keep = std::numeric_limits<Stamp>::max();
+    for (const auto& method : methods_) keep = std::min(keep, method->nextTruth());
+    while (!truth_.empty() && truth_.front().stamp < keep) truth_.pop_front();
   }
 }
 
@@ -768,11 +846,6 @@ void Evaluation::calibrate() {
     const double step = 0.5 * std::min(truth_period_, rate_period_);
     offset_estimate_ = estimateOffset(gyro, track, o_.max_offset, step, mount, throwIfInterrupted);
   }
-  offset_instantaneous_ = offset_estimate_.offset;
-  // A sample taken as the mean over the interval it closes stands for its middle, half a
-  // period before its stamp: the estimated offset, found with samples at their stamps, moves
-  // by that much for that reading. A given offset is the clocks' own and holds for both.
-  offset_averaged_ = offset_instantaneous_ + (o_.offset ? 0.0 : 0.5 * rate_period_);
   // The mount relates the rate vectors, whichever instant a sample stands for: fitted with
   // the samples at their stamps and the offset found that way, it holds for both readings.
   if (o_.mount) {
@@ -780,18 +853,97 @@ void Evaluation::calibrate() {
     mount_note_ = "given";
   } else {
     double ratio = 0.0;
-    mount_ = Eigen::Quaterniond(estimateMount(gyro, track, offset_instantaneous_, &ratio));
+    mount_ = Eigen::Quaterniond(estimateMount(gyro, track, offset_estimate_.offset, &ratio));
     mount_note_ = ratio < 1e-3 ? "estimated; the rates turn about one axis only, so the mount's "
                                  "rotation about it is not observable (closest to identity used)"
                                : "estimated from the rate directions (Wahba)";
   }
-  for (auto& method : methods_) {
-    method->mount = mount_;
-    method->offset = method->averaged() ? offset_averaged_ : offset_instantaneous_;
-  }
+  for (auto& method : methods_) method->mount = mount_;
+  applyDelayModel();
   for (const auto& r : calibration_rates_) push(r);
   calibration_rates_.clear();
   calibration_rates_.shrink_to_fit();
+}
+
+void Evaluation::applyDelayModel() {
+  const double o = offset_estimate_.offset;
+  // A reading's own lag: a sample taken as the mean over the interval it closes stands for
+  // its middle, half a period before its stamp; an instantaneous one for its stamp.
+  auto own = [this](const Method& m) { return m.averaged() ? 0.5 * rate_period_ : 0.0; };
+  char text[512];
+  if (o_.offset) {
+    // A given offset: the clocks' own, for both readings, with the configured rate_delay.
+    for (auto& m : methods_) m->start(m->configuredRateDelay(), o);
+    delay_note_ =
+        "not estimated (--offset given: every method at that offset, with the "
+        "configured rate_delay)";
+    return;
+  }
+  if (!offset_estimate_.observable) {
+    // Nothing found: offset 0 for samples at their stamps, which is also where the mount was
+    // fitted (for a motion whose time shift is a rotation, the mount takes that shift up); an
+    // interval-average reading places its samples half a period earlier, so it meets the
+    // truth half a period later.
+    for (auto& m : methods_)
+      m->start(m->configuredRateDelay(), o + own(*m) + m->configuredRateDelay());
+    delay_note_ =
+        "not estimated (the offset is not observable: samples at their stamps taken at offset "
+        "0, where the mount was fitted; the configured rate_delay used)";
+    return;
+  }
+  std::string fallback;
+  if (o_.truth_clock_same) {
+    total_delay_ = -o;
+    // Estimates agree to a few microseconds; a lag below -2 % of a period is a truth stamped
+    // after its instant (a latency) or another clock, not a rate newer than its stamp.
+    const double tolerance = 0.02 * rate_period_;
+    bool fits = total_delay_ >= -tolerance;
+    for (const auto& m : methods_) fits = fits && total_delay_ - own(*m) <= m->maxDt();
+    if (fits) {
+      delay_estimated_ = true;
+      std::string readings;
+      for (auto& m : methods_) {
+        const double needed = total_delay_ - own(*m);
+        m->start(std::max(0.0, needed), 0.0);
+      }
+      for (const bool averaged : {false, true}) {
+        const auto m = std::find_if(methods_.begin(), methods_.end(), [averaged](const auto& x) {
+          return x->averaged() == averaged;
+        });
+        if (m == methods_.end()) continue;
+        const double needed = total_delay_ - own(**m);
+        std::snprintf(text, sizeof text, "%s%s %.4f ms%s", readings.empty() ? "" : ", ",
+                      averaged ? "as interval averages" : "as instantaneous rates",
+                      std::max(0.0, needed) * 1e3,
+                      needed < -tolerance ? " (would need a negative delay: this reading cannot "
+                                            "explain the lag, and runs with 0)"
+                                          : "");
+        readings += text;
+      }
+      std::snprintf(text, sizeof text,
+                    "%.4f ms estimated (--truth-clock same: the truth is stamped at its instants "
+                    "on the rates' clock, so the rates' lag is minus the offset); each method "
+                    "runs with it less its reading's own lag (half a period for interval "
+                    "averages): rate_delay %s; compared at offset 0",
+                    total_delay_ * 1e3, readings.c_str());
+      delay_note_ = text;
+      return;
+    }
+    std::snprintf(text, sizeof text,
+                  "not estimated: with one clock the rates would lag by %.4f ms, which %s; "
+                  "compared as with --truth-clock separate. ",
+                  total_delay_ * 1e3,
+                  total_delay_ < 0.0 ? "is no delay (the truth is stamped late or on another "
+                                       "clock: give --truth-clock separate)"
+                                     : "exceeds max_dt (rate_delay is at most max_dt)");
+    fallback = text;
+  }
+  for (auto& m : methods_)
+    m->start(m->configuredRateDelay(), o + own(*m) + m->configuredRateDelay());
+  delay_note_ = fallback +
+                (fallback.empty() ? std::string("not estimated (--truth-clock separate): ") : "") +
+                "the offset is the clocks' and holds any delay of the rates, which this data "
+                "cannot tell from it; every method runs with the configured rate_delay";
 }
 
 void Evaluation::push(const RateSample& s) {
@@ -800,27 +952,71 @@ void Evaluation::push(const RateSample& s) {
 }
 
 void Evaluation::flush(bool at_end) {
+  // States from a few rate periods before the truth's start: the first truth samples have
+  // states on both sides.
+  const double lead = (kInterpolationNodes / 2 + 1) * rate_period_;
   for (auto& method : methods_) {
-    method->feed(batch_, *truth_start_);
-    method->compare(lookup(*method), at_end);
+    method->feed(batch_, *truth_start_, lead);
+    method->compare(truth_, at_end);
   }
   batch_.clear();
 }
 
+double Evaluation::resolutionFloor() const {
+  double white = std::numeric_limits<double>::infinity();
+  std::uint64_t n = 0;
+  for (const auto& m : methods_) {
+    if (!m->scored()) continue;
+    if (!std::isnan(m->whiteResidual())) white = std::min(white, m->whiteResidual());
+    n = std::max(n, m->compared);
+  }
+  const double roundoff = 10.0 * std::numeric_limits<double>::epsilon() * std::sqrt(double(n));
+  return std::isfinite(white) ? std::max(2.0 * white, roundoff) : roundoff;
+}
+
+double Evaluation::costTolerance() const {
+  // The median over the integrators run with both readings (one descheduled batch can spoil
+  // one method's cost: the median keeps it from setting the tolerance).
+  std::vector<double> differences;
+  for (const auto& a : methods_) {
+    if (a->averaged()) continue;
+    for (const auto& b : methods_) {
+      if (a->integrator() != b->integrator() || !b->averaged()) continue;
+      const double lo = std::min(a->costNs(), b->costNs()), hi = std::max(a->costNs(), b->costNs());
+      if (lo > 0.0) differences.push_back(hi / lo - 1.0);
+    }
+  }
+  if (differences.empty()) return kCostNoise;
+  std::sort(differences.begin(), differences.end());
+  const std::size_t n = differences.size();
+  const double median =
+      n % 2 ? differences[n / 2] : 0.5 * (differences[n / 2 - 1] + differences[n / 2]);
+  return std::max(kCostNoise, median);
+}
+
 std::size_t Evaluation::recommended() const {
-  // The cheapest scored method whose RMS error is within 10 % of the best one's: below that
-  // the difference is not worth its cost on this data.
+  // Among the scored methods whose RMS error is within 10 % of the best one's (or of the
+  // smallest error the truth resolves, when the best is below it): the cheapest, costs within
+  // the timing noise counting as equal, ties broken in a fixed order (the integrator table's,
+  // instantaneous before interval_average). Errors are the same on every run; the costs are
+  // not, so the order, not the clock, decides between methods the clock cannot tell apart.
   double best = std::numeric_limits<double>::infinity();
   for (const auto& m : methods_) {
     if (m->scored()) best = std::min(best, m->rms());
   }
-  std::size_t pick = 0;
-  double cost = std::numeric_limits<double>::infinity();
+  const double level = 1.1 * std::max(best, resolutionFloor());
+  double cheapest = std::numeric_limits<double>::infinity();
+  for (const auto& m : methods_) {
+    if (m->scored() && m->rms() <= level) cheapest = std::min(cheapest, m->costNs());
+  }
+  const double affordable = cheapest * (1.0 + costTolerance());
+  std::optional<std::size_t> pick;
   for (std::size_t i = 0; i < methods_.size(); ++i) {
     const Method& m = *methods_[i];
-    if (m.scored() && m.rms() <= 1.1 * best && m.costNs() < cost) pick = i, cost = m.costNs();
+    if (!m.scored() || m.rms() > level || m.costNs() > affordable) continue;
+    if (!pick || m.order() < methods_[*pick]->order()) pick = i;
   }
-  return pick;
+  return pick.value_or(0);
 }
 
 std::optional<std::string> Evaluation::noRecommendation() const {
@@ -830,17 +1026,20 @@ std::optional<std::string> Evaluation::noRecommendation() const {
   // Say it for the method that came closest.
   const Method* closest = methods_.front().get();
   for (const auto& m : methods_) {
-    if (m->integrated() > closest->integrated()) closest = m.get();
+    if (m->compared > closest->compared) closest = m.get();
   }
   const EngineCounters& c = closest->counters();
-  return "no method was scored on enough of the truth (at least half of its compared samples, "
-         "and at least " +
-         std::to_string(kMinScored) + ", integrated from the sample before): " + closest->name() +
-         " integrated " + std::to_string(closest->integrated()) + " of " +
-         std::to_string(closest->compared) + " compared (" + std::to_string(c.gaps) +
+  return "no method was scored on enough of the truth (at least half of the truth samples met "
+         "by its states, and at least " +
+         std::to_string(kMinScored) +
+         ", compared with states integrated one from the other, not across a gap longer than "
+         "max_dt or a reset): " +
+         closest->name() + " compared " + std::to_string(closest->compared) + " (" +
+         std::to_string(closest->in_gap) +
+         " truth samples between such gaps: " + std::to_string(c.gaps) +
          " gaps longer than max_dt, " + std::to_string(c.resets) + " resets; " +
-         std::to_string(closest->in_gap) + " samples in truth gaps, " +
-         std::to_string(closest->outside + before_truth_) + " outside the truth)";
+         std::to_string(closest->outside) + " outside its states; " +
+         std::to_string(before_truth_) + " rate samples before the truth)";
 }
 
 void Evaluation::report(std::FILE* out) const {
@@ -849,7 +1048,9 @@ void Evaluation::report(std::FILE* out) const {
   std::fprintf(out, "  rates %s (%s): %llu samples, %.1f Hz\n", rates_topic_.c_str(),
                rates_type_.c_str(), static_cast<unsigned long long>(rate_count_),
                rate_period_ > 0 ? 1.0 / rate_period_ : 0.0);
-  std::fprintf(out, "  truth %s%s (%s): %llu samples, %.1f Hz; gaps above %.4g s are skipped%s\n",
+  std::fprintf(out,
+               "  truth %s%s (%s): %llu samples, %.1f Hz; not differentiated across gaps above "
+               "%.4g s%s\n",
                truth_topic_.c_str(),
                o_.tf_parent.empty() ? "" : (" " + o_.tf_parent + " -> " + o_.tf_child).c_str(),
                truth_type_.c_str(), static_cast<unsigned long long>(truth_count_),
@@ -865,24 +1066,39 @@ void Evaluation::report(std::FILE* out) const {
                  static_cast<unsigned long long>(rate_non_finite_),
                  static_cast<unsigned long long>(truth_unusable_));
   }
-  std::fprintf(out,
-               "  time offset (truth - rates): %+.4f ms as instantaneous, %+.4f ms as interval "
-               "averages (%s)\n",
-               offset_instantaneous_ * 1e3, offset_averaged_ * 1e3, offset_estimate_.how.c_str());
+  std::fprintf(out, "  time offset (truth - rates, samples at their stamps): %+.4f ms (%s)\n",
+               offset_estimate_.offset * 1e3, offset_estimate_.how.c_str());
+  std::fprintf(out, "  rate delay: %s\n", delay_note_.c_str());
   const double mount_angle = 2.0 * std::atan2(mount_.vec().norm(), std::abs(mount_.w()));
   std::fprintf(out, "  mount q_ST [x y z w] = [%.6f %.6f %.6f %.6f] (%.3f deg; %s)\n", mount_.x(),
                mount_.y(), mount_.z(), mount_.w(), mount_angle * 180.0 / M_PI, mount_note_.c_str());
   const Method& first = *methods_.front();
   std::fprintf(out,
-               "  compared per method: %llu; in truth gaps: %llu; outside the truth: %llu; "
-               "before the truth: %llu\n",
+               "  compared at the truth's stamps, each method's states interpolated to them "
+               "(degree 5 through six states): %llu per method; between gaps of the rates: %llu; "
+               "outside the states: %llu; rate samples before the truth: %llu\n",
                static_cast<unsigned long long>(first.compared),
                static_cast<unsigned long long>(first.in_gap),
                static_cast<unsigned long long>(first.outside),
                static_cast<unsigned long long>(before_truth_));
-  std::fprintf(out, "\n  %-24s %10s %10s %11s %10s %10s %9s\n", "method", "max [rad]", "RMS [rad]",
-               "drift[rad/s]", "RPE 1 s", "RPE 10 s", "ns/sample");
   const auto refused = noRecommendation();
+  const double floor = resolutionFloor();
+  std::string unresolved;
+  for (const auto& m : methods_) {
+    if (m->scored() && m->rms() < floor) unresolved += (unresolved.empty() ? "" : ", ") + m->name();
+  }
+  std::fprintf(out,
+               "  truth resolves RMS errors down to %.3g rad (twice the white part of the "
+               "residuals, at least the round-off floor)\n",
+               floor);
+  if (!unresolved.empty()) {
+    std::fprintf(out,
+                 "  warning: the truth cannot resolve the errors of %s (below %.3g rad): they "
+                 "count as equally accurate\n",
+                 unresolved.c_str(), floor);
+  }
+  std::fprintf(out, "\n  %-24s %10s %10s %11s %10s %10s %9s %9s\n", "method", "max [rad]",
+               "RMS [rad]", "drift[rad/s]", "RPE 1 s", "RPE 10 s", "ns/sample", "delay[ms]");
   const std::size_t pick = recommended();
   for (std::size_t i = 0; i < methods_.size(); ++i) {
     const Method& m = *methods_[i];
@@ -896,10 +1112,10 @@ void Evaluation::report(std::FILE* out) const {
       }
       return std::string(text);
     };
-    std::fprintf(out, "  %-24s %s %s %s %s %s %9.1f%s\n", m.name().c_str(),
+    std::fprintf(out, "  %-24s %s %s %s %s %s %9.1f %9.4f%s\n", m.name().c_str(),
                  cell(m.max_error, 10).c_str(), cell(m.rms(), 10).c_str(),
                  cell(m.drift(), 11).c_str(), cell(m.window(0).rms(), 10).c_str(),
-                 cell(m.window(1).rms(), 10).c_str(), m.costNs(),
+                 cell(m.window(1).rms(), 10).c_str(), m.costNs(), m.rateDelay() * 1e3,
                  !m.scored()             ? "  (not scored)"
                  : !refused && i == pick ? "  <- recommended"
                                          : "");
@@ -912,29 +1128,36 @@ void Evaluation::report(std::FILE* out) const {
   }
   const Method& r = *methods_[pick];
   std::fprintf(out,
-               "\n  recommendation: integrator %s, rate_samples %s (the cheapest within 10 %% of "
-               "the lowest RMS error)\n  %.3f s wall for %llu messages\n",
-               r.integrator().c_str(), r.samples().c_str(), wall_,
+               "\n  recommendation: integrator %s, rate_samples %s, rate_delay %.6g (the cheapest "
+               "within 10 %% of the lowest RMS error, costs within %.0f %% equal, ties in the "
+               "integrator table's order)\n",
+               r.integrator().c_str(), r.samples().c_str(), r.rateDelay(), 100.0 * costTolerance());
+  std::fprintf(out,
+               "  settings:\n    integrator: %s\n    rate_samples: %s\n    rate_delay: %.6g%s\n",
+               r.integrator().c_str(), r.samples().c_str(), r.rateDelay(),
+               delay_estimated_ ? "" : "  # configured: not estimated from this data");
+  std::fprintf(out, "  %.3f s wall for %llu messages\n", wall_,
                static_cast<unsigned long long>(rate_count_ + truth_count_));
 }
 
 void Evaluation::writeCsv(const std::string& summary_path, const std::string& series_path) {
   CsvFile summary(summary_path, o_.prefix + ".csv");
   std::fputs(
-      "method,integrator,rate_samples,offset_s,compared,in_truth_gaps,outside_truth,"
+      "method,integrator,rate_samples,offset_s,rate_delay_s,compared,in_rate_gaps,outside_states,"
       "max_error_rad,rms_error_rad,drift_rad_per_s,rpe_1s_rms_rad,rpe_1s_max_rad,"
       "rpe_10s_rms_rad,rpe_10s_max_rad,cost_ns_per_sample,recommended\n",
       summary.get());
   const std::size_t pick = recommended();
   for (std::size_t i = 0; i < methods_.size(); ++i) {
     const Method& m = *methods_[i];
-    std::fprintf(
-        summary.get(), "%s,%s,%s,%.9g,%llu,%llu,%llu,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.2f,%d\n",
-        m.name().c_str(), m.integrator().c_str(), m.samples().c_str(), m.offset,
-        static_cast<unsigned long long>(m.compared), static_cast<unsigned long long>(m.in_gap),
-        static_cast<unsigned long long>(m.outside), m.max_error, m.rms(), m.drift(),
-        m.window(0).rms(), m.window(0).max, m.window(1).rms(), m.window(1).max, m.costNs(),
-        i == pick ? 1 : 0);
+    std::fprintf(summary.get(),
+                 "%s,%s,%s,%.9g,%.9g,%llu,%llu,%llu,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.2f,%d\n",
+                 m.name().c_str(), m.integrator().c_str(), m.samples().c_str(), m.offset,
+                 m.rateDelay(), static_cast<unsigned long long>(m.compared),
+                 static_cast<unsigned long long>(m.in_gap),
+                 static_cast<unsigned long long>(m.outside), m.max_error, m.rms(), m.drift(),
+                 m.window(0).rms(), m.window(0).max, m.window(1).rms(), m.window(1).max, m.costNs(),
+                 i == pick ? 1 : 0);
   }
   summary.close();
   CsvFile series(series_path, o_.prefix + "_series.csv");

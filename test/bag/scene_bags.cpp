@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -122,7 +123,32 @@ void writeTruth(rosbag::Bag& bag, const SceneBag& s, Stamp stamp, const Eigen::Q
   }
 }
 
+/// A second-order Butterworth low-pass at fc = fraction * fs, by the bilinear transform with
+/// the cut-off prewarped: b = K^2 (1, 2, 1) / D, a = (1, 2 (K^2 - 1) / D, (1 - sqrt2 K + K^2) /
+/// D), K = tan(pi fraction), D = 1 + sqrt2 K + K^2; one state per axis (direct form I).
+class Butterworth2 {
+ public:
+  Butterworth2(double fraction, const Eigen::Vector3d& steady) {
+    const double K = std::tan(M_PI * fraction);
+    const double D = 1.0 + M_SQRT2 * K + K * K;
+    b_ = {K * K / D, 2.0 * K * K / D, K * K / D};
+    a_ = {1.0, 2.0 * (K * K - 1.0) / D, (1.0 - M_SQRT2 * K + K * K) / D};
+    x1_ = x2_ = y1_ = y2_ = steady;
+  }
+  Eigen::Vector3d operator()(const Eigen::Vector3d& x) {
+    const Eigen::Vector3d y = b_[0] * x + b_[1] * x1_ + b_[2] * x2_ - a_[1] * y1_ - a_[2] * y2_;
+    x2_ = x1_, x1_ = x, y2_ = y1_, y1_ = y;
+    return y;
+  }
+
+ private:
+  std::array<double, 3> b_, a_;
+  Eigen::Vector3d x1_, x2_, y1_, y2_;
+};
+
 }  // namespace
+
+double butterworthDelay(double fraction) { return M_SQRT2 / (2.0 * std::tan(M_PI * fraction)); }
 
 Stamp stampAt(double t) { return kStart + static_cast<Stamp>(std::llround(t * 1e9)); }
 double secondsOf(Stamp stamp) { return static_cast<double>(stamp - kStart) * 1e-9; }
@@ -154,10 +180,23 @@ Written writeSceneBag(const std::string& path, const SceneBag& s) {
                                                          : rosbag::compression::Uncompressed);
   Written out;
   std::uint64_t random = s.seed;
+  std::uint64_t truth_random = s.seed + 1;  // apart, so that the rates stay those without noise
   const double h = 1.0 / s.rate_hz;
   const long n = std::lround(s.duration * s.rate_hz);
   const double dt_truth = 1.0 / s.truth_hz;
   long next_truth = 0;
+  // The rate a sample carries: at (or over the period up to) rate_delay before its stamp.
+  auto sampled = [&s, h](double t) {
+    const double at = t - s.rate_delay;
+    return s.averaged ? intervalMean(s.motion.rate, at - h, at)
+                      : Eigen::Vector3d(s.motion.rate(at));
+  };
+  const long preroll = std::lround(2.0 * s.rate_hz);
+  std::unique_ptr<Butterworth2> lowpass;
+  if (s.lowpass > 0.0) {
+    lowpass = std::make_unique<Butterworth2>(s.lowpass, sampled(-preroll * h));
+    for (long k = -preroll; k < 0; ++k) (*lowpass)(sampled(k * h));
+  }
   for (long k = 0; k <= n; ++k) {
     const double t = k * h;
     // Truth samples up to this instant, in stamp order with the rates.
@@ -166,10 +205,16 @@ Written writeSceneBag(const std::string& path, const SceneBag& s) {
       const double stamped = tt + s.truth_offset;
       if (stamped > s.gap_from && stamped < s.gap_to) continue;
       const Stamp stamp = stampAt(stamped);
-      writeTruth(bag, s, stamp, s.fixed * s.motion.attitude(tt) * s.mount);
+      Eigen::Quaterniond q = s.fixed * s.motion.attitude(tt) * s.mount;
+      if (s.truth_noise > 0.0) {
+        const Eigen::Vector3d n(normalRandom(truth_random), normalRandom(truth_random),
+                                normalRandom(truth_random));
+        q = q * ap::expMap(s.truth_noise * n);
+      }
+      writeTruth(bag, s, stamp, q);
       if (s.truth != TruthType::None) out.truth_stamps.push_back(stamp);
     }
-    Eigen::Vector3d w = s.averaged ? intervalMean(s.motion.rate, t - h, t) : s.motion.rate(t);
+    Eigen::Vector3d w = lowpass ? (*lowpass)(sampled(t)) : sampled(t);
     if (std::find(s.non_finite.begin(), s.non_finite.end(), k) != s.non_finite.end()) {
       w.y() = std::nan("");
     }

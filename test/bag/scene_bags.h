@@ -44,7 +44,13 @@ struct SceneBag {
   double rate_hz = 200.0;
   bool averaged = false;  ///< each sample the mean rate over the period it closes
   double jitter = 0.0;    ///< s, standard deviation of the receipt delay about its mean
-  double drop = 0.0;      ///< probability that a sample is lost (never the first four)
+  /// s: each sample is the rate (or mean) of rate_delay before its stamp (a fixed latency)
+  double rate_delay = 0.0;
+  /// When positive: the samples pass a 2nd-order Butterworth low-pass at lowpass * rate_hz
+  /// (an on-chip filter), started in its steady state two seconds before the first sample;
+  /// its group delay at DC is butterworthDelay(lowpass) / rate_hz.
+  double lowpass = 0.0;
+  double drop = 0.0;  ///< probability that a sample is lost (never the first four)
   std::uint64_t seed = 1;
   RateType rate_type = RateType::Imu;
   std::string rate_topic = "/imu/data_raw";
@@ -52,7 +58,9 @@ struct SceneBag {
   TruthType truth = TruthType::Pose;
   std::string truth_topic = "/truth";
   double truth_hz = 200.0;
-  double truth_offset = 0.0;              ///< s: the truth of instant t is stamped t + truth_offset
+  double truth_offset = 0.0;  ///< s: the truth of instant t is stamped t + truth_offset
+  /// rad: each truth sample turned by Exp(n), n with this standard deviation per axis
+  double truth_noise = 0.0;
   double gap_from = -1.0, gap_to = -1.0;  ///< s: no truth sample stamped in between
   Eigen::Quaterniond fixed = Eigen::Quaterniond::Identity();  ///< A = q_VW
   Eigen::Quaterniond mount = Eigen::Quaterniond::Identity();  ///< q_ST
@@ -65,6 +73,10 @@ struct Written {
   std::vector<double> rate_times;   ///< physical instants of those samples, s
   std::vector<Stamp> truth_stamps;  ///< as written
 };
+
+/// The DC group delay, in samples, of the 2nd-order Butterworth low-pass at fc = fraction * fs
+/// by the bilinear transform with the cut-off prewarped: sqrt2 / (2 tan(pi fraction)).
+double butterworthDelay(double fraction);
 
 /// Writes the scene's bag; q_VT(t) = A q_WS(t) q_ST is the truth of instant t.
 Written writeSceneBag(const std::string& path, const SceneBag& scene);
