@@ -259,9 +259,11 @@ std::vector<StreamModel> streamModels() {
   }
   add("averaged_end_as_point").averaged = true;  // the means read as point samples
   for (AS position : {AS::Mid, AS::Start}) {
-    StreamModel& as_point = add("averaged_" + ap::averageStampName(position) + "_as_point");
-    as_point.averaged = true;
-    as_point.stamped = position;
+    // Read as end-stamped means (average_stamp left at its default).
+    StreamModel& as_end = add("averaged_" + ap::averageStampName(position) + "_as_end");
+    as_end.averaged = true;
+    as_end.stamped = position;
+    as_end.setting = RS::IntervalAverage;
     StreamModel& s = add("averaged_" + ap::averageStampName(position));
     s.averaged = true;
     s.stamped = position;
@@ -326,17 +328,6 @@ std::vector<StreamModel> streamModels() {
 
 bool isRandom(const StreamModel& model) {
   return model.jitter > 0.0 || model.drop > 0.0 || model.mems || model.fifo_batch > 0;
-}
-
-// Where the state after a sample is compared with the truth: the interval's end for a mean
-// read with the matching average_stamp (the propagator then holds at the end); a mean read at
-// the wrong position is compared at its true end, 1/2 (mid) or 1 (start) period after the stamp
-// the propagator holds at.
-double truthShift(const StreamModel& model) {
-  auto periods = [](ap::AverageStamp p) {
-    return p == ap::AverageStamp::Mid ? 0.5 : p == ap::AverageStamp::Start ? 1.0 : 0.0;
-  };
-  return (periods(model.stamped) - periods(model.average_stamp)) / model.rate_hz;
 }
 
 // The true instants samples are taken at: k / rate_hz, or after a rate change k / rate_after_hz
@@ -434,7 +425,9 @@ struct StreamError {
 };
 
 // The stamp the propagator anchors at: the first sample's, or, for a start- or mid-stamped
-// mean read as such, the end of its interval (the next stamp, or halfway to it).
+// mean read as such, the end of its interval (the next stamp, or halfway to it). Every state is
+// compared with the truth at the stamp it is reported at (time()), whatever the reading: a
+// mean read at the wrong position is an error there, as a tf listener sees it.
 double anchorStamp(const StreamModel& model, const std::vector<RateSample>& samples) {
   switch (model.average_stamp) {
     case ap::AverageStamp::Start:
@@ -449,10 +442,9 @@ double anchorStamp(const StreamModel& model, const std::vector<RateSample>& samp
 
 StreamError streamError(const KinematicScene& scene, const StreamModel& model, Integrator method,
                         const std::vector<RateSample>& samples) {
-  const double shift = truthShift(model);
   ap::KinematicConfig config;
   config.integrator = method;
-  config.initial_q_WB = scene.attitude(anchorStamp(model, samples) + shift);
+  config.initial_q_WB = scene.attitude(anchorStamp(model, samples));
   config.rate_samples = model.setting;
   config.average_stamp = model.average_stamp;
   config.stamp_filter = model.filter;
@@ -465,8 +457,7 @@ StreamError streamError(const KinematicScene& scene, const StreamModel& model, I
       error.used.insert(propagator.integrator());
     }
     if (static_cast<long>(k) < kStartUpSamples || !propagator.anchored()) continue;
-    const double e =
-        ap::rotationAngle(propagator.orientation(), scene.attitude(propagator.time() + shift));
+    const double e = ap::rotationAngle(propagator.orientation(), scene.attitude(propagator.time()));
     error.worst = std::max(error.worst, e);
     if (propagator.time() >= settled) error.worst_settled = std::max(error.worst_settled, e);
   }

@@ -757,11 +757,12 @@ def stream_label(stream, rate):
 
 
 def jitter_range(cells, switched):
-    """The smallest (switched) or largest (not) jitter measure of auto on the jittered streams."""
-    values = [num(auto, "auto_jitter") for (_, stream, _), (_, auto) in cells.items()
-              if "jitter" in stream and "sensor_clock" not in stream and
-              ("rk4" in auto["auto_used"] or "exp2" in auto["auto_used"]) == switched]
-    values = [v for v in values if math.isfinite(v)]
+    """The smallest (switched) or largest (not) jitter measure J of auto on the streams read
+    without the stamp filter (with it the jitter rule is off) and with some stamp noise."""
+    values = [num(auto, "auto_jitter") for (best, auto) in cells.values()
+              if auto["stamp_filter"] == "none" and num(auto, "auto_jitter") > 1e-9 and
+              ("rk4" in auto["auto_used"] or "exp2" in auto["auto_used"]) == switched and
+              "drops" not in auto["stream"]]
     if not values:
         return "–"
     return fmt(min(values) if switched else max(values), 2)
@@ -788,7 +789,7 @@ def stream_verdict(streams):
         f"methods `auto` integrated with; **bold** beyond {STREAM_SLACK:g}×. `auto` is within "
         f"{STREAM_SLACK:g}× of the best on {held} of {len(ratios)} streams (worst "
         f"{ratios[worst_key]:.2f}×: {worst_key[1]} at {worst_key[2]} Hz on {worst_key[0]}). "
-        f"J on the receipt-jittered streams without the stamp filter: at most "
+        f"J on the streams with stamp noise read without the stamp filter: at most "
         f"{jitter_range(cells, False)} where `auto` stayed on `cf4`, at least "
         f"{jitter_range(cells, True)} where it switched.",
         "",
@@ -821,8 +822,8 @@ SETTINGS_ROWS = [
     ("point samples, hardware stamps", "point", None),
     ("means stamped at the interval's end (delta-angle / dt)", "averaged_end",
      "averaged_end_as_point"),
-    ("means stamped at the interval's midpoint", "averaged_mid", "averaged_mid_as_point"),
-    ("means stamped at the interval's start", "averaged_start", "averaged_start_as_point"),
+    ("means stamped at the interval's midpoint", "averaged_mid", "averaged_mid_as_end"),
+    ("means stamped at the interval's start", "averaged_start", "averaged_start_as_end"),
     ("rates through a 2nd-order Butterworth at ODR/4", "butterworth2_odr4_rate_delay",
      "butterworth2_odr4"),
     ("rates through a sinc³ decimator by 8", "sinc3_r8_rate_delay", "sinc3_r8"),
