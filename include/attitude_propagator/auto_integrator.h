@@ -5,18 +5,20 @@
 // than 1.5x:
 //   1. interval means filled in for lost samples (max_gap_fill) within the last
 //      kFillWindow steps: exp2 (cf4's cubic through filled means is worse than exp2's pair);
-//   2. stamp jitter that moves the rates a lot: the jitter measure
+//   2. stamp jitter that moves the rates a lot while the body turns: the jitter measure
 //        J = sigma_t |dw|_rms / (h |w|_rms),
 //      the stamp noise sigma_t (from the second differences of the stamps) times the rate's
-//      relative change per sample, above kJitterOn (off again below kJitterOff): rk4 on point
-//      samples, exp2 on interval means (cf4's noise guard still amplifies such rate noise).
+//      relative change per sample, above kJitterOn (off again below kJitterOff), and the mean
+//      rate at least kTurning |w|_rms: rk4 on point samples, exp2 on interval means (cf4's
+//      noise guard still amplifies such rate noise). A body that only vibrates keeps cf4: the
+//      coning drift a lower-order method misses then accumulates about fixed axes, and cf4 is
+//      best even with the jitter (a pure 50 Hz coning at 200 Hz with 0.1 ms jitter: rk4 3.5x
+//      cf4's error), where a turning body spreads that drift over all directions.
 //      Not with the stamp filter on: it removes the jitter J measures, and during its start-up
 //      (raw stamps) J would rise and hold the lower-order method for its whole memory, where
 //      the measurements keep cf4 within 1.5x of the best on every filtered stream.
 // Every statistic is an exponentially weighted mean over about kMemory samples: O(1) memory
-// and time per sample. J says how much jitter disturbs the rates, not what cf4's order gains:
-// on a pure 50 Hz coning (no other motion) with 0.1 ms jitter cf4 stays best (its coning drift
-// accumulates about one axis) and the rule's rk4 is 3.5x worse (docs/real_streams.md).
+// and time per sample.
 #pragma once
 
 #include <cstdint>
@@ -40,6 +42,10 @@ class KinematicAutoRule {
   /// does again.
   static constexpr double kJitterOn = 2e-3;
   static constexpr double kJitterOff = 1e-3;
+  /// The jitter rule needs the body to turn beyond its oscillation: |mean w| at least this
+  /// share of |w|_rms. Otherwise (a vibrating body at rest) the coning drift rk4 misses
+  /// accumulates about fixed axes and cf4 stays best even under the jitter.
+  static constexpr double kTurning = 0.1;
 
   /// kind: what the rates mean; stamps_filtered: the sensor-clock stamp filter is on (the
   /// jitter rule is then off).
@@ -72,6 +78,7 @@ class KinematicAutoRule {
   double mean_d2_squared_ = 0.0;  // of the stamps' second differences: 6 sigma_t^2
   double mean_dw_squared_ = 0.0;  // |w_k - w_(k-1)|^2
   double mean_w_squared_ = 0.0;   // |w|^2
+  Eigen::Vector3d mean_w_ = Eigen::Vector3d::Zero();
   bool jittered_ = false;
 };
 

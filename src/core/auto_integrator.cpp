@@ -42,15 +42,21 @@ Integrator KinematicAutoRule::step(double interval, const Eigen::Vector3d& w_B, 
   }
   blend(mean_interval_, interval, weight);
   blend(mean_w_squared_, w_B.squaredNorm(), weight);
+  mean_w_ += weight * (w_B - mean_w_);
   have_interval_ = true;
   last_interval_ = interval;
   last_w_ = w_B;
 
   steps_since_fill_ = filled ? 0 : steps_since_fill_ + 1;
-  const double jitter = jitterMeasure();
   if (samples_ >= kWarmUp && !stamps_filtered_) {
-    if (jitter > kJitterOn) jittered_ = true;
-    if (jitter < kJitterOff) jittered_ = false;
+    // J^2 against the thresholds squared: no root per sample.
+    const double j2 = mean_interval_ > 0.0 && mean_w_squared_ > 0.0
+                          ? mean_d2_squared_ / 6.0 * mean_dw_squared_ /
+                                (mean_w_squared_ * mean_interval_ * mean_interval_)
+                          : 0.0;
+    const bool turning = mean_w_.squaredNorm() >= kTurning * kTurning * mean_w_squared_;
+    if (j2 > kJitterOn * kJitterOn && turning) jittered_ = true;
+    if (j2 < kJitterOff * kJitterOff || !turning) jittered_ = false;
   }
   const bool averaged = kind_ == RateSamples::IntervalAverage;
   if (averaged && steps_since_fill_ < kFillWindow) {

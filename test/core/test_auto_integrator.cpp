@@ -153,14 +153,11 @@ TEST(AutoRule, FilledLossesOfMeansAreIntegratedByExp2) {
   EXPECT_LE(std::exp(log_ratio / 5), 1.2);
 }
 
-TEST(AutoRule, JitterThatMovesTheRatesALotIsIntegratedByRk4) {
+TEST(AutoRule, JitterThatMovesTheRatesOfATurningBodyALotIsIntegratedByRk4) {
   // A 50 Hz vibration (a coning of 0.02 rad) on a slow turn (0.5 rev/s), read at 200 Hz with
   // 0.1 ms receipt jitter: the rate turns by 90 degrees between samples, so a stamp error is a
   // large rate error, and cf4's cubic amplifies it (measured: cf4 0.055 rad over 10 s, rk4 0.037,
-  // auto 0.047). The jitter measure (0.023) is above kJitterOn: rk4. Not covered: the same
-  // vibration with no other motion, where the coning drift rk4 misses accumulates about one
-  // axis and cf4 is best by 3.5x even with this jitter; the rule still picks rk4 there
-  // (docs/real_streams.md).
+  // auto 0.047). The jitter measure (0.023) is above kJitterOn and the body turns: rk4.
   Stream vibration;
   vibration.motion.cone.beta = 0.02;
   vibration.motion.cone.omega = 2.0 * M_PI * 50.0;
@@ -170,6 +167,15 @@ TEST(AutoRule, JitterThatMovesTheRatesALotIsIntegratedByRk4) {
   EXPECT_GT(v.automatic.jitter_measure, 10.0 * ap::KinematicAutoRule::kJitterOn);
   EXPECT_TRUE(v.automatic.used.count(Integrator::Rk4));
   EXPECT_LE(v.ratio, 1.5);
+  // The same vibration on a body at rest: the same J, but the coning drift rk4 misses
+  // accumulates about one axis and cf4 is best by 3.5x (0.062 rad against rk4's 0.22): the
+  // mean rate is 1 % of its rms, below kTurning, and auto keeps cf4.
+  Stream at_rest = vibration;
+  at_rest.motion.turn = 0.0;
+  const Verdict still = judge(at_rest);
+  EXPECT_GT(still.automatic.jitter_measure, 10.0 * ap::KinematicAutoRule::kJitterOn);
+  EXPECT_EQ(still.automatic.used, std::set<Integrator>{Integrator::Cf4});
+  EXPECT_LE(still.ratio, 1.5);
   // The same jitter on the slow coning (the rate turns by 2.3 degrees a sample): cf4 stays,
   // the best there.
   Stream coning;
