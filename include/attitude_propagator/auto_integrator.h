@@ -68,6 +68,7 @@ class KinematicAutoRule {
  private:
   RateSamples kind_;
   bool stamps_filtered_;
+  Integrator base_;  // the table's kinematic `auto` (cf4), looked up once
   Integrator choice_;
   std::uint64_t samples_ = 0;
   std::uint64_t steps_since_fill_;

@@ -17,7 +17,8 @@ void blend(double& mean, double value, double weight) { mean += weight * (value 
 KinematicAutoRule::KinematicAutoRule(RateSamples kind, bool stamps_filtered)
     : kind_(kind),
       stamps_filtered_(stamps_filtered),
-      choice_(autoIntegrator(Model::Kinematic, false)),
+      base_(autoIntegrator(Model::Kinematic, false)),
+      choice_(base_),
       steps_since_fill_(kFillWindow) {}
 
 double KinematicAutoRule::jitterMeasure() const {
@@ -30,7 +31,7 @@ Integrator KinematicAutoRule::step(double interval, const Eigen::Vector3d& w_B, 
   // The weight of a new sample: 1/n while fewer than kMemory samples were seen (their mean),
   // then 1/kMemory.
   ++samples_;
-  const double weight = 1.0 / std::fmin(static_cast<double>(samples_), kMemory);
+  const double weight = samples_ >= kMemory ? 1.0 / kMemory : 1.0 / static_cast<double>(samples_);
   if (have_interval_) {
     const bool regular = std::abs(interval - mean_interval_) <= kRegular * mean_interval_ &&
                          std::abs(last_interval_ - mean_interval_) <= kRegular * mean_interval_;
@@ -49,14 +50,12 @@ Integrator KinematicAutoRule::step(double interval, const Eigen::Vector3d& w_B, 
 
   steps_since_fill_ = filled ? 0 : steps_since_fill_ + 1;
   if (samples_ >= kWarmUp && !stamps_filtered_) {
-    // J^2 against the thresholds squared: no root per sample.
-    const double j2 = mean_interval_ > 0.0 && mean_w_squared_ > 0.0
-                          ? mean_d2_squared_ / 6.0 * mean_dw_squared_ /
-                                (mean_w_squared_ * mean_interval_ * mean_interval_)
-                          : 0.0;
+    // J^2 = noise / (6 scale) against the thresholds squared: no root or division per sample.
+    const double noise = mean_d2_squared_ * mean_dw_squared_;
+    const double scale = 6.0 * mean_w_squared_ * mean_interval_ * mean_interval_;
     const bool turning = mean_w_.squaredNorm() >= kTurning * kTurning * mean_w_squared_;
-    if (j2 > kJitterOn * kJitterOn && turning) jittered_ = true;
-    if (j2 < kJitterOff * kJitterOff || !turning) jittered_ = false;
+    if (scale > 0.0 && turning && noise > kJitterOn * kJitterOn * scale) jittered_ = true;
+    if (!(scale > 0.0 && turning && noise >= kJitterOff * kJitterOff * scale)) jittered_ = false;
   }
   const bool averaged = kind_ == RateSamples::IntervalAverage;
   if (averaged && steps_since_fill_ < kFillWindow) {
@@ -64,7 +63,7 @@ Integrator KinematicAutoRule::step(double interval, const Eigen::Vector3d& w_B, 
   } else if (jittered_) {
     choice_ = averaged ? Integrator::Exp2 : Integrator::Rk4;
   } else {
-    choice_ = autoIntegrator(Model::Kinematic, false);
+    choice_ = base_;
   }
   return choice_;
 }
