@@ -116,4 +116,40 @@ inline KinematicScene tumblingScene() {
   return scene;
 }
 
+/// fast_tumbling: spinning at 3.5 rev/s about body e3 while that axis, tilted by 1 rad,
+/// precesses at 2 rad/s about world z (|w_B| up to 24 rad/s: |w| h = 0.24 at 100 Hz).
+inline KinematicScene fastTumblingScene() {
+  TwoAxisMotion m;
+  m.spin = 2.0 * M_PI * 3.5;
+  m.precession = 2.0;
+  m.q0 = Eigen::AngleAxisd(1.0, Eigen::Vector3d(1.0, 0.5, 0.0).normalized());
+  KinematicScene scene = fromTwoAxis("fast_tumbling", m);
+  scene.duration = 20.0;
+  return scene;
+}
+
+/// vibration: a 50 Hz wobble (a coning of half-angle 0.02 rad, |w| = 6.3 rad/s, as a mount's
+/// vibration makes) on top of a slow turn (0.5 rev/s about body e3, that axis tilted by 0.5 rad
+/// precessing at 0.5 rad/s). With q = q_A(t) (x) q_B(t), the slow turn A and the wobble B,
+///   dq/dt = 1/2 q (x) (0, R(q_B)^T w_A + w_B),
+/// so w_B of the pair is the slow turn's rate seen in the wobbling body plus the wobble's.
+inline KinematicScene vibrationScene() {
+  TwoAxisMotion slow;
+  slow.spin = 2.0 * M_PI * 0.5;
+  slow.precession = 0.5;
+  slow.q0 = Eigen::AngleAxisd(0.5, Eigen::Vector3d(0.3, 1.0, 0.0).normalized());
+  ConingMotion wobble;
+  wobble.beta = 0.02;
+  wobble.omega = 2.0 * M_PI * 50.0;
+  KinematicScene scene;
+  scene.name = "vibration";
+  scene.attitude = [slow, wobble](double t) { return slow.attitude(t) * wobble.attitude(t); };
+  scene.rate = [slow, wobble](double t) {
+    return Eigen::Vector3d(wobble.attitude(t).conjugate() * slow.bodyRate(t) + wobble.bodyRate(t));
+  };
+  scene.max_rate = std::abs(slow.spin) + std::abs(slow.precession) + wobble.rateMagnitude();
+  scene.duration = 20.0;
+  return scene;
+}
+
 }  // namespace bench

@@ -3,7 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <set>
+#include <string>
+#include <utility>
 
+#include "../test/core/gyro_streams.h"
 #include "attitude_propagator/kinematic_propagator.h"
 #include "attitude_propagator/quaternion.h"
 #include "methods.h"
@@ -199,16 +203,26 @@ Eigen::Vector3d intervalMean(const KinematicScene& scene, double a, double b) {
   return 0.5 * sum;
 }
 
+enum class Filter { None, Butterworth, Sinc3 };
+
 struct StreamModel {
   std::string name;
   double rate_hz = 200.0;
-  bool averaged = false;   // the gyro delivers interval means
-  bool mid_stamp = false;  // ... stamped at the interval's midpoint (else at its end)
-  double jitter = 0.0;     // s, receipt jitter (standard deviation)
-  double drop = 0.0;       // probability a sample is lost
-  bool mems = false;       // angle random walk and 16-bit quantization
+  bool averaged = false;  // the gyro delivers interval means
+  // ... stamped at the interval's end, midpoint or start (what the data are)
+  ap::AverageStamp stamped = ap::AverageStamp::End;
+  double jitter = 0.0;            // s, receipt jitter (standard deviation)
+  double drop = 0.0;              // probability a sample is lost
+  bool mems = false;              // angle random walk and 16-bit quantization
+  Filter lowpass = Filter::None;  // an on-chip filter before the stamp
+  int fifo_batch = 0;             // > 0: FIFO reads of this many samples, receipt-stamped
+  gyro_streams::Fifo fifo_form = gyro_streams::Fifo::Repeated;
+  double rate_after_hz = 0.0;  // > 0: the rate changes to this halfway through
+  // The settings the stream is read with.
   ap::RateSamples setting = ap::RateSamples::Instantaneous;
+  ap::AverageStamp average_stamp = ap::AverageStamp::End;
   ap::StampFilter filter = ap::StampFilter::None;
+  double rate_delay = 0.0;  // s, `rate_delay`: every stamp moved back by it (as the engine does)
   int max_gap_fill = 4;
 };
 
@@ -217,56 +231,154 @@ constexpr double kArw = 0.1 * M_PI / 180.0 / 60.0;        // rad/sqrt(s)
 constexpr double kLsb = 4000.0 / 65536.0 * M_PI / 180.0;  // rad/s
 constexpr double kDeg2000 = 2000.0 * M_PI / 180.0;        // rad/s
 
+// The on-chip filters: a 2nd-order Butterworth at ODR/4 (digital, bilinear), and a sinc^3
+// decimator by 8 from an internal rate of 8 ODR. Group delays from their coefficients.
+const gyro_streams::Butterworth2 kButterworth(0.25);
+const gyro_streams::SincDecimator kSinc3(3, 8);
+// FIFO reads of 10 samples, the read's latency spread by 0.2 ms RMS.
+constexpr int kFifoBatch = 10;
+constexpr double kFifoLatency = 2e-4;
+
 std::vector<StreamModel> streamModels() {
   using RS = ap::RateSamples;
-  std::vector<StreamModel> m(11);
-  m[0].name = "point";
-  m[1].name = "averaged_end";
-  m[1].averaged = true;
-  m[1].setting = RS::IntervalAverage;
-  m[2].name = "averaged_end_as_point";  // the same data read as point samples (the old default)
-  m[2].averaged = true;
-  m[3].name = "averaged_mid";
-  m[3].averaged = true;
-  m[3].mid_stamp = true;
-  m[4].name = "jitter_0.1ms";
-  m[4].jitter = 1e-4;
-  m[5].name = "jitter_0.1ms_sensor_clock";
-  m[5].jitter = 1e-4;
-  m[5].filter = ap::StampFilter::SensorClock;
-  m[6].name = "jitter_1ms_400Hz";
-  m[6].jitter = 1e-3;
-  m[6].rate_hz = 400.0;
-  m[7].name = "drops_5pct_averaged";
-  m[7].averaged = true;
-  m[7].drop = 0.05;
-  m[7].setting = RS::IntervalAverage;
-  m[8] = m[7];
-  m[8].name = "drops_5pct_averaged_no_fill";
-  m[8].max_gap_fill = 0;
-  m[9].name = "mems_averaged";
-  m[9].averaged = true;
-  m[9].mems = true;
-  m[9].setting = RS::IntervalAverage;
-  m[10] = m[9];
-  m[10].name = "mems_averaged_jitter_0.1ms_sensor_clock";
-  m[10].jitter = 1e-4;
-  m[10].filter = ap::StampFilter::SensorClock;
+  using AS = ap::AverageStamp;
+  std::vector<StreamModel> m;
+  m.reserve(64);  // the references add() returns stay valid
+  auto add = [&m](const std::string& name) -> StreamModel& {
+    m.emplace_back();
+    m.back().name = name;
+    return m.back();
+  };
+  // Clean point samples and interval means at the rates gyros are read at.
+  for (double hz : {100.0, 200.0, 400.0, 1000.0}) {
+    add("point").rate_hz = hz;
+    StreamModel& averaged = add("averaged_end");
+    averaged.rate_hz = hz;
+    averaged.averaged = true;
+    averaged.setting = RS::IntervalAverage;
+  }
+  add("averaged_end_as_point").averaged = true;  // the means read as point samples
+  for (AS position : {AS::Mid, AS::Start}) {
+    // Read as end-stamped means (average_stamp left at its default).
+    StreamModel& as_end = add("averaged_" + ap::averageStampName(position) + "_as_end");
+    as_end.averaged = true;
+    as_end.stamped = position;
+    as_end.setting = RS::IntervalAverage;
+    StreamModel& s = add("averaged_" + ap::averageStampName(position));
+    s.averaged = true;
+    s.stamped = position;
+    s.setting = RS::IntervalAverage;
+    s.average_stamp = position;
+  }
+  add("jitter_0.1ms").jitter = 1e-4;
+  StreamModel& filtered = add("jitter_0.1ms_sensor_clock");
+  filtered.jitter = 1e-4;
+  filtered.filter = ap::StampFilter::SensorClock;
+  for (ap::StampFilter filter : {ap::StampFilter::None, ap::StampFilter::SensorClock}) {
+    const bool on = filter == ap::StampFilter::SensorClock;
+    StreamModel& heavy = add(on ? "jitter_1ms_400Hz_sensor_clock" : "jitter_1ms_400Hz");
+    heavy.jitter = 1e-3;
+    heavy.rate_hz = 400.0;
+    heavy.filter = filter;
+  }
+  StreamModel& drops = add("drops_5pct_averaged");
+  drops.averaged = true;
+  drops.drop = 0.05;
+  drops.setting = RS::IntervalAverage;
+  m.push_back(drops);
+  m.back().name = "drops_5pct_averaged_no_fill";
+  m.back().max_gap_fill = 0;
+  StreamModel& mems = add("mems_averaged");
+  mems.averaged = true;
+  mems.mems = true;
+  mems.setting = RS::IntervalAverage;
+  m.push_back(mems);
+  m.back().name = "mems_averaged_jitter_0.1ms_sensor_clock";
+  m.back().jitter = 1e-4;
+  m.back().filter = ap::StampFilter::SensorClock;
+  // Rates through an on-chip filter, read without and with `rate_delay` at its group delay.
+  for (Filter lowpass : {Filter::Butterworth, Filter::Sinc3}) {
+    const bool bw = lowpass == Filter::Butterworth;
+    const double delay = (bw ? kButterworth.dcDelay() : kSinc3.delay() / kSinc3.ratio) / 200.0;
+    const std::string name = bw ? "butterworth2_odr4" : "sinc3_r8";
+    add(name).lowpass = lowpass;
+    StreamModel& delayed = add(name + "_rate_delay");
+    delayed.lowpass = lowpass;
+    delayed.rate_delay = delay;
+  }
+  // FIFO reads stamped at receipt, both forms, without and with the stamp filter.
+  for (gyro_streams::Fifo form : {gyro_streams::Fifo::Repeated, gyro_streams::Fifo::Spaced}) {
+    for (ap::StampFilter filter : {ap::StampFilter::None, ap::StampFilter::SensorClock}) {
+      const bool repeated = form == gyro_streams::Fifo::Repeated;
+      const bool on = filter == ap::StampFilter::SensorClock;
+      StreamModel& s = add(std::string("fifo10_") + (repeated ? "repeated" : "spaced") +
+                           (on ? "_sensor_clock" : ""));
+      s.fifo_batch = kFifoBatch;
+      s.fifo_form = form;
+      s.filter = filter;
+    }
+  }
+  // 200 -> 1000 Hz halfway, hardware stamps, without and with the stamp filter (it restarts).
+  add("rate_change_200_1000Hz").rate_after_hz = 1000.0;
+  StreamModel& change = add("rate_change_200_1000Hz_sensor_clock");
+  change.rate_after_hz = 1000.0;
+  change.filter = ap::StampFilter::SensorClock;
   return m;
 }
 
-// Sample k is taken at k h. The anchor keeps its exact stamp and rate so every method starts
-// from the truth.
+bool isRandom(const StreamModel& model) {
+  return model.jitter > 0.0 || model.drop > 0.0 || model.mems || model.fifo_batch > 0;
+}
+
+// The true instants samples are taken at: k / rate_hz, or after a rate change k / rate_after_hz
+// from halfway on.
+std::vector<double> sampleTimes(const KinematicScene& scene, const StreamModel& model) {
+  const long n = std::lround(scene.duration * model.rate_hz);
+  std::vector<double> times;
+  const long before = model.rate_after_hz > 0.0 ? n / 2 : n;
+  for (long k = 0; k <= before; ++k) times.push_back(k / model.rate_hz);
+  if (model.rate_after_hz > 0.0) {
+    const double t0 = times.back();
+    const long after = std::lround((scene.duration - t0) * model.rate_after_hz);
+    for (long k = 1; k <= after; ++k) times.push_back(t0 + k / model.rate_after_hz);
+  }
+  return times;
+}
+
+// Sample k is taken at times[k]. The anchor keeps its exact stamp and rate so every method
+// starts from the truth (a filtered stream's anchor carries the filter's output).
 std::vector<RateSample> makeStream(const KinematicScene& scene, const StreamModel& model,
                                    std::uint64_t seed) {
   Noise noise{seed};
   const double h = 1.0 / model.rate_hz;
-  const long n = std::lround(scene.duration * model.rate_hz);
+  std::vector<double> times = sampleTimes(scene, model);
+  std::vector<double> fifo;
+  if (model.fifo_batch > 0) {
+    fifo = gyro_streams::fifoStamps(model.rate_hz, model.fifo_batch, model.fifo_form, kFifoLatency,
+                                    seed, static_cast<long>(times.size()) - 1);
+    times.resize(fifo.size());
+  }
+  std::vector<Eigen::Vector3d> butterworth;
+  if (model.lowpass == Filter::Butterworth) {
+    const long preroll = std::lround(2.0 * model.rate_hz);  // no start-up transient
+    std::vector<Eigen::Vector3d> truth;
+    for (long k = -preroll; k < static_cast<long>(times.size()); ++k) {
+      truth.push_back(scene.rate(k * h));
+    }
+    butterworth = kButterworth.filter(truth);
+    butterworth.erase(butterworth.begin(), butterworth.begin() + preroll);
+  }
   std::vector<RateSample> samples;
-  for (long k = 0; k <= n; ++k) {
-    const double t = k * h;
-    Eigen::Vector3d w = model.averaged ? intervalMean(scene, t - h, t) : scene.rate(t);
-    double stamp = model.mid_stamp ? t - 0.5 * h : t;
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    const double t = times[k];
+    const double period = k > 0 ? t - times[k - 1] : h;
+    Eigen::Vector3d w = model.averaged ? intervalMean(scene, t - period, t) : scene.rate(t);
+    if (model.lowpass == Filter::Butterworth) w = butterworth[k];
+    if (model.lowpass == Filter::Sinc3) w = kSinc3.output(scene.rate, t, kSinc3.ratio / h);
+    const double offset = model.stamped == ap::AverageStamp::Mid     ? 0.5 * period
+                          : model.stamped == ap::AverageStamp::Start ? period
+                                                                     : 0.0;
+    double stamp = (model.fifo_batch > 0 ? fifo[k] : t) - offset;
     if (k > 0) {
       if (model.mems) {
         for (int i = 0; i < 3; ++i) {
@@ -277,7 +389,7 @@ std::vector<RateSample> makeStream(const KinematicScene& scene, const StreamMode
       stamp += model.jitter * noise.normal();
       if (k > 3 && noise.uniform() < model.drop) continue;
     }
-    samples.push_back({stamp, w});
+    samples.push_back({stamp - model.rate_delay, w});
   }
   return samples;
 }
@@ -308,29 +420,48 @@ constexpr double kSettledShare = 0.25;
 struct StreamError {
   double worst = 0.0;          // the largest error after the start-up samples
   double worst_settled = 0.0;  // ... after kSettledShare of the run
+  std::set<Integrator> used;   // the methods that integrated a step (`auto`: its choices)
+  double jitter = NAN;         // `auto`: its rule's jitter measure at the end
 };
+
+// The stamp the propagator anchors at: the first sample's, or, for a start- or mid-stamped
+// mean read as such, the end of its interval (the next stamp, or halfway to it). Every state is
+// compared with the truth at the stamp it is reported at (time()), whatever the reading: a
+// mean read at the wrong position is an error there, as a tf listener sees it.
+double anchorStamp(const StreamModel& model, const std::vector<RateSample>& samples) {
+  switch (model.average_stamp) {
+    case ap::AverageStamp::Start:
+      return samples[1].t;
+    case ap::AverageStamp::Mid:
+      return 0.5 * (samples[0].t + samples[1].t);
+    case ap::AverageStamp::End:
+      break;
+  }
+  return samples.front().t;
+}
 
 StreamError streamError(const KinematicScene& scene, const StreamModel& model, Integrator method,
                         const std::vector<RateSample>& samples) {
   ap::KinematicConfig config;
   config.integrator = method;
-  config.initial_q_WB = scene.attitude(samples.front().t);
+  config.initial_q_WB = scene.attitude(anchorStamp(model, samples));
   config.rate_samples = model.setting;
+  config.average_stamp = model.average_stamp;
   config.stamp_filter = model.filter;
   config.max_gap_fill = model.max_gap_fill;
   ap::KinematicPropagator propagator(config);
   StreamError error;
   const double settled = samples.front().t + kSettledShare * scene.duration;
   for (std::size_t k = 0; k < samples.size(); ++k) {
-    propagator.addSample(samples[k].t, samples[k].w_B);
-    if (static_cast<long>(k) < kStartUpSamples) continue;
-    // Midpoint stamps: the state at stamp s is the attitude half a period later.
-    const double shift = model.mid_stamp ? 0.5 / model.rate_hz : 0.0;
-    const double e =
-        ap::rotationAngle(propagator.orientation(), scene.attitude(propagator.time() + shift));
+    if (propagator.addSample(samples[k].t, samples[k].w_B) == ap::StampOutcome::Advanced) {
+      error.used.insert(propagator.integrator());
+    }
+    if (static_cast<long>(k) < kStartUpSamples || !propagator.anchored()) continue;
+    const double e = ap::rotationAngle(propagator.orientation(), scene.attitude(propagator.time()));
     error.worst = std::max(error.worst, e);
     if (propagator.time() >= settled) error.worst_settled = std::max(error.worst_settled, e);
   }
+  if (propagator.autoRule() != nullptr) error.jitter = propagator.autoRule()->jitterMeasure();
   return error;
 }
 
@@ -343,31 +474,47 @@ double median(std::vector<double> values) {
 
 void runStreamSweep(const std::vector<KinematicScene>& scenes, std::FILE* out) {
   std::fputs(
-      "scene,stream,method,auto,rate_hz,rate_samples,stamp_filter,max_gap_fill,seeds,"
-      "err_rad,err_rad_max,floor_rad,err_settled_rad\n",
+      "scene,stream,method,auto,rate_hz,rate_samples,average_stamp,stamp_filter,rate_delay_s,"
+      "max_gap_fill,seeds,err_rad,err_rad_max,floor_rad,err_settled_rad,auto_used,auto_jitter\n",
       out);
   constexpr int kSeeds = 5;  // median over seeds for the random streams
+  std::vector<Integrator> methods = methodsFor(ap::Model::Kinematic);
+  methods.push_back(Integrator::Auto);  // last: its choice marks the method rows above
   for (const KinematicScene& scene : scenes) {
     for (const StreamModel& model : streamModels()) {
-      const bool random = model.jitter > 0.0 || model.drop > 0.0 || model.mems;
-      const int seeds = random ? kSeeds : 1;
+      const int seeds = isRandom(model) ? kSeeds : 1;
       std::vector<std::vector<RateSample>> streams;
       for (int s = 1; s <= seeds; ++s) streams.push_back(makeStream(scene, model, s));
-      for (Integrator method : methodsFor(ap::Model::Kinematic)) {
-        std::vector<double> errors, settled;
+      std::set<Integrator> chosen;  // what auto integrated with, on any seed
+      std::vector<std::pair<std::string, std::string>> rows;  // either side of the auto column
+      for (Integrator method : methods) {
+        std::vector<double> errors, settled, jitters;
         for (const auto& samples : streams) {
           const StreamError e = streamError(scene, model, method, samples);
           errors.push_back(e.worst);
           settled.push_back(e.worst_settled);
+          jitters.push_back(e.jitter);
+          if (method == Integrator::Auto) chosen.insert(e.used.begin(), e.used.end());
         }
         std::sort(errors.begin(), errors.end());
-        std::fprintf(out, "%s,%s,%s,%d,%g,%s,%s,%d,%d,%s,%s,%s,%s\n", scene.name.c_str(),
-                     model.name.c_str(), ap::integratorName(method).c_str(),
-                     method == autoChoice() ? 1 : 0, model.rate_hz,
-                     ap::rateSamplesName(model.setting).c_str(),
-                     ap::stampFilterName(model.filter).c_str(), model.max_gap_fill, seeds,
-                     field(errors[errors.size() / 2]).c_str(), field(errors.back()).c_str(),
-                     field(noiseFloor(scene, model)).c_str(), field(median(settled)).c_str());
+        std::string choice;
+        for (Integrator c : chosen) choice += (choice.empty() ? "" : "+") + ap::integratorName(c);
+        char row[512];
+        std::snprintf(row, sizeof row, "%g,%s,%s,%s,%s,%d,%d,%s,%s,%s,%s,%s,%s\n", model.rate_hz,
+                      ap::rateSamplesName(model.setting).c_str(),
+                      ap::averageStampName(model.average_stamp).c_str(),
+                      ap::stampFilterName(model.filter).c_str(), field(model.rate_delay).c_str(),
+                      model.max_gap_fill, seeds, field(errors[errors.size() / 2]).c_str(),
+                      field(errors.back()).c_str(), field(noiseFloor(scene, model)).c_str(),
+                      field(median(settled)).c_str(), choice.c_str(),
+                      field(median(jitters)).c_str());
+        rows.emplace_back(scene.name + "," + model.name + "," + ap::integratorName(method), row);
+      }
+      // A method row is marked when auto integrated a step with it (on any seed).
+      for (std::size_t i = 0; i < methods.size(); ++i) {
+        const bool marked = methods[i] == Integrator::Auto || chosen.count(methods[i]) > 0;
+        std::fprintf(out, "%s,%d,%s", rows[i].first.c_str(), marked ? 1 : 0,
+                     rows[i].second.c_str());
       }
     }
     std::fprintf(stderr, "bench: streams on %s done\n", scene.name.c_str());

@@ -18,10 +18,13 @@ void runKinematicSweep(const std::vector<KinematicScene>& scenes, const TimingOp
 /// stamps with 0.1 ms and 1 ms RMS receipt jitter (column jitter_s).
 void runKinematicStability(const KinematicScene& scene, double duration, std::FILE* out);
 
-/// Every kinematic method on the streams real gyros deliver (averaged rates, receipt jitter,
-/// lost samples, a noisy MEMS gyro), one CSV row each: scene, stream, method, settings, largest
-/// error along the path, the error floor the stream's noise alone sets (empty if none), and
-/// the largest error after the first quarter of the path (a stamp filter has settled by then).
+/// Every kinematic method and `auto` on the streams real gyros deliver (point and averaged rates
+/// at 100-1000 Hz, mid- and start-stamped means, receipt jitter, lost samples, a noisy MEMS gyro,
+/// on-chip filters with and without rate_delay, FIFO reads, a rate change), one CSV row each:
+/// scene, stream, method, settings, largest error along the path against the truth at the
+/// reported stamp, the error floor the stream's noise alone sets (empty if none), the largest
+/// error after the first quarter of the path (a stamp filter has settled by then), and for
+/// `auto` the methods it integrated with and its rule's jitter measure.
 void runStreamSweep(const std::vector<KinematicScene>& scenes, std::FILE* out);
 
 /// Aborts (returns false, with a message) if a scene's closed form does not satisfy

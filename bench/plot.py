@@ -726,7 +726,163 @@ def invariant_lines(sweep, invariants):
     return lines
 
 
-def verdict(sweep, invariants):
+# ---------------------------------------------------------------------------------------------
+# Real streams (real_streams.csv): `auto` against the best method per stream, and the settings
+# per stream of docs/real_streams.md.
+# ---------------------------------------------------------------------------------------------
+
+STREAM_SLACK = 1.5  # `auto` holds on a stream when its error is within this of the best method's
+
+
+def stream_cells(streams):
+    """(scene, stream, rate_hz) -> (the best kinematic method's row, auto's row)."""
+    groups = defaultdict(list)
+    for r in streams:
+        groups[(r["scene"], r["stream"], r["rate_hz"])].append(r)
+    cells = {}
+    for key, rows in groups.items():
+        methods = [r for r in rows if r["method"] != "auto"]
+        auto = next((r for r in rows if r["method"] == "auto"), None)
+        if auto is not None and methods:
+            cells[key] = (min(methods, key=lambda r: num(r, "err_rad")), auto)
+    return cells
+
+
+def stream_ratio(best, auto):
+    return max(num(auto, "err_rad"), FLOOR) / max(num(best, "err_rad"), FLOOR)
+
+
+def stream_label(stream, rate):
+    return f"`{stream}` {rate} Hz" if stream in ("point", "averaged_end") else f"`{stream}`"
+
+
+def jitter_range(cells, switched):
+    """The smallest (switched) or largest (not) jitter measure J of auto on the streams read
+    without the stamp filter (with it the jitter rule is off) and with some stamp noise."""
+    values = [num(auto, "auto_jitter") for (best, auto) in cells.values()
+              if auto["stamp_filter"] == "none" and num(auto, "auto_jitter") > 1e-9 and
+              ("rk4" in auto["auto_used"] or "exp2" in auto["auto_used"]) == switched and
+              "drops" not in auto["stream"]]
+    if not values:
+        return "–"
+    return fmt(min(values) if switched else max(values), 2)
+
+
+def stream_verdict(streams):
+    """`auto` on every stream of real_streams.csv against the best kinematic method there."""
+    cells = stream_cells(streams)
+    if not cells:
+        return []
+    scenes = list(dict.fromkeys(r["scene"] for r in streams))
+    keys = list(dict.fromkeys((r["stream"], r["rate_hz"]) for r in streams))
+    ratios = {k: stream_ratio(*v) for k, v in cells.items()}
+    held = sum(1 for v in ratios.values() if v <= STREAM_SLACK)
+    worst_key = max(ratios, key=ratios.get)
+    lines = [
+        "",
+        "**On the real streams** (`real_streams.csv`, `bench_sweep --streams`; the streams in "
+        "[real_streams.md](docs/real_streams.md)). `auto` chooses per stream "
+        "(`src/core/auto_integrator.cpp`): `cf4`, but `exp2` for the steps whose window holds "
+        "an interval mean filled in for a lost one, and `rk4` (point samples) or `exp2` "
+        "(means) while the jitter measure J = σ_t |Δω|_rms / (h |ω|_rms) exceeds 2e-3 and "
+        "the body turns (mean rate ≥ 0.1 |ω|_rms), without the stamp filter. "
+        f"Each cell: `auto`'s largest error over the best method's on that stream, and the "
+        f"methods `auto` integrated with; **bold** beyond {STREAM_SLACK:g}×. `auto` is within "
+        f"{STREAM_SLACK:g}× of the best on {held} of {len(ratios)} streams (worst "
+        f"{ratios[worst_key]:.2f}×: {worst_key[1]} at {worst_key[2]} Hz on {worst_key[0]}). "
+        f"J on the streams with stamp noise read without the stamp filter: at most "
+        f"{jitter_range(cells, False)} where `auto` stayed on `cf4`, at least "
+        f"{jitter_range(cells, True)} where it switched.",
+        "",
+        "| stream | " + " | ".join(scenes) + " |",
+        "|---|" + "---|" * len(scenes),
+    ]
+    for stream, rate in keys:
+        row = []
+        for scene in scenes:
+            cell = cells.get((scene, stream, rate))
+            if cell is None:
+                row.append("–")
+                continue
+            best, auto = cell
+            ratio = ratios[(scene, stream, rate)]
+            text = f"{ratio:.2f}"
+            if ratio > STREAM_SLACK:
+                text = f"**{text}**"
+            text += f" {auto['auto_used']}"
+            if ratio > 1.005 and best["method"] not in auto["auto_used"].split("+"):
+                text += f" (best {best['method']})"
+            row.append(text)
+        lines.append(f"| {stream_label(stream, rate)} | " + " | ".join(row) + " |")
+    return lines
+
+
+# What a gyro delivers (200 Hz unless named), the streams read with the settings and with the
+# defaults (as a plain point-sample reading), and what the row says.
+SETTINGS_ROWS = [
+    ("point samples, hardware stamps", "point", None),
+    ("means stamped at the interval's end (delta-angle / dt)", "averaged_end",
+     "averaged_end_as_point"),
+    ("means stamped at the interval's midpoint", "averaged_mid", "averaged_mid_as_end"),
+    ("means stamped at the interval's start", "averaged_start", "averaged_start_as_end"),
+    ("rates through a 2nd-order Butterworth at ODR/4", "butterworth2_odr4_rate_delay",
+     "butterworth2_odr4"),
+    ("rates through a sinc³ decimator by 8", "sinc3_r8_rate_delay", "sinc3_r8"),
+    ("receipt stamps, 0.1 ms RMS jitter", "jitter_0.1ms_sensor_clock", "jitter_0.1ms"),
+    ("receipt stamps, 1 ms RMS jitter (400 Hz)", "jitter_1ms_400Hz",
+     "jitter_1ms_400Hz_sensor_clock"),
+    ("FIFO reads of 10, every sample with the read's receipt stamp",
+     "fifo10_repeated_sensor_clock", "fifo10_repeated"),
+    ("FIFO reads of 10, receipt stamp less k periods", "fifo10_spaced_sensor_clock",
+     "fifo10_spaced"),
+    ("a rate change 200 → 1000 Hz, hardware stamps", "rate_change_200_1000Hz",
+     "rate_change_200_1000Hz_sensor_clock"),
+    ("means with 5 % lost", "drops_5pct_averaged", "drops_5pct_averaged_no_fill"),
+    ("noisy MEMS means (angle random walk, quantisation)", "mems_averaged", None),
+]
+
+
+def settings_of(row):
+    """The non-default settings a stream was read with, as parameters."""
+    parts = []
+    if row["rate_samples"] != "instantaneous":
+        parts.append(f"`rate_samples: {row['rate_samples']}`")
+    if row["average_stamp"] != "end":
+        parts.append(f"`average_stamp: {row['average_stamp']}`")
+    if row["stamp_filter"] != "none":
+        parts.append(f"`stamp_filter: {row['stamp_filter']}`")
+    if num(row, "rate_delay_s") > 0:
+        parts.append(f"`rate_delay: {num(row, 'rate_delay_s'):.5f}`")
+    if row["max_gap_fill"] != "4":
+        parts.append(f"`max_gap_fill: {row['max_gap_fill']}`")
+    return ", ".join(parts) or "the defaults"
+
+
+def settings_table(streams):
+    """Which settings per stream, with `auto`'s error (median over seeds) read so and read
+    otherwise, on every scene."""
+    autos = {(r["scene"], r["stream"], r["rate_hz"]): r for r in streams if r["method"] == "auto"}
+    scenes = list(dict.fromkeys(r["scene"] for r in streams))
+    rate_of = {r["stream"]: r["rate_hz"] for r in streams}
+    lines = ["| stream | settings | `auto`'s error with them, rad (" + ", ".join(scenes) +
+             ") | read otherwise |", "|---|---|---|---|"]
+    for label, with_, without in SETTINGS_ROWS:
+        rate = "200" if with_ in ("point", "averaged_end") else rate_of.get(with_)
+        row = autos.get((scenes[0], with_, rate))
+        if row is None:
+            continue
+        errs = " / ".join(fmt(num(autos[(s, with_, rate)], "err_rad"), 2) for s in scenes)
+        other = "–"
+        if without is not None and (scenes[0], without, rate_of.get(without)) in autos:
+            alt = autos[(scenes[0], without, rate_of[without])]
+            other = (settings_of(alt) + ": " + " / ".join(
+                fmt(num(autos[(s, without, rate_of[without])], "err_rad"), 2) for s in scenes))
+        lines.append(f"| {label} | {settings_of(row)} | {errs} | {other} |")
+    return "\n".join(lines) + "\n"
+
+
+
+def verdict(sweep, invariants, streams=()):
     """`auto`'s choices against the measurements: every claim computed from the rows."""
     lines = ["### `auto` against the measurements", "",
              f"`auto` holds in a (scene, tolerance) cell of the table above when its method is "
@@ -746,6 +902,7 @@ def verdict(sweep, invariants):
             lines += exact_cost_line(sweep, method)
             lines += numerical_best_lines(sweep, scenes, method)
     lines += invariant_lines(sweep, invariants)
+    lines += stream_verdict(streams)
     lines.append("")
     return "\n".join(lines)
 
@@ -793,7 +950,7 @@ NODE_QUEUE = 10000  # messages: the node's input queue (attitude_propagator_ros)
 
 
 def results_markdown(sweep, medians, node, has_node_chart, machine, invariants=(),
-                     spreads=None):
+                     spreads=None, streams=()):
     parts = [
         "## Benchmarks: speed against accuracy",
         "",
@@ -818,7 +975,7 @@ def results_markdown(sweep, medians, node, has_node_chart, machine, invariants=(
         "",
         cheapest_table(sweep),
         "",
-        verdict(sweep, invariants),
+        verdict(sweep, invariants, streams),
         "### Targets",
         "",
         targets_table(sweep, medians, node),
@@ -865,8 +1022,8 @@ def charts_relative_to(text, docs_dir, folder):
     return text.replace("](docs/", "](" if rel == os.curdir else "](" + rel + "/")
 
 
-def splice_page(page, text, docs_dir):
-    begin, end = "<!-- >>> results -->", "<!-- <<< results -->"
+def splice_page(page, text, docs_dir, marker="results"):
+    begin, end = f"<!-- >>> {marker} -->", f"<!-- <<< {marker} -->"
     with open(page) as f:
         content = f.read()
     if content.count(begin) != 1 or content.count(end) != 1:
@@ -880,19 +1037,19 @@ def splice_page(page, text, docs_dir):
 
 def real_streams_chart(rows, path):
     """Accuracy on real streams: error per method and stream (median over seeds, whisker to
-    the worst seed), one panel per scene, with the error the stream's noise alone sets."""
-    scenes = sorted({r["scene"] for r in rows}, key=lambda s: (s != "coning", s))
-    fig, axes = plt.subplots(len(scenes), 1, figsize=(13, 4.2 * len(scenes)), squeeze=False)
-    methods = list(dict.fromkeys(r["method"] for r in rows))
+    the worst seed), one panel per scene, with `auto`'s error (black dot) and the error the
+    stream's noise alone sets."""
+    scenes = list(dict.fromkeys(r["scene"] for r in rows))
+    keys = list(dict.fromkeys((r["stream"], r["rate_hz"]) for r in rows))
+    fig, axes = plt.subplots(len(scenes), 1, figsize=(20, 5.0 * len(scenes)), squeeze=False)
+    methods = [m for m in dict.fromkeys(r["method"] for r in rows) if m != "auto"]
     width = 0.8 / len(methods)
     for ax, scene in zip(axes[:, 0], scenes):
-        mine = [r for r in rows if r["scene"] == scene]
-        streams = list(dict.fromkeys(r["stream"] for r in mine))
+        mine = {(r["stream"], r["rate_hz"], r["method"]): r for r in rows if r["scene"] == scene}
         for m, method in enumerate(methods):
             xs, ys, tops = [], [], []
-            for i, stream in enumerate(streams):
-                row = next((r for r in mine if r["stream"] == stream and r["method"] == method),
-                           None)
+            for i, (stream, rate) in enumerate(keys):
+                row = mine.get((stream, rate, method))
                 if row is None:
                     continue
                 xs.append(i - 0.4 + (m + 0.5) * width)
@@ -901,22 +1058,28 @@ def real_streams_chart(rows, path):
             color, _ = style(method)
             ax.bar(xs, ys, width, color=color, label=method, log=True)
             ax.vlines(xs, ys, tops, color="black", linewidth=0.6)
+        autos = [(i, mine.get((stream, rate, "auto"))) for i, (stream, rate) in enumerate(keys)]
+        autos = [(i, r) for i, r in autos if r is not None]
+        ax.plot([i for i, _ in autos], [max(num(r, "err_rad"), FLOOR) for _, r in autos], "o",
+                color="black", markersize=5, label="auto", zorder=4)
         labelled = False
-        for i, stream in enumerate(streams):
-            floor = num(next(r for r in mine if r["stream"] == stream), "floor_rad")
+        for i, (stream, rate) in enumerate(keys):
+            row = next((r for (s_, r_, _), r in mine.items() if s_ == stream and r_ == rate),
+                       None)
+            floor = num(row, "floor_rad") if row else float("nan")
             if not math.isnan(floor):
                 ax.hlines(floor, i - 0.45, i + 0.45, color="black", linestyles="dashed",
                           label=None if labelled else "noise floor (1 sigma at the end)")
                 labelled = True
-        ax.set_xticks(range(len(streams)))
-        ax.set_xticklabels([s.replace("_", " ") for s in streams], rotation=20, ha="right",
-                           fontsize=8)
+        ax.set_xticks(range(len(keys)))
+        ax.set_xticklabels([f"{s.replace('_', ' ')} {r} Hz" for s, r in keys], rotation=35,
+                           ha="right", fontsize=7)
         ax.set_ylabel("largest error along the path (rad)")
-        ax.set_title(f"accuracy on real streams: {scene}, 200 Hz (jitter 1 ms: 400 Hz)")
+        ax.set_title(f"accuracy on real streams: {scene}")
         ax.grid(True, axis="y", which="major", alpha=0.3)
-        ax.legend(fontsize=8, ncol=3, loc="lower left")
+        ax.legend(fontsize=8, ncol=4, loc="lower left")
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
+    fig.savefig(path, dpi=70)
     plt.close(fig)
 
 
@@ -932,8 +1095,12 @@ def main(argv):
     stability_chart(read_csv(os.path.join(data_dir, "stability.csv")),
                     os.path.join(docs_dir, "stability.png"))
     streams_path = os.path.join(data_dir, "real_streams.csv")
-    if os.path.exists(streams_path):
-        real_streams_chart(read_csv(streams_path), os.path.join(docs_dir, "real_streams.png"))
+    streams = read_csv(streams_path) if os.path.exists(streams_path) else []
+    if streams:
+        real_streams_chart(streams, os.path.join(docs_dir, "real_streams.png"))
+        streams_page = os.path.join(docs_dir, "real_streams.md")
+        if os.path.exists(streams_page):
+            splice_page(streams_page, settings_table(streams), docs_dir, "settings")
     costs_path = os.path.join(data_dir, "step_costs.json")
     medians = gbench_medians(costs_path) if os.path.exists(costs_path) else {}
     spreads = gbench_spreads(costs_path) if os.path.exists(costs_path) else {}
@@ -942,7 +1109,7 @@ def main(argv):
     if node:
         node_chart(node, os.path.join(docs_dir, "node_bench.png"))
     text = results_markdown(sweep, medians, node, bool(node), machine_line(data_dir), invariants,
-                            spreads)
+                            spreads, streams)
     with open(os.path.join(docs_dir, "results.md"), "w") as f:
         f.write(charts_relative_to(text, docs_dir, docs_dir))  # results.md sits by the charts
     if page:

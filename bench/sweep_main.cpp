@@ -3,8 +3,10 @@
 //   sweep.csv       work-precision: error and median cost per step for every (scene, method, dt)
 //   stability.csv   error after a fixed time against |w| dt from 1e-3 to 10
 //   invariants.csv  energy and |M| drift against time on a long free-body run
-//   real_streams.csv  every kinematic method on real gyro streams (averaged, jittered, lost
-//                     samples, noisy MEMS) on the coning and tumbling scenes
+//   real_streams.csv  every kinematic method and `auto` on real gyro streams (point and
+//                     averaged at 100-1000 Hz, mid- and start-stamped means, jittered, lost
+//                     samples, noisy MEMS, on-chip filters, FIFO reads, a rate change) on the
+//                     coning, tumbling, fast tumbling and vibration scenes
 // Usage: bench_sweep [out_dir] [--quick] [--streams | --stability]   (--quick: fewer
 // repetitions, for a smoke test; --streams: only real_streams.csv; --stability: only
 // stability.csv)
@@ -85,12 +87,17 @@ int main(int argc, char** argv) {
     for (const auto& scene : scenes) {
       if (!bench::checkClosedForm(scene)) return 1;
     }
-    if (!bench::checkClosedForm(bench::tumblingScene())) return 1;
+    const std::vector<bench::KinematicScene> stream_scenes{
+        bench::coningScene(), bench::tumblingScene(), bench::fastTumblingScene(),
+        bench::vibrationScene()};
+    for (const auto& scene : stream_scenes) {
+      if (!bench::checkClosedForm(scene)) return 1;
+    }
     if (!checkReferences()) return 1;
     if (!options.stability_only) {
       std::FILE* streams = std::fopen((options.out_dir + "/real_streams.csv").c_str(), "w");
       if (streams == nullptr) throw std::runtime_error("cannot write real_streams.csv");
-      bench::runStreamSweep({bench::coningScene(), bench::tumblingScene()}, streams);
+      bench::runStreamSweep(stream_scenes, streams);
       std::fclose(streams);
     }
     if (options.streams_only) return 0;

@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 
+#include "attitude_propagator/auto_integrator.h"
 #include "attitude_propagator/average_stamp.h"
 #include "attitude_propagator/integrator.h"
 #include "attitude_propagator/kinematic_step.h"
@@ -17,7 +18,9 @@
 namespace attitude_propagator {
 
 struct KinematicConfig {
-  Integrator integrator = Integrator::Auto;  ///< Auto resolves to Cf4
+  /// Auto: chosen per step by KinematicAutoRule (cf4 unless the stream shows filled losses or
+  /// heavy stamp jitter; auto_integrator.h).
+  Integrator integrator = Integrator::Auto;
   TimePolicy time_policy;
   Eigen::Quaterniond initial_q_WB = Eigen::Quaterniond::Identity();
   /// What a sample's rate means (point value, or mean over the interval it closes).
@@ -77,7 +80,11 @@ class KinematicPropagator {
   double normError() const { return norm_error_; }
   /// Integration steps since the last anchor (first sample, gap, jump back, set_state, reset).
   std::uint64_t steps() const { return steps_; }
+  /// The method integrating: the configured one, or with `auto` the one its rule chose for the
+  /// last step (cf4 before any).
   Integrator integrator() const { return integrator_; }
+  /// The rule `auto` chooses by, or nullptr when a method was configured.
+  const KinematicAutoRule* autoRule() const { return automatic_ ? &auto_rule_ : nullptr; }
   RateSamples rateSamples() const { return rate_samples_; }
 
   /// Subtracted from the rates of the samples that follow. Throws std::invalid_argument for
@@ -109,6 +116,9 @@ class KinematicPropagator {
   int lostSamples(double interval) const;
   void rememberInterval(double interval);
 
+  bool automatic_;  // `auto`: integrator_ follows auto_rule_
+  KinematicAutoRule auto_rule_;
+  bool filling_ = false;  // the sample integrating is filled in for a lost one
   Integrator integrator_;
   TimePolicy policy_;
   Eigen::Quaterniond initial_q_WB_;

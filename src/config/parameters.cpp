@@ -75,6 +75,14 @@ Model resolveModel(const Parameters& p) {
   return p.inertia.empty() ? Model::Kinematic : Model::Dynamic;
 }
 
+/// `auto` on the kinematic model, for the parameter documentation: the table's method, chosen
+/// per stream by KinematicAutoRule (auto_integrator.h) where the measurements put another ahead.
+std::string autoKinematicDoc() {
+  return quotedNames({autoIntegrator(Model::Kinematic, false)}) +
+         " (per stream: `exp2` next to filled losses, `rk4` or `exp2` under heavy stamp jitter; "
+         "docs/real_streams.md)";
+}
+
 Integrator resolveIntegrator(const Parameters& p, Model model) {
   const Integrator integrator = integratorFromName(p.integrator);  // throws "integrator: ..."
   const bool ok =
@@ -196,12 +204,12 @@ void applyStreamParameters(const Parameters& p, KinematicConfig& kinematic) {
 }  // namespace
 
 const char* integratorParameterDoc() {
-  static const std::string doc =
-      "kinematic: " + quotedNames(integratorsFor(Model::Kinematic)) +
-      "; dynamic: " + quotedNames(integratorsFor(Model::Dynamic)) +
-      "; `auto`: " + quotedNames({autoIntegrator(Model::Kinematic, false)}) + ", " +
-      quotedNames({autoIntegrator(Model::Dynamic, false)}) + " torque-free, else " +
-      quotedNames({autoIntegrator(Model::Dynamic, true)});
+  static const std::string doc = "kinematic: " + quotedNames(integratorsFor(Model::Kinematic)) +
+                                 "; dynamic: " + quotedNames(integratorsFor(Model::Dynamic)) +
+                                 "; `auto`: " + autoKinematicDoc() + ", " +
+                                 quotedNames({autoIntegrator(Model::Dynamic, false)}) +
+                                 " torque-free, else " +
+                                 quotedNames({autoIntegrator(Model::Dynamic, true)});
   return doc.c_str();
 }
 

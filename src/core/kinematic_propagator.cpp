@@ -89,7 +89,9 @@ void fillMeans(const RateWindow& window, const RateSample& next, double h, int l
 }  // namespace
 
 KinematicPropagator::KinematicPropagator(const KinematicConfig& config)
-    : integrator_(resolveKinematic(config.integrator)),
+    : automatic_(config.integrator == Integrator::Auto),
+      auto_rule_(config.rate_samples, config.stamp_filter != StampFilter::None),
+      integrator_(resolveKinematic(config.integrator)),
       policy_(config.time_policy),
       initial_q_WB_(checkedUnit(config.initial_q_WB, "initial_orientation")),
       q_WB_(initial_q_WB_),
@@ -178,6 +180,8 @@ void KinematicPropagator::setGyroBias(const Eigen::Vector3d& bias_B) {
 
 void KinematicPropagator::reset() {
   interval_ends_.clear();
+  auto_rule_.reset();
+  if (automatic_) integrator_ = auto_rule_.choice();
   q_WB_ = initial_q_WB_;
   anchor_q_WB_ = initial_q_WB_;
   window_.clear();
@@ -217,6 +221,7 @@ void KinematicPropagator::anchor(double t, const Eigen::Vector3d& w_B) {
   window_.push({t, w_B});
   anchor_q_WB_ = q_WB_;
   restamp_.reset();  // the anchor's stamp is the state's time: the history starts again
+  auto_rule_.restart();
   samples_since_anchor_ = 1;
   anchored_ = true;
   steps_ = 0;
@@ -226,6 +231,7 @@ void KinematicPropagator::anchor(double t, const Eigen::Vector3d& w_B) {
 // The step is committed only when finite: a finite rate can still overflow (|w| h beyond the
 // double range), and the state must never become NaN. The window is restored otherwise.
 StampOutcome KinematicPropagator::integrate(const RateSample& sample) {
+  if (automatic_) integrator_ = auto_rule_.step(sample.t - time(), sample.w_B, filling_);
   const bool evicted = window_.push(sample);
   const IntegratorInfo& method = integratorInfo(integrator_);
   const bool restart = method.restart_from_anchor &&
@@ -278,7 +284,10 @@ StampOutcome KinematicPropagator::fillAndIntegrate(const RateSample& sample) {
     fillMeans(window_, sample, h, lost, means);
     for (int j = 0; j < lost; ++j) {
       if (!means[j].allFinite()) return integrate(sample);
-      if (integrate({t_last + (j + 1) * h, means[j]}) != StampOutcome::Advanced) break;
+      filling_ = true;
+      const StampOutcome filled = integrate({t_last + (j + 1) * h, means[j]});
+      filling_ = false;
+      if (filled != StampOutcome::Advanced) break;
       ++filled_samples_;
     }
   }

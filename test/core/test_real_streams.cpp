@@ -17,6 +17,7 @@
 #include "attitude_propagator/kinematic_step.h"
 #include "attitude_propagator/quaternion.h"
 #include "attitude_propagator/stamp_filter.h"
+#include "gyro_streams.h"
 #include "integrator_cases.h"
 #include "rotation_matchers.h"
 #include "sampling.h"
@@ -319,26 +320,18 @@ TEST(GyroBias, IsSubtractedBeforeIntegration) {
 
 namespace {
 
-// FIFO batches: a driver reads the sensor's FIFO every `batch` samples, the read delayed by a
-// latency draw about its mean (the mean is no filter's to see). Repeated: every sample of the
-// read gets the receipt stamp. Spaced: the k-th newest gets the receipt stamp less k periods.
-// A batch of 1 is the per-sample stream with the same latency distribution. The anchor (k = 0)
-// comes alone with its exact stamp, as in coningStream.
-enum class Fifo { Repeated, Spaced };
+// FIFO batches (gyro_streams.h): the anchor (k = 0) comes alone with its exact stamp, as in
+// coningStream, then reads of `batch` samples stamped at receipt.
+using gyro_streams::Fifo;
 
 std::vector<Sample> fifoStream(double hz, int batch, Fifo form, double sigma, std::uint64_t seed,
                                double duration) {
   const ConingMotion cone;
-  std::uint64_t state = seed;
-  const long n = std::lround(duration * hz);
-  std::vector<Sample> samples{{0.0, cone.bodyRate(0.0)}};
-  for (long first = 1; first + batch - 1 <= n; first += batch) {
-    const long newest = first + batch - 1;
-    const double receipt = newest / hz + sigma * normalRandom(state);
-    for (long k = first; k <= newest; ++k) {
-      const double stamp = form == Fifo::Repeated ? receipt : receipt - (newest - k) / hz;
-      samples.push_back({stamp, cone.bodyRate(k / hz)});
-    }
+  const std::vector<double> stamps =
+      gyro_streams::fifoStamps(hz, batch, form, sigma, seed, std::lround(duration * hz));
+  std::vector<Sample> samples;
+  for (std::size_t k = 0; k < stamps.size(); ++k) {
+    samples.push_back({stamps[k], cone.bodyRate(k / hz)});
   }
   return samples;
 }
