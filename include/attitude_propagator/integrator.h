@@ -131,7 +131,9 @@ int declaredOrder(Integrator integrator, Model model);
 /// The methods that drive `model` (Kinematic or Dynamic), in the table's order, without Auto.
 std::vector<Integrator> integratorsFor(Model model);
 
-/// What `auto` resolves to for a model (Kinematic or Dynamic) with or without torque input.
+/// What `auto` resolves to for a model (Kinematic or Dynamic) with or without torque input. On
+/// the kinematic model that is the starting method: KinematicAutoRule (auto_integrator.h) may
+/// step with exp2 or rk4 where the stream calls for it (docs/real_streams.md).
 Integrator autoIntegrator(Model model, bool torque_input);
 
 /// Every integrator name, `auto` first; or the names of the given integrators.

@@ -27,6 +27,11 @@ EngineState OutputEncoder::inWorldAxes(const EngineState& s) const {
   return out;
 }
 
+OutputEncoder::OutputEncoder(const NodeConfig& config, const AttitudeEngine& engine)
+    : OutputEncoder(config, engine.modelName(), integratorName(engine.integrator())) {
+  engine_ = &engine;
+}
+
 void OutputEncoder::state(const EngineState& engine_state, AttitudeState& out) const {
   const EngineState s = inWorldAxes(engine_state);
   out.header.stamp = toRosTime(s.stamp);
@@ -39,7 +44,7 @@ void OutputEncoder::state(const EngineState& engine_state, AttitudeState& out) c
   out.kinetic_energy = s.kinetic_energy;
   out.norm_error = s.norm_error;
   out.model = model_;
-  out.integrator = integrator_;
+  out.integrator = engine_ ? integratorName(engine_->integrator()) : integrator_;
   out.steps = s.steps;
 }
 

@@ -148,7 +148,7 @@ void AttitudePropagatorRos::watchTf() {
 }
 
 void AttitudePropagatorRos::rebuildEncoder() {
-  encoder_.emplace(config_, engine_->modelName(), integratorName(engine_->integrator()));
+  encoder_.emplace(config_, *engine_);
 }
 
 void AttitudePropagatorRos::publishConventionFrames() {

@@ -259,7 +259,7 @@ class Writer {
 
 /// The node's output encoding for this run's configuration and integrator.
 OutputEncoder outputEncoder(const NodeConfig& config, const AttitudeEngine& engine) {
-  return OutputEncoder(config, engine.modelName(), integratorName(engine.integrator()));
+  return OutputEncoder(config, engine);
 }
 
 /// Bytes the output takes per state and per republished IMU message (an estimate for the

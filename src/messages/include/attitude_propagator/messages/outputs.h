@@ -21,6 +21,9 @@ class OutputEncoder {
  public:
   /// `model` and `integrator`: the names AttitudeState carries (resolved, never auto).
   OutputEncoder(const NodeConfig& config, std::string model, std::string integrator);
+  /// The names from `engine` at each state: `integrator: auto` may change method per step
+  /// (the kinematic model's rule), and AttitudeState says which one made the state.
+  OutputEncoder(const NodeConfig& config, const AttitudeEngine& engine);
 
   /// The frame ids of AttitudeState: fixed_frame and body_frame, suffixed for the convention.
   const std::string& stateFixedFrame() const { return state_fixed_; }
@@ -51,6 +54,7 @@ class OutputEncoder {
   std::string state_body_;
   std::string model_;
   std::string integrator_;
+  const AttitudeEngine* engine_ = nullptr;
 };
 
 }  // namespace attitude_propagator
