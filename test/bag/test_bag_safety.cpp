@@ -533,7 +533,7 @@ TEST(EvaluateBagSafety, HugeMaxOffsetIsBounded) {
 // 60 s of coning, whose vectors are matched through the best mount at each offset): the run
 // ends with 128 + the signal, within a second of it (one trial offset takes well under a
 // millisecond; the rest is slack for a loaded machine), or had ended before it; no CSV unless
-// it ended with 0.
+// it ended with 0; at least four of the eight signals are seen and said ("interrupted").
 TEST(EvaluateBagSafety, OffsetSearchIsInterruptible) {
   TempDir dir;
   SceneBag scene;
@@ -559,12 +559,14 @@ TEST(EvaluateBagSafety, OffsetSearchIsInterruptible) {
       EXPECT_LT(seconds, delay + 1.0);
       continue;
     }
-    ++interrupted;
     EXPECT_EQ(r.status, 128 + (k % 2 ? SIGINT : SIGTERM)) << r.output;
     EXPECT_LT(seconds, delay + 1.0) << "signal after " << delay << " s";
-    EXPECT_NE(r.output.find("interrupted"), std::string::npos) << r.output;
     EXPECT_FALSE(exists(dir.file("eval.csv")));
     EXPECT_TRUE(noPartialFiles(dir));
+    // A signal in the first tenth of a second or so (more on a loaded machine) comes before the
+    // program has set its handlers: the default action ends it, with the same status and
+    // nothing written. After that it says so.
+    if (r.output.find("interrupted") != std::string::npos) ++interrupted;
   }
   EXPECT_GE(interrupted, 4);
 }
