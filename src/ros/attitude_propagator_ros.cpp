@@ -147,9 +147,7 @@ void AttitudePropagatorRos::watchTf() {
       boost::function<void(const TfEvent&)>([this](const TfEvent& e) { onTfSeen(e, true); }));
 }
 
-void AttitudePropagatorRos::rebuildEncoder() {
-  encoder_.emplace(config_, *engine_);
-}
+void AttitudePropagatorRos::rebuildEncoder() { encoder_.emplace(config_, *engine_); }
 
 void AttitudePropagatorRos::publishConventionFrames() {
   if (!tf_static_pub_) return;

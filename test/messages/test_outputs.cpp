@@ -44,8 +44,7 @@ ap::EngineState someState() {
 
 /// A buffer holding what the node publishes: the transform on /tf and world_frame's named axes
 /// on /tf_static.
-void publish(const ap::OutputEncoder& encoder, const ap::EngineState& s,
-             tf2::BufferCore& buffer) {
+void publish(const ap::OutputEncoder& encoder, const ap::EngineState& s, tf2::BufferCore& buffer) {
   geometry_msgs::TransformStamped t;
   encoder.transform(s, t);
   buffer.setTransform(t, "node", false);
