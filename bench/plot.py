@@ -372,6 +372,7 @@ def gbench_spreads(path):
 def cost_table(medians):
     groups = [("kinematicStep", "one kinematic step + normalise (four-sample window)"),
               ("addSample", "KinematicPropagator::addSample (the node's path)"),
+              ("engineSubmitCost", "AttitudeEngine::submit of one IMU rate, 200 Hz"),
               ("dynamicStep", "one dynamic step, free body, h = 0.01 s"),
               ("exact", "one exact evaluation at a new time")]
     euler = medians.get("kinematicStep/euler")
