@@ -416,6 +416,14 @@ def targets_table(sweep, medians, node):
             worst = max(kin, key=kin.get)
             lines.append(f"| every kinematic step < 100 ns ({what}) | slowest `{worst}` "
                          f"{kin[worst]:.1f} ns | {yes(kin[worst] < 100)} |")
+    for stamps in ["", "_jittered"]:
+        plain = medians.get("engineSubmitCost/default" + stamps)
+        filtered = medians.get("engineSubmitCost/sensor_clock" + stamps)
+        if plain and filtered:
+            lines.append(f"| the stamp filter ≤ 1.5× the default path per message "
+                         f"(engineSubmitCost{', jittered stamps' if stamps else ''}) "
+                         f"| {filtered / plain:.2f}× ({filtered:.0f} against {plain:.0f} ns) "
+                         f"| {yes(filtered / plain <= 1.5)} |")
     rk4 = medians.get("dynamicStep/rk4")
     exact = {n: v for n, v in medians.items() if n.startswith("exact/")}
     for name, ns in exact.items():
