@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -442,4 +443,24 @@ TEST(FixDecoder, BadQuaternionsAndCovariancesAreRefusedByTheEngineOnce) {
   EXPECT_EQ(engine.counters().fixes_bad_covariance, 2u);
   EXPECT_EQ(engine.counters().fixes_accepted, 0u);
   EXPECT_EQ(decoder.refusals().total(), 0u);
+}
+
+// fix_frame: empty (body_frame) by default, a tf2 frame id otherwise, never the fixed frame.
+TEST(FixFrames, FromTheParameters) {
+  ap::Parameters p;
+  const ap::FixFrames defaults = ap::FixFrames::of(ap::validateParameters(p));
+  EXPECT_EQ(defaults.fixed, "world");
+  EXPECT_EQ(defaults.body, "base_link");
+  EXPECT_EQ(defaults.fix, "");
+  p.fix_frame = "camera";
+  EXPECT_EQ(ap::FixFrames::of(ap::validateParameters(p)).fix, "camera");
+  for (const char* refused : {"/camera", "world"}) {
+    p.fix_frame = refused;
+    try {
+      ap::validateParameters(p);
+      ADD_FAILURE() << "fix_frame '" << refused << "' accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("fix_frame", 0), 0u) << e.what();
+    }
+  }
 }
