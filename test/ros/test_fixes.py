@@ -118,7 +118,8 @@ class FixesTest(unittest.TestCase):
         q_tf = lookup(self.tf_buffer, "world_fx", "body_fx", last)
         error = rotation_angle(q_tf, qexp(scaled(w, t_end)))
         rospy.loginfo("fixes: gyro_bias %s (true %s, stddev %s); tf off by %.3g rad, "
-                      "3 sqrt(trace P) = %.3g rad; accepted %s, rejected by the gate %s, too old %s",
+                      "3 sqrt(trace P) = %.3g rad; accepted %s, rejected by the gate %s, "
+                      "too old %s",
                       bias, b, sigma, error, 3.0 * spread,
                       *(self.diag.get(name, k) for k in ("fixes_accepted", "fixes_rejected_gate",
                                                          "fixes_too_old")))
