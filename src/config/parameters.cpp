@@ -182,6 +182,12 @@ void checkScalars(const Parameters& p) {
     fail("body_frame", "equals fixed_frame '" + p.fixed_frame +
                            "'; accepted: a frame id different from fixed_frame");
   }
+  // fix_frame: empty means body_frame; the fixed frame would measure nothing.
+  if (!p.fix_frame.empty()) requireFrameName("fix_frame", p.fix_frame);
+  if (p.fix_frame == p.fixed_frame) {
+    fail("fix_frame", "equals fixed_frame '" + p.fixed_frame +
+                          "'; accepted: empty (body_frame) or a frame joined to body_frame");
+  }
 }
 
 // Real-stream settings of the kinematic model: what a rate sample means, the stamp filter and

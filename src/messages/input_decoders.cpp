@@ -1,5 +1,6 @@
 #include "attitude_propagator/messages/input_decoders.h"
 
+#include <algorithm>
 #include <utility>
 
 #include "attitude_propagator/messages/conversions.h"
@@ -21,6 +22,8 @@ const char* refusedCounter(Refused why) {
       return "dropped_no_time";
     case Refused::BiasFrame:
       return "rejected_bias";
+    case Refused::NoOrientation:
+      return "fixes_refused_no_orientation";
   }
   return "?";
 }
@@ -39,6 +42,8 @@ void countRefusal(AttitudeEngine& engine, Refused why) {
       return engine.reject(Rejection::NoTime);
     case Refused::BiasFrame:
       return engine.rejectBias();
+    case Refused::NoOrientation:
+      return;  // a fix: FixDecoder counts it (fix_decoder.h)
   }
 }
 
@@ -105,21 +110,27 @@ Decoded<Reading> readWrench(const geometry_msgs::WrenchStamped& msg, const ros::
   return reading(Source::Torque, msg.header.stamp, arrival, msg.wrench.torque, msg.header.frame_id);
 }
 
-TopicType::TopicType(std::string plain, std::string plain_md5, std::string stamped,
-                     std::string stamped_md5)
-    : plain_(std::move(plain)),
-      plain_md5_(std::move(plain_md5)),
-      stamped_(std::move(stamped)),
-      stamped_md5_(std::move(stamped_md5)) {}
+TopicType::TopicType(std::vector<std::pair<std::string, std::string>> types)
+    : types_(std::move(types)) {}
 
 std::optional<Refusal> TopicType::admit(const std::string& datatype, const std::string& md5) {
-  const bool known =
-      (datatype == plain_ && md5 == plain_md5_) || (datatype == stamped_ && md5 == stamped_md5_);
+  const bool known = std::any_of(types_.begin(), types_.end(), [&](const auto& type) {
+    return datatype == type.first && md5 == type.second;
+  });
   if (known && datatype_.empty()) datatype_ = datatype;
   if (known && datatype == datatype_) return std::nullopt;
   Refusal r = refusal(Refused::WrongType);
   r.detail = datatype;
   return r;
+}
+
+std::string TopicType::accepted() const {
+  std::string out;
+  for (std::size_t i = 0; i < types_.size(); ++i) {
+    if (i > 0) out += i + 1 == types_.size() ? " or " : ", ";
+    out += types_[i].first;
+  }
+  return out;
 }
 
 InputDecoders::InputDecoders(DecoderFrames frames)

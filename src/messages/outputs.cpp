@@ -15,7 +15,8 @@ OutputEncoder::OutputEncoder(const NodeConfig& config, std::string model, std::s
       state_fixed_(fixed_ + fixedFrameSuffix(world_)),
       state_body_(body_ + bodyFrameSuffix(world_)),
       model_(std::move(model)),
-      integrator_(std::move(integrator)) {}
+      integrator_(std::move(integrator)),
+      gyro_bias_B_(engineConfig(config).gyro_bias_B) {}
 
 EngineState OutputEncoder::inWorldAxes(const EngineState& s) const {
   if (world_ == WorldConvention::Enu) return s;
@@ -24,6 +25,9 @@ EngineState OutputEncoder::inWorldAxes(const EngineState& s) const {
   out.P_B = bodyCovarianceInConvention(world_, s.P_B);
   out.w_B = bodyVectorInConvention(world_, s.w_B);
   out.M_B = bodyVectorInConvention(world_, s.M_B);
+  out.gyro_bias_estimate_B = bodyVectorInConvention(world_, s.gyro_bias_estimate_B);
+  // Standard deviations per axis: the convention's body axes are FLU's up to sign.
+  out.gyro_bias_stddev_B = bodyVectorInConvention(world_, s.gyro_bias_stddev_B).cwiseAbs();
   return out;
 }
 
@@ -46,6 +50,9 @@ void OutputEncoder::state(const EngineState& engine_state, AttitudeState& out) c
   out.model = model_;
   out.integrator = engine_ ? integratorName(engine_->integrator()) : integrator_;
   out.steps = s.steps;
+  const Eigen::Vector3d& configured_B = engine_ ? engine_->gyroBias() : gyro_bias_B_;
+  toMsg(bodyVectorInConvention(world_, configured_B) + s.gyro_bias_estimate_B, out.gyro_bias);
+  toMsg(s.gyro_bias_stddev_B, out.gyro_bias_stddev);
 }
 
 void OutputEncoder::transform(const EngineState& s, geometry_msgs::TransformStamped& out) const {

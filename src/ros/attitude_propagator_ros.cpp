@@ -64,6 +64,7 @@ AttitudePropagatorRos::AttitudePropagatorRos(ros::NodeHandle nh, ros::NodeHandle
       updater_(nh, pnh, pnh.getNamespace()) {
   engine_ = std::make_unique<AttitudeEngine>(engineConfig(config_), *this);
   decoders_.emplace(DecoderFrames::of(config_));
+  fixes_.emplace(config_);
   rebuildEncoder();
   sim_time_ = ros::Time::isSimTime();
   advertise();
@@ -121,6 +122,8 @@ void AttitudePropagatorRos::subscribe() {
     bias_sub_ = nh_.subscribe("gyro_bias", kSparseQueueSize, &AttitudePropagatorRos::onGyroBias,
                               this, hints);
   }
+  fix_sub_ = nh_.subscribe("orientation_fix", kSparseQueueSize, &AttitudePropagatorRos::onFix, this,
+                           hints);
   watchTf();
   if (sim_time_) {
     // Under sim time /clock is the time source: every tick is seen, in order with the inputs
@@ -252,6 +255,13 @@ void AttitudePropagatorRos::onGyroBias(const geometry_msgs::Vector3Stamped::Cons
   });
 }
 
+void AttitudePropagatorRos::onFix(const ros::MessageEvent<const topic_tools::ShapeShifter>& event) {
+  guarded("orientation_fix", [&] {
+    pollClock();
+    fixes_->onMessage(*event.getConstMessage(), event.getReceiptTime(), *engine_, tf_frames_);
+  });
+}
+
 void AttitudePropagatorRos::onClock(const rosgraph_msgs::Clock::ConstPtr& msg) {
   guarded("/clock", [&] { engine_->clockTick(toStamp(msg->clock)); });
 }
@@ -271,7 +281,7 @@ bool AttitudePropagatorRos::taken(const DecodedInput& in, const char* topic) {
     const Eigen::Quaterniond& q = in.q_BS;
     ROS_INFO("rates in frame '%s' are rotated into '%s' by q = [%g, %g, %g, %g] (x y z w)",
              logText(decoders_->mountFrame()).c_str(), body.c_str(), q.x(), q.y(), q.z(), q.w());
-    if (!config_.torque_input) {
+    if (!config_.torque_input && !fixes_->usesTf()) {
       // Cached for good: stop listening, or the listener would keep digesting our own /tf.
       tf_listener_.reset();
       tf_buffer_.reset();
@@ -333,6 +343,8 @@ void AttitudePropagatorRos::refused(const Refusal& r, const char* topic) {
                         "messages' frame once known, or empty (%lu rejected so far)",
                         logText(r.frame).c_str(), body.c_str(), c.rejected_bias);
       break;
+    case Refused::NoOrientation:
+      break;  // fixes only: fix_input.cpp logs them
   }
 }
 
@@ -646,6 +658,8 @@ void AttitudePropagatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no rate input in the last second");
   } else if (!input_window_problem_.empty()) {
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN, input_window_problem_);
+  } else if (const std::string fixes = fixes_->warning(c); !fixes.empty()) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, fixes);
   } else if (const std::optional<double> lag = inputLagBeyondWarning()) {
     status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
                     "inputs arrive %.3f s %s ROS time (sensor clock skewed, or a queue): tf "
@@ -692,6 +706,7 @@ void AttitudePropagatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper
   status.add("tf_resumes", tf_resumes_);
   const Eigen::Vector3d& b = engine_->gyroBias();
   status.addf("gyro_bias", "[%g, %g, %g]", b.x(), b.y(), b.z());
+  fixes_->diagnose(status, *engine_);
   if (const KinematicPropagator* k = engine_->kinematic()) {
     status.add("rate_samples", config_.parameters.rate_samples);
     status.add("filled_samples", k->filledSamples());

@@ -122,6 +122,49 @@ TEST_P(EveryWorld, ImuMessageIsItsFramesOrientationAsTfComposesIt) {
   EXPECT_TRUE((C_BS * P_S * C_BS.transpose()).isApprox(s.P_B, 1e-12));
 }
 
+// AttitudeState's gyro_bias is the bias in use, the configured one (the gyro_bias parameter, or
+// the engine's, which the bias topic moves) plus the estimate, in the child frame's axes as tf
+// carries a vector there; its standard deviation likewise (per axis, so without sign).
+TEST_P(EveryWorld, GyroBiasIsTheBiasInUseInTheChildFramesAxes) {
+  ap::Parameters p;
+  p.world_frame = GetParam();
+  p.gyro_bias = {0.01, -0.02, 0.03};
+  const ap::NodeConfig config = ap::validateParameters(p);
+  ap::EngineState s = someState();
+  s.gyro_bias_estimate_B = Eigen::Vector3d(1e-3, 2e-3, -4e-3);
+  s.gyro_bias_stddev_B = Eigen::Vector3d(1e-4, 2e-4, 3e-4);
+  const ap::OutputEncoder encoder(config, "kinematic", "cf4");
+  ap::AttitudeState msg;
+  encoder.state(s, msg);
+  tf2::BufferCore buffer;
+  publish(encoder, s, buffer);
+  const Eigen::Quaterniond q_child_body =
+      lookup(buffer, msg.child_frame_id, "base_link", msg.header.stamp);
+  const Eigen::Vector3d b_B = Eigen::Vector3d(0.01, -0.02, 0.03) + s.gyro_bias_estimate_B;
+  EXPECT_LT((ap::toEigen(msg.gyro_bias) - q_child_body * b_B).norm(), 1e-15);
+  const Eigen::Vector3d stddev = (q_child_body * s.gyro_bias_stddev_B).cwiseAbs();
+  EXPECT_LT((ap::toEigen(msg.gyro_bias_stddev) - stddev).norm(), 1e-15);
+
+  // With an engine, the configured part is the engine's: here the bias topic's sample.
+  struct Sink : ap::EngineSink {
+    void publishState(const ap::EngineState&) override {}
+    void inputApplied(const ap::Input&, const ap::EngineState&) override {}
+    void note(const ap::EngineNote&) override {}
+  } sink;
+  ap::AttitudeEngine engine(ap::engineConfig(config), sink);
+  ASSERT_TRUE(engine.submitBias(1, Eigen::Vector3d(0.5, 0.25, -0.125)));
+  ap::Input rate;
+  rate.stamp = 2;
+  engine.submit(rate);  // the sample takes effect with the rates stamped after it
+  ap::EngineState t = engine.state();
+  ap::AttitudeState from_engine;
+  ap::OutputEncoder(config, engine).state(t, from_engine);
+  EXPECT_LT((ap::toEigen(from_engine.gyro_bias) - q_child_body * Eigen::Vector3d(0.5, 0.25, -0.125))
+                .norm(),
+            1e-15);
+  EXPECT_EQ(ap::toEigen(from_engine.gyro_bias_stddev), Eigen::Vector3d::Zero());
+}
+
 TEST_P(EveryWorld, ReverseTfPublishesTheInverseFromTheBody) {
   const ap::OutputEncoder encoder(configFor(GetParam(), true), "kinematic", "cf4");
   const ap::EngineState s = someState();

@@ -10,7 +10,7 @@ import tf2_ros
 from attitude_propagator.msg import AttitudeState
 from attitude_propagator.srv import SetState, SetStateRequest
 from diagnostic_msgs.msg import DiagnosticArray
-from geometry_msgs.msg import Quaternion, Vector3
+from geometry_msgs.msg import PoseWithCovarianceStamped, Quaternion, Vector3
 from rosgraph_msgs.msg import Clock, Log
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Empty
@@ -48,6 +48,12 @@ def axis_angle(axis, angle):
     return (axis[0] * s, axis[1] * s, axis[2] * s, math.cos(angle / 2.0))
 
 
+def qexp(v):
+    """Exp of a rotation vector: the rotation by |v| about v."""
+    n = math.sqrt(sum(c * c for c in v))
+    return (0.0, 0.0, 0.0, 1.0) if n == 0.0 else axis_angle(v, n)
+
+
 def rotation_angle(a, b):
     """Angle of the rotation a^c b, so q and -q compare equal."""
     d = qmul(qconj(a), b)
@@ -70,6 +76,24 @@ def make_imu(stamp, w, frame_id="base_link", covariance=None):
     if covariance is not None:
         msg.angular_velocity_covariance = covariance
     msg.orientation_covariance[0] = -1.0
+    return msg
+
+
+def make_pose_fix(stamp, frame_id, q, rotation_covariance=None):
+    """An orientation fix as PoseWithCovarianceStamped: q in frame_id, the 3x3 rotation
+    covariance (row-major, about frame_id's axes) in rows and columns 3-5 of the 6x6."""
+    msg = PoseWithCovarianceStamped()
+    msg.header.stamp = stamp
+    msg.header.frame_id = frame_id
+    msg.pose.pose.orientation = Quaternion(*q)
+    covariance = [0.0] * 36
+    for i in range(3):
+        covariance[7 * i] = 1.0  # the position's, which a fix ignores
+    if rotation_covariance is not None:
+        for i in range(3):
+            for j in range(3):
+                covariance[6 * (i + 3) + (j + 3)] = rotation_covariance[3 * i + j]
+    msg.pose.covariance = covariance
     return msg
 
 

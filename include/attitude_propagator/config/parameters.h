@@ -59,6 +59,7 @@ struct Parameters {
   double fix_history = 1.0;
   double fix_gate = 16.266;  // the 99.9 % point of chi-square(3)
   double fix_stddev = 0.01;
+  std::string fix_frame;  // empty: body_frame
   bool estimate_gyro_bias = false;
   double gyro_bias_random_walk = 1e-6;
   double gyro_bias_stddev = 2.424e-5;  // 5 deg/h
@@ -144,6 +145,9 @@ void forEachParameter(P& p, F&& f) {
     "chi-square(3)); > 0");
   f("fix_stddev", p.fix_stddev, "rad",
     "rotation error of a fix that carries no covariance, per axis; in (0, π]");
+  f("fix_frame", p.fix_frame, "",
+    "the frame whose orientation a pose or quaternion fix gives (its mount to `body_frame` "
+    "from tf); empty: `body_frame`");
   f("estimate_gyro_bias", p.estimate_gyro_bias, "",
     "kinematic model: estimate the gyro bias from the fixes (subtracted on top of `gyro_bias`)");
   f("gyro_bias_random_walk", p.gyro_bias_random_walk, "rad/s/√s",

@@ -24,6 +24,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <geometry_msgs/Twist.h>
@@ -45,10 +46,19 @@
 
 namespace attitude_propagator {
 
-/// Why a decoder refused a message. Each goes to one engine counter (refusedCounter).
-enum class Refused { NoRate, BadCovariance, WrongType, NoTransform, NoTime, BiasFrame };
+/// Why a decoder refused a message. Each goes to one engine counter (refusedCounter), but for
+/// NoOrientation, which only fixes meet (FixDecoder counts fixes' refusals: fix_decoder.h).
+enum class Refused {
+  NoRate,
+  BadCovariance,
+  WrongType,
+  NoTransform,
+  NoTime,
+  BiasFrame,
+  NoOrientation,  ///< an Imu fix without orientation (orientation_covariance[0] == -1)
+};
 /// The counter a refusal is counted in: rejected_no_rate, rejected_covariance, rejected_type,
-/// dropped_no_tf, dropped_no_time, rejected_bias.
+/// dropped_no_tf, dropped_no_time, rejected_bias; NoOrientation: fixes_refused_no_orientation.
 const char* refusedCounter(Refused why);
 /// Counts a refusal in the engine's counters, once.
 void countRefusal(AttitudeEngine& engine, Refused why);
@@ -122,29 +132,39 @@ void deserializeInto(const Serialized& message, std::vector<std::uint8_t>& buffe
   ros::serialization::deserialize(read, out);
 }
 
-/// One type per topic that takes a plain and a stamped type: the first message of either fixes
-/// it; a message of any other type, or of the other one later, is WrongType.
+/// One type per topic that takes several types (a plain and a stamped one; the fix topic's
+/// four): the first message of an accepted type fixes it; a message of any other type, or of
+/// another accepted one later, is WrongType.
 class TopicType {
  public:
   template <class Plain, class Stamped>
   static TopicType of() {
-    return TopicType(ros::message_traits::datatype<Plain>(), ros::message_traits::md5sum<Plain>(),
-                     ros::message_traits::datatype<Stamped>(),
-                     ros::message_traits::md5sum<Stamped>());
+    return anyOf<Plain, Stamped>();
+  }
+  /// Accepts each of `M...`, in that order (the first is plainType(), the second stampedType()).
+  template <class... M>
+  static TopicType anyOf() {
+    return TopicType({{ros::message_traits::datatype<M>(), ros::message_traits::md5sum<M>()}...});
   }
   /// Nothing when the message's type is the topic's (fixing it at the first), else WrongType
   /// naming the type received.
   std::optional<Refusal> admit(const std::string& datatype, const std::string& md5);
   /// The topic's type; empty before its first message of an accepted type.
   const std::string& datatype() const { return datatype_; }
-  bool stamped() const { return datatype_ == stamped_; }
-  /// The two types accepted, for messages.
-  const std::string& plainType() const { return plain_; }
-  const std::string& stampedType() const { return stamped_; }
+  template <class M>
+  bool is() const {
+    return datatype_ == ros::message_traits::datatype<M>();
+  }
+  bool stamped() const { return types_.size() > 1 && datatype_ == types_[1].first; }
+  /// The first two types accepted, for messages.
+  const std::string& plainType() const { return types_.front().first; }
+  const std::string& stampedType() const { return types_.back().first; }
+  /// Every type accepted, "a, b or c".
+  std::string accepted() const;
 
  private:
-  TopicType(std::string plain, std::string plain_md5, std::string stamped, std::string stamped_md5);
-  std::string plain_, plain_md5_, stamped_, stamped_md5_;
+  explicit TopicType(std::vector<std::pair<std::string, std::string>> types);
+  std::vector<std::pair<std::string, std::string>> types_;  // (datatype, md5)
   std::string datatype_;
 };
 

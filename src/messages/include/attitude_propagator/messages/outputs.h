@@ -30,9 +30,10 @@ class OutputEncoder {
   const std::string& stateBodyFrame() const { return state_body_; }
 
   /// The engine's state (REP-103 axes) in world_frame's axes: what AttitudeState and
-  /// propagate_bag's CSV carry.
+  /// propagate_bag's CSV carry (the bias estimate and its standard deviations too).
   EngineState inWorldAxes(const EngineState& s) const;
-  /// The state in world_frame's axes, stamped at its own stamp.
+  /// The state in world_frame's axes, stamped at its own stamp; gyro_bias is the bias in use
+  /// (the engine's gyroBias(), or the gyro_bias parameter without an engine, plus the estimate).
   void state(const EngineState& s, AttitudeState& out) const;
   /// fixed_frame → body_frame (body_frame → fixed_frame with reverse_tf) in REP-103's axes:
   /// tf's tree is ROS's, whatever the messages' axes.
@@ -54,6 +55,7 @@ class OutputEncoder {
   std::string state_body_;
   std::string model_;
   std::string integrator_;
+  Eigen::Vector3d gyro_bias_B_;  // the gyro_bias parameter, when there is no engine to ask
   const AttitudeEngine* engine_ = nullptr;
 };
 

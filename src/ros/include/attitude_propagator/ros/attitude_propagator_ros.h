@@ -41,6 +41,7 @@
 #include "attitude_propagator/engine.h"
 #include "attitude_propagator/messages/input_decoders.h"
 #include "attitude_propagator/messages/outputs.h"
+#include "attitude_propagator/ros/fix_input.h"
 
 namespace attitude_propagator {
 
@@ -84,6 +85,8 @@ class AttitudePropagatorRos : public EngineSink {
   void onClock(const rosgraph_msgs::Clock::ConstPtr& msg);
   /// A gyro bias, in force for rates stamped at or after its stamp.
   void onGyroBias(const geometry_msgs::Vector3Stamped::ConstPtr& msg);
+  /// An absolute attitude fix (fix_input.h).
+  void onFix(const ros::MessageEvent<const topic_tools::ShapeShifter>& event);
 
   /// Counts and logs a refused input (false), or logs a newly looked-up mount (true).
   bool taken(const DecodedInput& in, const char* topic);
@@ -145,6 +148,7 @@ class AttitudePropagatorRos : public EngineSink {
   // created at the first lookup and dropped once the mount is known (unless torque input may
   // need it), so the node does not digest its own /tf stream.
   std::optional<InputDecoders> decoders_;
+  std::optional<FixInput> fixes_;
   class TfFrames : public FrameSource {
    public:
     explicit TfFrames(AttitudePropagatorRos& node) : node_(node) {}
@@ -161,6 +165,7 @@ class AttitudePropagatorRos : public EngineSink {
   ros::Subscriber torque_sub_;
   ros::Subscriber clock_sub_;
   ros::Subscriber bias_sub_;
+  ros::Subscriber fix_sub_;
   ros::Subscriber tf_watch_sub_;
   ros::Subscriber tf_static_watch_sub_;
   std::uint64_t tf_conflicts_ = 0;

@@ -1,0 +1,143 @@
+#include "attitude_propagator/messages/fix_decoder.h"
+
+#include <utility>
+
+#include "attitude_propagator/messages/conversions.h"
+#include "attitude_propagator/orientation_covariance.h"
+
+namespace attitude_propagator {
+
+FixFrames FixFrames::of(const NodeConfig& config) {
+  const Parameters& p = config.parameters;
+  return {p.fixed_frame, p.body_frame, p.fix_frame};
+}
+
+const char* fixRefusedCounter(Refused why) {
+  switch (why) {
+    case Refused::NoTransform:
+      return "fixes_refused_no_tf";
+    case Refused::WrongType:
+      return "fixes_refused_type";
+    case Refused::NoTime:
+      return "fixes_refused_no_time";
+    case Refused::NoOrientation:
+      return "fixes_refused_no_orientation";
+    default:
+      return "?";  // not a fix's refusal
+  }
+}
+
+Eigen::Matrix3d orientationBlock(const boost::array<double, 36>& covariance) {
+  using Matrix6 = Eigen::Matrix<double, 6, 6, Eigen::RowMajor>;
+  return Eigen::Map<const Matrix6>(covariance.data()).bottomRightCorner<3, 3>();
+}
+
+FixDecoder::FixDecoder(FixFrames frames)
+    : frames_(std::move(frames)),
+      type_(TopicType::anyOf<geometry_msgs::PoseWithCovarianceStamped, geometry_msgs::PoseStamped,
+                             geometry_msgs::QuaternionStamped, sensor_msgs::Imu>()) {}
+
+Decoded<Fix> FixDecoder::refuse(Refusal refusal) {
+  switch (refusal.why) {
+    case Refused::NoTransform:
+      ++refusals_.no_tf;
+      break;
+    case Refused::WrongType:
+      ++refusals_.type;
+      break;
+    case Refused::NoTime:
+      ++refusals_.no_time;
+      break;
+    case Refused::NoOrientation:
+      ++refusals_.no_orientation;
+      break;
+    default:
+      break;  // the decoder makes no other
+  }
+  return {std::nullopt, std::move(refusal)};
+}
+
+Decoded<Fix> FixDecoder::fix(const geometry_msgs::PoseWithCovarianceStamped& msg,
+                             const ros::Time& arrival, FrameSource* frames) {
+  return compose(msg.header.stamp, arrival, msg.header.frame_id, frames_.fix,
+                 toEigen(msg.pose.pose.orientation), orientationBlock(msg.pose.covariance),
+                 CovarianceAxes::Header, frames);
+}
+
+Decoded<Fix> FixDecoder::fix(const geometry_msgs::PoseStamped& msg, const ros::Time& arrival,
+                             FrameSource* frames) {
+  return compose(msg.header.stamp, arrival, msg.header.frame_id, frames_.fix,
+                 toEigen(msg.pose.orientation), Eigen::Matrix3d::Zero(), CovarianceAxes::Header,
+                 frames);
+}
+
+Decoded<Fix> FixDecoder::fix(const geometry_msgs::QuaternionStamped& msg, const ros::Time& arrival,
+                             FrameSource* frames) {
+  return compose(msg.header.stamp, arrival, msg.header.frame_id, frames_.fix,
+                 toEigen(msg.quaternion), Eigen::Matrix3d::Zero(), CovarianceAxes::Header, frames);
+}
+
+Decoded<Fix> FixDecoder::fix(const sensor_msgs::Imu& msg, const ros::Time& arrival,
+                             FrameSource* frames) {
+  // REP-145: orientation_covariance[0] == -1 says the message carries no orientation.
+  if (msg.orientation_covariance[0] == -1.0) {
+    Refusal r;
+    r.why = Refused::NoOrientation;
+    r.frame = msg.header.frame_id;
+    return refuse(std::move(r));
+  }
+  // The orientation of the Imu's own frame in the fixed frame (REP-145).
+  const std::string& own = msg.header.frame_id.empty() ? frames_.fix : msg.header.frame_id;
+  return compose(msg.header.stamp, arrival, frames_.fixed, own, toEigen(msg.orientation),
+                 covarianceFromMsg(msg.orientation_covariance), CovarianceAxes::Fix, frames);
+}
+
+std::optional<Eigen::Quaterniond> FixDecoder::lookup(const std::string& target,
+                                                     const std::string& source, FrameSource* frames,
+                                                     Refusal& refused) const {
+  if (source == target) return Eigen::Quaterniond::Identity();
+  std::string error = "no frame source";
+  auto q = frames ? frames->rotation(target, source, ros::Time(), &error) : std::nullopt;
+  if (!q) {
+    refused.why = Refused::NoTransform;
+    refused.frame = source;
+    refused.detail = error;
+  }
+  return q;
+}
+
+Decoded<Fix> FixDecoder::compose(const ros::Time& header_stamp, const ros::Time& arrival,
+                                 const std::string& header_frame, const std::string& fix_frame,
+                                 const Eigen::Quaterniond& q_HF, const Eigen::Matrix3d& R,
+                                 CovarianceAxes axes, FrameSource* frames) {
+  Refusal refused;
+  const auto stamp = stampOf(header_stamp, arrival);
+  if (!stamp) {
+    refused.why = Refused::NoTime;
+    return refuse(std::move(refused));
+  }
+  const std::string& H = header_frame.empty() ? frames_.fixed : header_frame;
+  const std::string& F = fix_frame.empty() ? frames_.body : fix_frame;
+  const auto q_WH = lookup(frames_.fixed, H, frames, refused);
+  if (!q_WH) return refuse(std::move(refused));
+  const auto q_BF = lookup(frames_.body, F, frames, refused);
+  if (!q_BF) return refuse(std::move(refused));
+
+  Fix fix;
+  fix.stamp = *stamp;
+  // q_WB = q_WH q_HF q_FB. q_HF is not normalised: the engine judges its norm.
+  fix.q_WB = *q_WH * q_HF * q_BF->conjugate();
+  if (R.isZero(0.0) || checkRateCovariance(R) != RateCovarianceCheck::Ok) {
+    fix.R_B = R;  // none given; or not a covariance, which the engine refuses as given
+  } else if (axes == CovarianceAxes::Header) {
+    // An error about H's fixed axes, q_HF' = Exp(e_H) q_HF, is e_B = C_BH e_H in the body,
+    // q_BH = q_WBᶜ q_WH = q_BF q_HFᶜ.
+    const Eigen::Quaterniond q_BH = *q_BF * q_HF.normalized().conjugate();
+    fix.R_B = rotateCovariance(R, q_BH.toRotationMatrix());
+  } else {
+    fix.R_B = rotateCovariance(R, q_BF->toRotationMatrix());  // e_B = C_BF e_F
+  }
+  return {std::move(fix), std::nullopt};
+}
+
+}  // namespace attitude_propagator

@@ -1,0 +1,162 @@
+#include "attitude_propagator/ros/fix_input.h"
+
+#include <cstring>
+#include <optional>
+
+#include <ros/console.h>
+
+#include "attitude_propagator/messages/conversions.h"
+#include "attitude_propagator/ros/log_text.h"
+
+namespace attitude_propagator {
+
+namespace {
+
+// Throttle period (s) of warnings about fixes that keep coming bad, as for the other inputs.
+constexpr double kFixWarnPeriod = 5.0;
+
+/// A FrameSource that notes whether it was asked at all.
+class NotingFrames : public FrameSource {
+ public:
+  NotingFrames(FrameSource& frames, bool& asked) : frames_(frames), asked_(asked) {}
+  std::optional<Eigen::Quaterniond> rotation(const std::string& target, const std::string& source,
+                                             const ros::Time& stamp, std::string* error) override {
+    asked_ = true;
+    return frames_.rotation(target, source, stamp, error);
+  }
+
+ private:
+  FrameSource& frames_;
+  bool& asked_;
+};
+
+}  // namespace
+
+FixInput::FixInput(const NodeConfig& config)
+    : decoder_(FixFrames::of(config)), config_(engineConfig(config).fixes) {}
+
+void FixInput::onMessage(const topic_tools::ShapeShifter& msg, const ros::Time& arrival,
+                         AttitudeEngine& engine, FrameSource& frames) {
+  NotingFrames noting(frames, uses_tf_);
+  const Decoded<Fix> fix = decoder_.topic(msg, arrival, &noting);
+  if (!fix) return logRefusal(*fix.refusal);
+  logOutcome(engine.submitFix(fix->stamp, fix->q_WB, fix->R_B), fix->stamp, engine);
+}
+
+std::uint64_t FixInput::notApplied(const EngineCounters& c) const {
+  return c.fixes_rejected_gate + c.fixes_too_old + c.fixes_bad_quaternion + c.fixes_bad_covariance +
+         c.fixes_queue_full + c.fixes_refused_model + decoder_.refusals().total();
+}
+
+std::uint64_t FixInput::notAppliedInARow(const EngineCounters& c) {
+  if (c.fixes_accepted != applied_seen_) {
+    applied_seen_ = c.fixes_accepted;
+    not_applied_at_last_apply_ = notApplied(c);
+  }
+  return notApplied(c) - not_applied_at_last_apply_;
+}
+
+std::string FixInput::warning(const EngineCounters& c) {
+  const std::uint64_t run = notAppliedInARow(c);
+  if (run < kFixWarnRun) return {};
+  return "the last " + std::to_string(run) +
+         " orientation fixes were not applied (latest: " + last_reason_ +
+         "): the state is not corrected by them";
+}
+
+void FixInput::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status,
+                        const AttitudeEngine& engine) const {
+  const EngineCounters& c = engine.counters();
+  const FixRefusals& r = decoder_.refusals();
+  status.add("fixes_accepted", c.fixes_accepted);
+  status.add("fixes_reset", c.fixes_reset);
+  status.add("fixes_rejected_gate", c.fixes_rejected_gate);
+  status.add("fixes_too_old", c.fixes_too_old);
+  status.add("fixes_bad_quaternion", c.fixes_bad_quaternion);
+  status.add("fixes_bad_covariance", c.fixes_bad_covariance);
+  status.add("fixes_queue_full", c.fixes_queue_full);
+  status.add("fixes_refused_model", c.fixes_refused_model);
+  status.add("fixes_refused", r.total());
+  status.add(fixRefusedCounter(Refused::NoTransform), r.no_tf);
+  status.add(fixRefusedCounter(Refused::WrongType), r.type);
+  status.add(fixRefusedCounter(Refused::NoTime), r.no_time);
+  status.add(fixRefusedCounter(Refused::NoOrientation), r.no_orientation);
+  status.add("fixes_pending", engine.pendingFixes());
+  if (config_.estimate_gyro_bias) {
+    const Eigen::Vector3d& b = engine.gyroBiasEstimate();
+    const Eigen::Vector3d s = engine.gyroBiasStddev();
+    status.addf("gyro_bias_estimate", "[%g, %g, %g]", b.x(), b.y(), b.z());
+    status.addf("gyro_bias_estimate_stddev", "[%g, %g, %g]", s.x(), s.y(), s.z());
+  }
+}
+
+void FixInput::logRefusal(const Refusal& r) {
+  const FixFrames& f = decoder_.frames();
+  switch (r.why) {
+    case Refused::NoTransform:
+      ROS_WARN_THROTTLE(kFixWarnPeriod,
+                        "orientation_fix: no transform for frame '%s' (the header frame must be "
+                        "joined to '%s', fix_frame to '%s'): refused (%lu so far; %s)",
+                        logText(r.frame).c_str(), f.fixed.c_str(),
+                        (f.fix.empty() ? f.body : f.fix).c_str(), decoder_.refusals().no_tf,
+                        logText(r.detail, 4 * kLogTextBytes).c_str());
+      break;
+    case Refused::WrongType:
+      ROS_WARN_THROTTLE(kFixWarnPeriod,
+                        "orientation_fix: message type %s refused; the topic carries %s (its "
+                        "first message's type; accepted: %s) (%lu so far)",
+                        logText(r.detail).c_str(), decoder_.type().datatype().c_str(),
+                        decoder_.type().accepted().c_str(), decoder_.refusals().type);
+      break;
+    case Refused::NoTime:
+      ROS_WARN_THROTTLE(kFixWarnPeriod,
+                        "orientation_fix: unstamped fix and no ROS time yet (/clock): refused");
+      break;
+    case Refused::NoOrientation:
+      ROS_WARN_THROTTLE(kFixWarnPeriod,
+                        "orientation_fix: sensor_msgs/Imu with orientation_covariance[0] == -1 "
+                        "(no orientation, REP-145): refused (%lu so far)",
+                        decoder_.refusals().no_orientation);
+      break;
+    default:
+      break;  // the fix decoder makes no other
+  }
+  last_reason_ = fixRefusedCounter(r.why) + std::strlen("fixes_");  // refused_...
+}
+
+void FixInput::logOutcome(FixOutcome outcome, Stamp stamp, const AttitudeEngine& engine) {
+  const char* why = nullptr;
+  switch (outcome) {
+    case FixOutcome::Accepted:
+    case FixOutcome::Reset:
+    case FixOutcome::Waiting:
+      ROS_DEBUG("orientation_fix at %.9f s: %s", toRosTime(stamp).toSec(), fixOutcomeName(outcome));
+      return;
+    case FixOutcome::RejectedGate:
+      why = "its innovation is beyond fix_gate (5 in a row apply as a reset)";
+      break;
+    case FixOutcome::TooOld:
+      why = "stamped before the rates kept (fix_history) or before the last anchor";
+      break;
+    case FixOutcome::BadQuaternion:
+      why = "a non-finite quaternion, or not of unit norm";
+      break;
+    case FixOutcome::BadCovariance:
+      why =
+          "a covariance that is not one (non-finite, asymmetric, a negative variance, a "
+          "variance above pi^2)";
+      break;
+    case FixOutcome::QueueFull:
+      why = "stamped ahead of the rates, and too many wait already";
+      break;
+    case FixOutcome::RefusedByModel:
+      why = "the dynamic model takes no fixes";
+      break;
+  }
+  last_reason_ = fixOutcomeName(outcome);
+  ROS_WARN_THROTTLE(kFixWarnPeriod, "orientation_fix at %.9f s: %s: %s (%lu accepted so far)",
+                    toRosTime(stamp).toSec(), fixOutcomeName(outcome), why,
+                    engine.counters().fixes_accepted);
+}
+
+}  // namespace attitude_propagator

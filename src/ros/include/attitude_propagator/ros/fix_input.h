@@ -1,0 +1,57 @@
+// The orientation_fix topic in the node: each message decoded by the message layer's FixDecoder
+// (fix_decoder.h), handed to AttitudeEngine::submitFix, and what became of it logged (throttled,
+// by name) and shown in diagnostics. The rules live in the decoder and the engine; this only
+// wires them to ROS, beside the wrapper (attitude_propagator_ros.h), on its callback queue.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include <diagnostic_updater/DiagnosticStatusWrapper.h>
+#include <ros/time.h>
+#include <topic_tools/shape_shifter.h>
+
+#include "attitude_propagator/config/parameters.h"
+#include "attitude_propagator/engine.h"
+#include "attitude_propagator/messages/fix_decoder.h"
+
+namespace attitude_propagator {
+
+/// Fixes not applied in a row (refused, rejected, too old ...) from which diagnostics WARN: the
+/// output is not corrected as the user thinks.
+constexpr std::uint64_t kFixWarnRun = 3;
+
+class FixInput {
+ public:
+  explicit FixInput(const NodeConfig& config);
+
+  /// Decodes one message (`frames` is asked for the header frame and fix_frame's mount),
+  /// submits the fix, and logs a refusal or an outcome other than applied or waiting.
+  void onMessage(const topic_tools::ShapeShifter& msg, const ros::Time& arrival,
+                 AttitudeEngine& engine, FrameSource& frames);
+  /// A fix has needed tf: the node keeps its listener.
+  bool usesTf() const { return uses_tf_; }
+  /// Fixes refused or not applied since the last one applied (counted from the counters, so a
+  /// fix that waited counts when the rates reach it).
+  std::uint64_t notAppliedInARow(const EngineCounters& c);
+  /// The WARN summary when kFixWarnRun or more fixes in a row were not applied; else empty.
+  std::string warning(const EngineCounters& c);
+  /// The fix counters, and with estimate_gyro_bias the estimate and its standard deviation.
+  void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status,
+                const AttitudeEngine& engine) const;
+
+ private:
+  /// Every fix not applied so far: the engine's refusals and the decoder's.
+  std::uint64_t notApplied(const EngineCounters& c) const;
+  void logRefusal(const Refusal& r);
+  void logOutcome(FixOutcome outcome, Stamp stamp, const AttitudeEngine& engine);
+
+  FixDecoder decoder_;
+  FixConfig config_;
+  bool uses_tf_ = false;
+  std::uint64_t applied_seen_ = 0;               // fixes_accepted when last looked at
+  std::uint64_t not_applied_at_last_apply_ = 0;  // notApplied() then
+  std::string last_reason_;                      // the latest refusal or rejection, by name
+};
+
+}  // namespace attitude_propagator
