@@ -16,7 +16,7 @@
 #include <roslz4/lz4s.h>
 
 #include "bag_format.h"
-#include "tool_support.h"
+#include "tool_error.h"
 
 namespace attitude_propagator {
 namespace tools {

@@ -1,4 +1,4 @@
-// The bag 2.0 format as both our writer (tool_support.cpp) and our structure check
+// The bag 2.0 format as both our writer (bag_writer.h) and our structure check
 // (bag_check.cpp) read it: "#ROSBAG V2.0\n", then records
 // "<header length><header><data length><data>", the header a list of "<field length>name=value";
 // integers little-endian, times as sec then nsec.

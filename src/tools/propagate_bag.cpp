@@ -39,7 +39,14 @@
 #include "attitude_propagator/messages/frame_source.h"
 #include "attitude_propagator/messages/input_decoders.h"
 #include "attitude_propagator/messages/outputs.h"
-#include "tool_support.h"
+#include "bag_input.h"
+#include "bag_writer.h"
+#include "command_line.h"
+#include "config_file.h"
+#include "interrupts.h"
+#include "output_files.h"
+#include "progress.h"
+#include "tool_error.h"
 
 namespace attitude_propagator {
 namespace tools {
