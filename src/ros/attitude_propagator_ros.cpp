@@ -69,6 +69,9 @@ AttitudePropagatorRos::AttitudePropagatorRos(ros::NodeHandle nh, ros::NodeHandle
   sim_time_ = ros::Time::isSimTime();
   advertise();
   publishConventionFrames();
+  // Listening from the start: a mount (or a torque's frame) sent before the first message that
+  // needs it is heard, as propagate_bag reads a bag's /tf from its start.
+  ensureTfListener();
   subscribe();
   updater_.setHardwareID(config_.parameters.body_frame + " from " +
                          (config_.rate_input == RateInput::Imu     ? imu_nh_.resolveName("data_raw")
@@ -281,11 +284,13 @@ bool AttitudePropagatorRos::taken(const DecodedInput& in, const char* topic) {
     const Eigen::Quaterniond& q = in.q_BS;
     ROS_INFO("rates in frame '%s' are rotated into '%s' by q = [%g, %g, %g, %g] (x y z w)",
              logText(decoders_->mountFrame()).c_str(), body.c_str(), q.x(), q.y(), q.z(), q.w());
-    if (!config_.torque_input && !fixes_->usesTf()) {
-      // Cached for good: stop listening, or the listener would keep digesting our own /tf.
-      tf_listener_.reset();
-      tf_buffer_.reset();
-    }
+  }
+  const bool mount_settled = in.new_mount || decoders_->mountFrame().empty();
+  if (tf_buffer_ && mount_settled && !config_.torque_input && !fixes_->usesTf()) {
+    // The mount is cached (or the rates need none): stop listening, or the listener would keep
+    // digesting our own /tf. Rates in a new frame later start it again (ensureTfListener).
+    tf_listener_.reset();
+    tf_buffer_.reset();
   }
   return true;
 }
