@@ -1,0 +1,418 @@
+#!/usr/bin/python3
+"""The node and propagate_bag, message for message (node_vs_bag.test).
+
+Both decode every message through the message layer and drive the core engine, so the same
+messages in the same order on the same clock must give the same states and the same counters.
+Each test writes a bag (with record times), runs propagate_bag on it with the parameters the
+node runs with (read back from its private namespace), then publishes the bag's messages to
+the node one at a time in record order and compares: every state (stamp, orientation, angular
+velocity) and every counter both report.
+
+The order the node sees is the bag's by construction, not by timing: each message is published
+synchronously and the next one waits until the node has acted on it, i.e.
+- until the node has published as many states as propagate_bag had written by that message's
+  record time (propagate_bag writes a state at the record time of the message that made it due),
+- or, when that message makes no state due, until a call of the node's ~set_parameters service
+  (no change: dynamic_reconfigure calls back with the values in force) returns. roscpp reads the
+  request on a connection opened after the message was already in the node's socket, and puts
+  both callbacks on the node's one callback queue in the order read, so the message's callback
+  has run when the call returns.
+The one exception is the node's tf listener, which runs its own thread: the transform that first
+gives the mount is followed by a settle time (a mount cached once stops the listener).
+"""
+import math
+import os
+import re
+import shutil
+import subprocess
+import tempfile
+import threading
+import time
+import unittest
+import warnings
+
+import rosbag
+import rospkg
+import rospy
+import rostest
+import yaml
+from attitude_propagator.msg import AttitudeState
+from diagnostic_msgs.msg import DiagnosticArray
+from dynamic_reconfigure.srv import Reconfigure, ReconfigureRequest
+from geometry_msgs.msg import Quaternion, TransformStamped, Vector3, Vector3Stamped, WrenchStamped
+from rosgraph_msgs.msg import Clock
+from tf2_msgs.msg import TFMessage
+
+from ap_test_util import (NS_PER_S, Recorder, as_tuple, axis_angle, call_with_timeout,
+                          make_imu, qconj, qmul, time_ns, wait_for)
+
+T0 = 100 * NS_PER_S
+MS = 10 ** 6
+US = 10 ** 3
+# The mount, body <- imu: no symmetric case, so C and its transpose (or a wrong axis) differ.
+MOUNT = axis_angle((1.0, 2.0, 3.0), 0.7)
+# The brief's agreement: the same code on the same doubles should agree to round-off or better.
+TOLERANCE = 1e-12
+# Waiting for the node to act on one message (wall s): generous, the machine is shared.
+PACE_TIMEOUT = 20.0
+# After the transform that first gives the mount: the listener's own thread stores it.
+LISTENER_SETTLE = 1.0
+
+# propagate_bag's names for its drops (the summary) and the node's diagnostic keys.
+DROP_KEYS = {
+    "stale": "dropped_stale", "future": "rejected_future", "reset": "dropped_on_reset",
+    "queue-full": "pending_overflow", "non-finite": "rejected_non_finite",
+    "out-of-range": "rejected_out_of_range", "no-rate": "rejected_no_rate",
+    "type": "rejected_type", "covariance": "rejected_covariance", "no-tf": "dropped_no_tf",
+    "no-time": "dropped_no_time",
+}
+
+
+def rotation_angle_exact(a, b):
+    """2 asin |vec(a^-1 b)|: the angle between two orientations (q and -q alike)."""
+    d = qmul(qconj(a), b)
+    return 2.0 * math.asin(min(1.0, math.sqrt(d[0] ** 2 + d[1] ** 2 + d[2] ** 2)))
+
+
+class Scene:
+    """A bag's messages: (record time ns, topic, message), strictly increasing record times."""
+
+    def __init__(self):
+        self.events = []
+
+    def add(self, record_ns, topic, msg):
+        self.events.append((int(record_ns), topic, msg))
+
+    def sorted_events(self):
+        events = sorted(self.events, key=lambda e: e[0])
+        times = [e[0] for e in events]
+        assert len(set(times)) == len(times), "two messages at one record time"
+        return events
+
+    def write(self, path):
+        with rosbag.Bag(path, "w") as bag:
+            for record, topic, msg in self.sorted_events():
+                bag.write(topic, msg, t=time_ns(record))
+
+
+def clock(ns):
+    return Clock(clock=time_ns(ns))
+
+
+def rate_in_imu_frame(t):
+    """A smooth body rate (rad/s) about all three axes, as the mounted IMU reads it."""
+    return (0.4 * math.sin(2.0 * t), 0.3 * math.cos(3.0 * t), 0.5 + 0.1 * math.sin(t))
+
+
+# A full covariance, cross terms included: rotated into the body as C R C^T.
+RATE_COVARIANCE = [1e-4, 1e-5, 0.0, 1e-5, 2e-4, -2e-5, 0.0, -2e-5, 3e-4]
+
+
+def kinematic_scene():
+    """200 Hz IMU in frame imu_kin, its mount on /tf from 12.5 ms on (the first three samples
+    have no transform yet), gyro bias samples (one used, one before the mount is known, one in
+    a wrong frame), a straggler, NaN, REP-145 and far-future samples, a gap of 0.3 s (max_dt
+    0.05 s), and the stamps jumping back by 1.5 s at 2 s and going on; /clock at 20 Hz."""
+    s = Scene()
+    for k in range(61):
+        s.add(T0 + k * 50 * MS, "/clock", clock(T0 + k * 50 * MS))
+
+    def imu(stamp_ns, w, covariance=RATE_COVARIANCE):
+        return make_imu(time_ns(stamp_ns), w, "imu_kin", list(covariance))
+
+    for i in range(600):
+        t_ms = 5 * i
+        if 1200 < t_ms < 1500:
+            continue  # a gap longer than max_dt
+        stamp = T0 + t_ms * MS - (1500 * MS if t_ms >= 2000 else 0)  # jumped back, going on
+        s.add(T0 + t_ms * MS + MS, "/imu/data_raw", imu(stamp, rate_in_imu_frame(t_ms * 1e-3)))
+    s.add(T0 + 802500 * US, "/imu/data_raw", imu(T0 + 800 * MS, (0.1, 0.2, 0.3)))  # straggler
+    s.add(T0 + 902500 * US, "/imu/data_raw",
+          imu(T0 + 902500 * US, (float("nan"), 0.0, 0.0)))
+    no_rate = imu(T0 + 952500 * US, (0.1, 0.2, 0.3))
+    no_rate.angular_velocity_covariance[0] = -1.0  # REP-145: no rate
+    s.add(T0 + 952500 * US, "/imu/data_raw", no_rate)
+    # The clock is at 1.0 s: a stamp 1.6 s ahead is beyond max_future (1 s).
+    s.add(T0 + 1002500 * US, "/imu/data_raw", imu(T0 + 2600 * MS, (0.1, 0.2, 0.3)))
+    for k in range(15):
+        t = TransformStamped()
+        t.header.stamp = time_ns(T0 + 12500 * US + k * 200 * MS)
+        t.header.frame_id = "body_kin"
+        t.child_frame_id = "imu_kin"
+        t.transform.rotation = Quaternion(*MOUNT)
+        s.add(t.header.stamp.to_nsec(), "/tf", TFMessage(transforms=[t]))
+
+    def bias(record_ns, stamp_ns, frame, value):
+        msg = Vector3Stamped()
+        msg.header.stamp = time_ns(stamp_ns)
+        msg.header.frame_id = frame
+        msg.vector = Vector3(*value)
+        s.add(record_ns, "/gyro_bias", msg)
+
+    bias(T0 + 7500 * US, T0 + 7500 * US, "imu_kin", (0.02, 0.0, 0.0))  # mount not known yet
+    bias(T0 + 505500 * US, T0 + 600 * MS, "imu_kin", (0.01, -0.02, 0.015))  # from 0.6 s on
+    bias(T0 + 700500 * US, T0 + 700500 * US, "elsewhere", (0.03, 0.0, 0.0))  # wrong frame
+    return s
+
+
+def dynamic_scene():
+    """/clock at 100 Hz (3 ms past the 100 Hz grid) with a jump of 0.3 s at 1.5 s (max_dt
+    0.1 s); WrenchStamped torques in the body at 20 Hz stamped 19 ms after their record time
+    (they wait for the clock), one stamped before the clock (late), and from 2.2 s on stamps
+    1.5 s back, going on (two stale, then late input on ROS time)."""
+    s = Scene()
+    for k in range(300):
+        tick = T0 + 3 * MS + k * 10 * MS
+        if T0 + 1503 * MS < tick < T0 + 1803 * MS:
+            continue  # the clock jumps ahead: a gap
+        s.add(tick, "/clock", clock(tick))
+    for j in range(60):
+        record = T0 + j * 50 * MS + MS
+        if T0 + 1503 * MS < record < T0 + 1803 * MS:
+            continue
+        stamp = record + 19 * MS
+        if j == 20:
+            stamp = T0 + 980 * MS  # the clock is at 0.993 s: late
+        if record >= T0 + 2200 * MS:
+            stamp -= 1500 * MS
+        msg = WrenchStamped()
+        msg.header.stamp = time_ns(stamp)
+        msg.header.frame_id = "body_dyn"
+        msg.wrench.torque = Vector3(0.2 * math.sin(j / 5.0), 0.1 * math.cos(j / 7.0), -0.15)
+        s.add(record, "/torque", msg)
+    return s
+
+
+def tool_summary(text):
+    """propagate_bag's counters, named as the node's diagnostics name them."""
+    c = {}
+    m = re.search(r"(\d+) accepted, dropped: ([^;]*); (\d+) resets, (\d+) jumps back, (\d+) gaps, "
+                  r"(\d+) late; (\d+) states", text)
+    assert m, text
+    c["accepted"] = int(m.group(1))
+    c.update({key: 0 for key in DROP_KEYS.values()})
+    if m.group(2) != "none":
+        for part in m.group(2).split(", "):
+            name, n = part.rsplit(" ", 1)
+            c[DROP_KEYS[name]] = int(n)
+    c["resets"], c["jumps_back"], c["gaps"], c["late"] = (int(m.group(i)) for i in range(3, 7))
+    m = re.search(r"inputs: (\d+) = \d+ accepted \+ \d+ dropped \+ (\d+) pending", text)
+    assert m, text
+    c["received"], c["pending"] = int(m.group(1)), int(m.group(2))
+    m = re.search(r"dynamic: (\d+) failed steps, .*?, (\d+) deferred ticks", text)
+    if m:
+        c["failed_steps"], c["deferred_ticks"] = int(m.group(1)), int(m.group(2))
+    m = re.search(r"gyro bias: (\d+) used, (\d+) refused", text)
+    if m:
+        c["bias_used"], c["rejected_bias"] = int(m.group(1)), int(m.group(2))
+    return c
+
+
+class Barrier:
+    """Returns once the node has run every callback for what was published before the call
+    (see the module's text): a ~set_parameters call that changes nothing, on a new connection."""
+
+    def __init__(self, node_name):
+        self.service = node_name + "/set_parameters"
+        rospy.wait_for_service(self.service, 30.0)
+        self.calls = 0
+
+    def __call__(self):
+        self.calls += 1
+        proxy = rospy.ServiceProxy(self.service, Reconfigure)  # not persistent: a new connection
+        call_with_timeout(lambda: proxy(ReconfigureRequest()), 30.0, self.service)
+
+
+class LatestDiagnostics:
+    """The latest diagnostic values of one node, and how many statuses came."""
+
+    def __init__(self, node_name):
+        self.prefix = node_name.lstrip("/") + ":"
+        self.lock = threading.Lock()
+        self.values, self.count = None, 0
+        self.sub = rospy.Subscriber("/diagnostics", DiagnosticArray, self._cb, queue_size=100)
+
+    def _cb(self, msg):
+        with self.lock:
+            for status in msg.status:
+                if status.name.startswith(self.prefix):
+                    self.values = {kv.key: kv.value for kv in status.values}
+                    self.count += 1
+
+    def after_now(self):
+        """Values computed after everything published so far was handled: the second status
+        from now (one may be on its way)."""
+        with self.lock:
+            start = self.count
+        wait_for(lambda: self.count >= start + 2, 20.0, self.prefix + " diagnostics")
+        with self.lock:
+            return dict(self.values)
+
+
+class NodeVsBagTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("test_node_vs_bag")
+        cls.dir = tempfile.mkdtemp(prefix="node_vs_bag_")
+        cls.default_keys = list(yaml.safe_load(open(os.path.join(
+            rospkg.RosPack().get_path("attitude_propagator"), "config", "default.yaml"))))
+
+    @classmethod
+    def tearDownClass(cls):
+        shutil.rmtree(cls.dir, ignore_errors=True)
+
+    # ---- the two runs ------------------------------------------------------------------------
+
+    def run_tool(self, name, scene, node_name):
+        """Writes the bag, runs propagate_bag with the node's parameters; its states (record
+        time ns, AttitudeState) and counters."""
+        bag = os.path.join(self.dir, name + ".bag")
+        out = os.path.join(self.dir, name + ".out.bag")
+        config = os.path.join(self.dir, name + ".yaml")
+        scene.write(bag)
+        params = rospy.get_param(node_name)
+        with open(config, "w") as f:
+            yaml.safe_dump({k: params[k] for k in self.default_keys if k in params}, f)
+        env = dict(os.environ, PATH="/usr/bin:" + os.environ.get("PATH", ""))
+        started = time.monotonic()
+        run = subprocess.run(["rosrun", "attitude_propagator", "propagate_bag", bag, "-o", out,
+                              "--config", config, "--no-progress"], env=env,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                             universal_newlines=True, timeout=120)
+        print("%s: propagate_bag in %.2f s:\n%s%s" % (name, time.monotonic() - started,
+                                                       run.stdout, run.stderr))
+        self.assertEqual(run.returncode, 0, run.stdout + run.stderr)
+        with rosbag.Bag(out) as b:
+            states = [(t.to_nsec(), m) for _, m, t in b.read_messages(topics=["/attitude_state"])]
+        return states, tool_summary(run.stdout)
+
+    def run_node(self, scene, ns, tool_states, listener_topic=None):
+        """Publishes the scene to the node in record order, each message once the node has acted
+        on the one before; the node's states and counters."""
+        node_name = "/%s/attitude_propagator" % ns
+        barrier = Barrier(node_name)  # advertised after the node subscribed to its inputs
+        states = Recorder("/%s/attitude_state" % ns, AttitudeState)
+        diagnostics = LatestDiagnostics(node_name)
+        wait_for(lambda: states.sub.get_num_connections() > 0, 30.0, "attitude_state")
+        events = scene.sorted_events()
+        # Published synchronously (no queue_size): the message is in the node's socket when
+        # publish() returns, before the barrier's connection is opened.
+        pubs = {}
+        for topic in sorted({e[1] for e in events}):
+            target = topic if topic == "/tf" else "/%s%s" % (ns, topic)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # rospy's advice to give a queue_size
+                pubs[topic] = rospy.Publisher(
+                    target, type(next(e[2] for e in events if e[1] == topic)), queue_size=None)
+        for topic, pub in pubs.items():
+            wait_for(lambda: pub.get_num_connections() > 0, 30.0, "a subscriber on " + pub.name)
+        # States propagate_bag had written by each record time: the node's pace.
+        due, n = [], 0
+        for record, _, _ in events:
+            while n < len(tool_states) and tool_states[n][0] <= record:
+                n += 1
+            due.append(n)
+        paced_on_states, stalled = 0, None
+        started = time.monotonic()
+        for i, (record, topic, msg) in enumerate(events):
+            # The node's tf listener, created by the first rate in the mount's frame, shares the
+            # connection of the node's tf watch (one subscription per topic in a process), so it
+            # hears what follows that rate.
+            first_mount = topic == listener_topic and states.count() == 0
+            pubs[topic].publish(msg)
+            if stalled is None and due[i] > (due[i - 1] if i else 0):
+                try:
+                    wait_for(lambda: states.count() >= due[i], PACE_TIMEOUT,
+                             "%d states after message %d (%s at %.4f s)"
+                             % (due[i], i, topic, (record - T0) * 1e-9))
+                    paced_on_states += 1
+                    continue
+                except AssertionError as e:
+                    stalled = str(e)  # the comparison below shows how; pace on the barrier now
+            barrier()
+            if first_mount:
+                time.sleep(LISTENER_SETTLE)
+        barrier()
+        try:
+            wait_for(lambda: states.count() >= len(tool_states), 10.0,
+                     "%d states" % len(tool_states))
+        except AssertionError:
+            pass  # fewer states: the comparison says which
+        time.sleep(0.5)  # anything the node would publish beyond the tool's states
+        counters = diagnostics.after_now()
+        print("%s: %d messages fed in %.1f s (%d paced on states, %d barriers)%s"
+              % (ns, len(events), time.monotonic() - started, paced_on_states, barrier.calls,
+                 "; pacing stalled: " + stalled if stalled else ""))
+        with states.lock:
+            return list(states.messages), counters, stalled
+
+    # ---- the comparisons ---------------------------------------------------------------------
+
+    def compare_states(self, name, node_states, tool_states):
+        tool = [m for _, m in tool_states]
+        problems = []
+        if len(node_states) != len(tool):
+            problems.append("%d states from the node, %d from propagate_bag"
+                            % (len(node_states), len(tool)))
+        worst_angle = worst_rate = 0.0
+        for i, (a, b) in enumerate(zip(node_states, tool)):
+            if a.header.stamp != b.header.stamp:
+                problems.append("state %d: stamp %d (node) != %d (propagate_bag)"
+                                % (i, a.header.stamp.to_nsec(), b.header.stamp.to_nsec()))
+                continue
+            angle = rotation_angle_exact(as_tuple(a.orientation), as_tuple(b.orientation))
+            rate = max(abs(a.angular_velocity.x - b.angular_velocity.x),
+                       abs(a.angular_velocity.y - b.angular_velocity.y),
+                       abs(a.angular_velocity.z - b.angular_velocity.z))
+            worst_angle, worst_rate = max(worst_angle, angle), max(worst_rate, rate)
+            if not angle <= TOLERANCE or not rate <= TOLERANCE:
+                problems.append("state %d at %d: orientation %.3g rad, angular velocity %.3g rad/s "
+                                "apart" % (i, a.header.stamp.to_nsec(), angle, rate))
+            for field in ("model", "integrator"):
+                if getattr(a, field) != getattr(b, field):
+                    problems.append("state %d: %s %s (node) != %s (propagate_bag)"
+                                    % (i, field, getattr(a, field), getattr(b, field)))
+        print("%s: %d states compared, largest difference %.3g rad, %.3g rad/s"
+              % (name, min(len(node_states), len(tool)), worst_angle, worst_rate))
+        self.assertFalse(problems, "%s: %d differences:\n%s"
+                         % (name, len(problems), "\n".join(problems[:20])))
+
+    def compare_counters(self, name, node, tool):
+        print("%s: propagate_bag's counters %s" % (name, sorted(tool.items())))
+        differ = ["%s: node %s, propagate_bag %d" % (key, node.get(key), value)
+                  for key, value in sorted(tool.items())
+                  if key != "bias_used" and node.get(key) != str(value)]
+        self.assertFalse(differ, "%s: counters differ:\n%s" % (name, "\n".join(differ)))
+
+    def assertHappened(self, counters, expected):
+        """The scene did what it was written to do (design.md §6-§7), in propagate_bag's count."""
+        wrong = ["%s %d, expected %d" % (k, counters.get(k, -1), v)
+                 for k, v in expected.items() if counters.get(k) != v]
+        self.assertFalse(wrong, "the scene's events: " + "; ".join(wrong))
+
+    # ---- the set-ups -------------------------------------------------------------------------
+
+    def test_kinematic_node_and_propagate_bag_agree(self):
+        scene = kinematic_scene()
+        tool_states, tool = self.run_tool("kinematic", scene, "/kin/attitude_propagator")
+        self.assertHappened(tool, {"dropped_no_tf": 3, "rejected_bias": 2, "bias_used": 1,
+                                   "dropped_stale": 3, "rejected_non_finite": 1,
+                                   "rejected_no_rate": 1, "rejected_future": 1, "gaps": 1,
+                                   "jumps_back": 1, "resets": 1})
+        node_states, node, _ = self.run_node(scene, "kin", tool_states, listener_topic="/tf")
+        self.compare_states("kinematic", node_states, tool_states)
+        self.compare_counters("kinematic", node, tool)
+
+    def test_dynamic_node_and_propagate_bag_agree(self):
+        scene = dynamic_scene()
+        tool_states, tool = self.run_tool("dynamic", scene, "/dyn/attitude_propagator")
+        self.assertHappened(tool, {"dropped_stale": 2, "jumps_back": 1, "resets": 0})
+        self.assertGreaterEqual(tool["late"], 1)
+        self.assertGreaterEqual(tool["gaps"], 1)
+        node_states, node, _ = self.run_node(scene, "dyn", tool_states)
+        self.compare_states("dynamic", node_states, tool_states)
+        self.compare_counters("dynamic", node, tool)
+
+
+if __name__ == "__main__":
+    rostest.rosrun("attitude_propagator", "node_vs_bag", NodeVsBagTest)
