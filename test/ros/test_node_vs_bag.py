@@ -33,6 +33,7 @@ import unittest
 import warnings
 
 import rosbag
+import rosgraph
 import rospkg
 import rospy
 import rostest
@@ -60,7 +61,7 @@ TOLERANCE = 1e-12
 # Waiting for the node to act on one message (wall s): generous, the machine is shared.
 PACE_TIMEOUT = 20.0
 # After the transform that first gives the mount: the listener's own thread stores it.
-LISTENER_SETTLE = 1.0
+LISTENER_SETTLE = 2.0
 
 # propagate_bag's names for its drops (the summary) and the node's diagnostic keys.
 DROP_KEYS = {
@@ -76,6 +77,12 @@ def rotation_angle_exact(a, b):
     """2 asin |vec(a^-1 b)|: the angle between two orientations (q and -q alike)."""
     d = qmul(qconj(a), b)
     return 2.0 * math.asin(min(1.0, math.sqrt(d[0] ** 2 + d[1] ** 2 + d[2] ** 2)))
+
+
+def subscriber_count(topic):
+    """How many nodes the master lists as subscribers of topic."""
+    subscribers = rosgraph.Master(rospy.get_name()).getSystemState()[1]
+    return sum(len(nodes) for name, nodes in subscribers if name == topic)
 
 
 def vector(v):
@@ -352,21 +359,25 @@ class NodeVsBagTest(unittest.TestCase):
                 warnings.simplefilter("ignore")  # rospy's advice to give a queue_size
                 pubs[topic] = rospy.Publisher(
                     target, type(next(e[2] for e in events if e[1] == topic)), queue_size=None)
-        for topic, pub in pubs.items():
-            wait_for(lambda: pub.get_num_connections() > 0, 30.0, "a subscriber on " + pub.name)
+        for pub in pubs.values():
+            # Every node subscribed (the other nodes' tf watches hear /tf too), connected.
+            wait_for(lambda: pub.get_num_connections() >= max(1, subscriber_count(pub.name)),
+                     30.0, "every subscriber on " + pub.name)
         # States propagate_bag had written by each record time: the node's pace.
         due, n = [], 0
         for record, _, _ in events:
             while n < len(tool_states) and tool_states[n][0] <= record:
                 n += 1
             due.append(n)
-        paced_on_states, stalled = 0, None
+        paced_on_states, stalled, rates_sent = 0, None, False
         started = time.monotonic()
         for i, (record, topic, msg) in enumerate(events):
             # The node's tf listener, created by the first rate in the mount's frame, shares the
             # connection of the node's tf watch (one subscription per topic in a process), so it
-            # hears what follows that rate.
-            first_mount = topic == listener_topic and states.count() == 0
+            # hears what follows that rate; until the node has a state, what it hears may be
+            # the mount, which its own thread stores (the settle time below).
+            first_mount = topic == listener_topic and states.count() == 0 and rates_sent
+            rates_sent = rates_sent or topic not in (listener_topic, "/clock", "/gyro_bias")
             pubs[topic].publish(msg)
             if pace_on_states and stalled is None and due[i] > (due[i - 1] if i else 0):
                 try:
