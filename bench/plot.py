@@ -2,9 +2,10 @@
 """Turns the benchmark CSV files into the charts and the results table (docs/design.md §8).
 
 Usage: plot.py DATA_DIR DOCS_DIR [PAGE]
+       plot.py --fixes DATA_DIR DOCS_DIR   (only the late fixes' chart, DOCS_DIR/fixes.png)
 
 Reads DATA_DIR/sweep.csv, stability.csv, invariants.csv, step_costs.json and, when present,
-node_bench.csv and real_streams.csv; writes DOCS_DIR/*.png and DOCS_DIR/results.md, and, given
+node_bench.csv, real_streams.csv and fixes.csv; writes DOCS_DIR/*.png and DOCS_DIR/results.md, and, given
 PAGE (docs/benchmarks.md), replaces the text between its `<!-- >>> results -->` and
 `<!-- <<< results -->` markers, with the charts' paths relative to PAGE's folder.
 
@@ -1092,7 +1093,55 @@ def real_streams_chart(rows, path):
     plt.close(fig)
 
 
+def fixes_chart(rows, path):
+    """Late absolute fixes on the simulated gyro (fixes.csv, bench_sweep --fixes): the body-frame
+    attitude error per axis with its 3 sigma bound, with and without the gyro bias estimate, and
+    the bias estimate's error with its 3 sigma."""
+    colours = ["tab:red", "tab:green", "tab:blue"]
+    runs = [("bias_estimated", "attitude error, fuse with estimate_gyro_bias"),
+            ("bias_not_estimated", "attitude error, fuse without the bias estimate")]
+    fig, axes = plt.subplots(3, 1, figsize=(11, 11), sharex=True)
+    for ax, (run, title) in zip(axes[:2], runs):
+        mine = [r for r in rows if r["run"] == run]
+        t = [num(r, "t") for r in mine]
+        for colour, axis in zip(colours, "xyz"):
+            ax.plot(t, [1e3 * num(r, "err_" + axis) for r in mine], color=colour, linewidth=0.7,
+                    label=f"error about {axis}")
+            bound = [3e3 * num(r, "sd_" + axis) for r in mine]
+            ax.plot(t, bound, color=colour, linestyle="dashed", linewidth=0.8,
+                    label=f"3 sigma about {axis}")
+            ax.plot(t, [-b for b in bound], color=colour, linestyle="dashed", linewidth=0.8)
+        ax.set_ylabel("mrad (body frame)")
+        ax.set_title(title)
+        ax.set_ylim(-1.5, 1.5)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7, ncol=3, loc="upper right")
+    ax = axes[2]
+    mine = [r for r in rows if r["run"] == "bias_estimated"]
+    t = [num(r, "t") for r in mine]
+    for colour, axis in zip(colours, "xyz"):
+        ax.plot(t, [num(r, "bias_err_" + axis) for r in mine], color=colour, linewidth=0.8,
+                label=f"bias error, {axis}")
+        bound = [3 * num(r, "bias_sd_" + axis) for r in mine]
+        ax.plot(t, bound, color=colour, linestyle="dashed", linewidth=0.8,
+                label=f"3 sigma, {axis}")
+        ax.plot(t, [-b for b in bound], color=colour, linestyle="dashed", linewidth=0.8)
+    ax.set_ylabel("deg/h")
+    ax.set_ylim(-16, 16)
+    ax.set_xlabel("time (s)")
+    ax.set_title("gyro bias estimate's error (true bias 10 deg/h)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, ncol=3, loc="upper right")
+    fig.tight_layout()
+    fig.savefig(path, dpi=70)
+    plt.close(fig)
+
+
 def main(argv):
+    if len(argv) > 1 and argv[1] == "--fixes":
+        fixes_chart(read_csv(os.path.join(argv[2], "fixes.csv")),
+                    os.path.join(argv[3], "fixes.png"))
+        return
     data_dir, docs_dir = argv[1], argv[2]
     page = argv[3] if len(argv) > 3 else None
     sweep = read_csv(os.path.join(data_dir, "sweep.csv"))
@@ -1110,6 +1159,9 @@ def main(argv):
         streams_page = os.path.join(docs_dir, "real_streams.md")
         if os.path.exists(streams_page):
             splice_page(streams_page, settings_table(streams), docs_dir, "settings")
+    fixes_path = os.path.join(data_dir, "fixes.csv")
+    if os.path.exists(fixes_path):
+        fixes_chart(read_csv(fixes_path), os.path.join(docs_dir, "fixes.png"))
     costs_path = os.path.join(data_dir, "step_costs.json")
     medians = gbench_medians(costs_path) if os.path.exists(costs_path) else {}
     spreads = gbench_spreads(costs_path) if os.path.exists(costs_path) else {}

@@ -13,13 +13,23 @@
 //                            output step of 0.01 s at tolerance 1e-9; exact: its cached
 //                            closed form, evaluated at the next time)
 //   exact/<form>             one TorqueFreeMotion::evaluate at a new time
+//   engineSample/<model>[_fix_history]   one rate input (kinematic: cf4, the bias estimated) or
+//                            one clock tick publishing a grid stamp (dynamic: rk4, a torque
+//                            held) through AttitudeEngine, without fixes and with the fix
+//                            history kept (one fix at the start): the per-sample cost of the
+//                            history, as a ratio of the two in the same run
+//   fixReplay/<model>        one late fix 1 s behind the newest state: kinematic, 200 Hz rates
+//                            (200 inputs replayed); dynamic, a 100 Hz grid with torques and
+//                            rates (the steps of 1 s replayed)
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "attitude_propagator/dynamic_step.h"
+#include "attitude_propagator/engine.h"
 #include "attitude_propagator/kinematic_propagator.h"
 #include "attitude_propagator/kinematic_step.h"
 #include "attitude_propagator/torque_free_motion.h"
@@ -135,6 +145,119 @@ void registerDynamic() {
   }
 }
 
+// ---- the engine with late fixes (docs/design.md §6.9) ----------------------------------------
+
+constexpr ap::Stamp kEpoch = 1780000000LL * 1000000000LL;  // a 2026 ROS time
+
+ap::Stamp stampOf(double t) { return kEpoch + static_cast<ap::Stamp>(std::llround(t * 1e9)); }
+
+struct NullSink : ap::EngineSink {
+  void publishState(const ap::EngineState& s) override { benchmark::DoNotOptimize(s.q_WB); }
+  void inputApplied(const ap::Input&, const ap::EngineState&) override {}
+  void note(const ap::EngineNote&) override {}
+};
+
+ap::Input rateInput(double t) {
+  ap::Input in;
+  in.source = ap::Source::Imu;
+  in.stamp = stampOf(t);
+  in.value = rateAt(t);
+  return in;
+}
+
+ap::Input torqueInput(double t) {
+  ap::Input in;
+  in.source = ap::Source::Torque;
+  in.stamp = stampOf(t);
+  in.value = Eigen::Vector3d(0.3 * std::sin(t), -0.5, 0.2);
+  return in;
+}
+
+ap::EngineConfig kinematicFixConfig() {
+  ap::EngineConfig c;
+  c.model = ap::Model::Kinematic;
+  c.kinematic.integrator = Integrator::Cf4;
+  c.rate_stddev = 1e-3;
+  c.fixes.estimate_gyro_bias = true;
+  c.fixes.history = 1.5;
+  return c;
+}
+
+ap::EngineConfig dynamicFixConfig() {
+  ap::EngineConfig c;
+  c.model = ap::Model::Dynamic;
+  ap::DynamicConfig d;
+  d.body = ap::RigidBody::fromPrincipalMoments(Eigen::Vector3d(1.07, 2.10, 2.83));
+  d.integrator = Integrator::Rk4;
+  d.torque_input = true;
+  d.max_step = 0.01;
+  d.initial.w_B = Eigen::Vector3d(0.7, -0.4, 1.1);
+  c.dynamic = d;
+  c.publish_rate = 100.0;
+  c.initial_orientation_stddev = 0.05;
+  c.fixes.history = 1.5;
+  return c;
+}
+
+const Eigen::Matrix3d kFixCovariance = 1e-6 * Eigen::Matrix3d::Identity();
+
+/// One step of the model: a rate input (kinematic), or a torque and a clock tick at the grid
+/// stamp (dynamic), at sample k.
+void feed(ap::AttitudeEngine& engine, bool dynamic, long k) {
+  if (!dynamic) {
+    engine.submit(rateInput(k * kDt));
+    return;
+  }
+  const double t = 0.01 * k;
+  if (k % 10 == 0) engine.submit(torqueInput(t + 0.0037));  // a new torque every 0.1 s
+  engine.clockTick(stampOf(t));
+}
+
+void engineSampleCost(benchmark::State& state, bool dynamic, bool history) {
+  NullSink sink;
+  ap::AttitudeEngine engine(dynamic ? dynamicFixConfig() : kinematicFixConfig(), sink);
+  long k = 0;
+  feed(engine, dynamic, k++);
+  if (history) engine.submitFix(stampOf(0.0), engine.state().q_WB, kFixCovariance);
+  for (auto _ : state) {
+    feed(engine, dynamic, k++);
+    benchmark::DoNotOptimize(engine.state().q_WB.coeffs().data());
+  }
+  state.counters["history"] = static_cast<double>(engine.fixHistorySize());
+}
+
+void fixReplayCost(benchmark::State& state, bool dynamic) {
+  NullSink sink;
+  ap::AttitudeEngine engine(dynamic ? dynamicFixConfig() : kinematicFixConfig(), sink);
+  const long per_second = dynamic ? 100 : 200;
+  feed(engine, dynamic, 0);
+  engine.submitFix(stampOf(0.0), engine.state().q_WB, kFixCovariance);
+  Eigen::Quaterniond q = engine.state().q_WB;
+  for (long k = 1; k <= 3 * per_second / 2; ++k) {  // newest at 1.5 s
+    feed(engine, dynamic, k);
+    if (k == per_second / 2) q = engine.state().q_WB;  // the estimate at 0.5 s: inside the gate
+  }
+  for (auto _ : state) {
+    // 1 s behind the newest state; near the estimate, so the gate lets it through.
+    const ap::FixOutcome outcome = engine.submitFix(stampOf(0.5), q, kFixCovariance);
+    benchmark::DoNotOptimize(outcome);
+  }
+  state.counters["replayed"] = static_cast<double>(per_second);
+  state.counters["accepted"] = static_cast<double>(engine.counters().fixes_accepted);
+}
+
+void registerFixes() {
+  for (bool dynamic : {false, true}) {
+    const std::string model = dynamic ? "dynamic_rk4" : "kinematic_cf4";
+    benchmark::RegisterBenchmark(("engineSample/" + model).c_str(), engineSampleCost, dynamic,
+                                 false);
+    benchmark::RegisterBenchmark(("engineSample/" + model + "_fix_history").c_str(),
+                                 engineSampleCost, dynamic, true);
+    benchmark::RegisterBenchmark(("fixReplay/" + model).c_str(), fixReplayCost, dynamic)
+        ->Unit(benchmark::kMicrosecond);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -142,6 +265,7 @@ int main(int argc, char** argv) {
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   registerKinematic();
   registerDynamic();
+  registerFixes();
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
   return 0;

@@ -3,13 +3,16 @@
 //   sweep.csv       work-precision: error and median cost per step for every (scene, method, dt)
 //   stability.csv   error after a fixed time against |w| dt from 1e-3 to 10
 //   invariants.csv  energy and |M| drift against time on a long free-body run
+//   fixes.csv       late absolute fixes on a simulated gyro (test/core/simulated_gyro.h): the
+//                   attitude error and its standard deviation against time, with and without
+//                   the gyro bias estimate, and the bias estimate's error (every 0.5 s)
 //   real_streams.csv  every kinematic method and `auto` on real gyro streams (point and
 //                     averaged at 100-1000 Hz, mid- and start-stamped means, jittered, lost
 //                     samples, noisy MEMS, on-chip filters, FIFO reads, a rate change) on the
 //                     coning, tumbling, fast tumbling and vibration scenes
-// Usage: bench_sweep [out_dir] [--quick] [--streams | --stability]   (--quick: fewer
+// Usage: bench_sweep [out_dir] [--quick] [--streams | --stability | --fixes]   (--quick: fewer
 // repetitions, for a smoke test; --streams: only real_streams.csv; --stability: only
-// stability.csv)
+// stability.csv; --fixes: only fixes.csv)
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -17,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "../test/core/simulated_gyro.h"
 #include "csv.h"
 #include "dynamic_sweep.h"
 #include "kinematic_sweep.h"
@@ -28,6 +32,7 @@ struct Options {
   std::string out_dir = ".";
   bool streams_only = false;
   bool stability_only = false;
+  bool fixes_only = false;
   bench::TimingOptions timing;
 };
 
@@ -38,6 +43,8 @@ Options parse(int argc, char** argv) {
       options.streams_only = true;
     } else if (std::strcmp(argv[i], "--stability") == 0) {
       options.stability_only = true;
+    } else if (std::strcmp(argv[i], "--fixes") == 0) {
+      options.fixes_only = true;
     } else if (std::strcmp(argv[i], "--quick") == 0) {
       options.timing.rounds = 1;
       options.timing.min_chunk_ms = 0.0;
@@ -64,6 +71,43 @@ std::vector<bench::DynamicScene> dynamicScenes() {
           bench::torquedScene()};
 }
 
+// The scene of the fix tests (600 s, fixes at 5 Hz with 1 mrad noise, 150 ms late, fuse), with
+// and without the bias estimate: every 0.5 s the body-frame attitude error Log(q_est^-1 q_true)
+// and sqrt(P_B) per axis, the bias estimate's error and its standard deviation (deg/h).
+void writeFixRuns(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) throw std::runtime_error("cannot write " + path);
+  std::fputs(
+      "run,t,err_x,err_y,err_z,sd_x,sd_y,sd_z,bias_err_x,bias_err_y,bias_err_z,"
+      "bias_sd_x,bias_sd_y,bias_sd_z\n",
+      f);
+  for (bool estimate : {true, false}) {
+    const char* run = estimate ? "bias_estimated" : "bias_not_estimated";
+    long k = 0;
+    const simulated_gyro::GyroRun result = simulated_gyro::simulateGyro(
+        600.0, true, estimate, 0.0,
+        [&](double t, const attitude_propagator::EngineState& s, const Eigen::Quaterniond& truth,
+            const Eigen::Vector3d& bias) {
+          if (k++ % 100 != 0) return;
+          const Eigen::Vector3d e = attitude_propagator::logMap(s.q_WB.conjugate() * truth);
+          const Eigen::Vector3d sd = s.P_B.diagonal().cwiseMax(0.0).cwiseSqrt();
+          const double per = 1.0 / simulated_gyro::kDegPerHour;
+          const Eigen::Vector3d be = per * (s.gyro_bias_estimate_B - bias);
+          const Eigen::Vector3d bsd = per * s.gyro_bias_stddev_B;
+          std::fprintf(f, "%s,%.3f,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e,%.6e\n",
+                       run, t, e.x(), e.y(), e.z(), sd.x(), sd.y(), sd.z(), be.x(), be.y(), be.z(),
+                       bsd.x(), bsd.y(), bsd.z());
+        });
+    std::fprintf(stderr,
+                 "bench: fixes (%s): rms after 60 s %.3g rad, mean NEES %.2f, bias error %.3g "
+                 "deg/h at 120 s, %.3g deg/h at 600 s\n",
+                 run, result.rms_after_60, result.mean_nees,
+                 result.bias_error_120 / simulated_gyro::kDegPerHour,
+                 result.bias_error_end / simulated_gyro::kDegPerHour);
+  }
+  std::fclose(f);
+}
+
 // The references judge everything else, so they are checked first against known answers:
 // the constant torque from rest (docs/numerics.md §8) and Hairer-Lubich-Wanner's M(100).
 bool checkReferences() {
@@ -83,6 +127,10 @@ bool checkReferences() {
 int main(int argc, char** argv) {
   try {
     const Options options = parse(argc, argv);
+    if (options.fixes_only) {
+      writeFixRuns(options.out_dir + "/fixes.csv");
+      return 0;
+    }
     const auto scenes = kinematicScenes();
     for (const auto& scene : scenes) {
       if (!bench::checkClosedForm(scene)) return 1;
@@ -101,6 +149,7 @@ int main(int argc, char** argv) {
       std::fclose(streams);
     }
     if (options.streams_only) return 0;
+    if (!options.stability_only) writeFixRuns(options.out_dir + "/fixes.csv");
     if (!options.stability_only) {
       std::FILE* sweep = openCsv(options.out_dir + "/sweep.csv");
       bench::runKinematicSweep(scenes, options.timing, sweep);

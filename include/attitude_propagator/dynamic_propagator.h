@@ -3,6 +3,7 @@
 // or torque-free, with the time policy of docs/design.md §6.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -54,6 +55,10 @@ class DynamicPropagator {
   ~DynamicPropagator();
   DynamicPropagator(DynamicPropagator&&) noexcept;
   DynamicPropagator& operator=(DynamicPropagator&&) noexcept;
+  /// A copy is the whole state (knots, held torque, counters): the fix history keeps one per
+  /// step to replay from (docs/design.md §6.9). Assigning to an existing one allocates nothing.
+  DynamicPropagator(const DynamicPropagator& other);
+  DynamicPropagator& operator=(const DynamicPropagator& other);
 
   /// The integrator in use after resolving Auto.
   Integrator integrator() const;
@@ -91,6 +96,13 @@ class DynamicPropagator {
   /// Back to the initial state, waiting for an anchoring stamp.
   void reset();
 
+  /// Replaces the orientation at time() (an absolute fix, docs/design.md §6.9): the state at
+  /// time() becomes a knot and its orientation q_WB; the angular velocity (and momentum), the
+  /// grid and the held torque stay, so the steps that follow are the ones that would have
+  /// followed from the corrected state. No-op before the anchor or for a zero or non-finite q
+  /// (normalised otherwise).
+  void correctOrientation(const Eigen::Quaterniond& q_WB);
+
   /// The inputs' stamps start again from an earlier time (their source jumped back, and the
   /// engine recognised it): the next rate and torque samples are not compared with the previous
   /// ones, and act as late samples do. The state and the held torque stay.
@@ -113,6 +125,8 @@ class DynamicPropagator {
   std::uint64_t failedSteps() const;
   /// Why the last FailedStep happened (StepStatus::Ok before the first one).
   StepStatus lastFailure() const;
+  /// Bytes a copy holds beyond sizeof(DynamicPropagator) (its state, on the heap).
+  static std::size_t stateBytes();
   /// Work units (as for step_budget) the last advanceTo, setTorque or setRate spent.
   std::uint64_t lastCallWork() const;
 

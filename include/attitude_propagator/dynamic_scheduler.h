@@ -37,8 +37,19 @@ class DynamicScheduler final : public Propagator {
   double energyDrift() const override { return dynamic_.energyDrift(); }
   double momentumDrift() const override { return dynamic_.momentumDrift(); }
 
+  std::optional<double> savedTime() const override;
+  void save(ModelSnapshot& into) const override;
+  void restore(const ModelSnapshot& from) override;
+  bool advanceForFix(double t) override;
+  void correctOrientation(const Eigen::Quaterniond& q_WB) override {
+    dynamic_.correctOrientation(q_WB);
+  }
+  void replay(const ModelStep& step) override;
+
  private:
   void applyDynamic(const Input& input);
+  /// The input to the propagator (setTorque or setRate), the held torque kept.
+  StampOutcome applyToModel(const Input& input);
   void applyPendingUpTo(Stamp stamp);
   void publishGridStamp(Stamp stamp);
 

@@ -77,7 +77,7 @@ enum class FixOutcome {
   BadCovariance,   ///< non-finite, asymmetric, a negative variance, a variance above pi^2,
                    ///< a correlation beyond one
   QueueFull,       ///< waiting, and dropped: kMaxPendingFixes were stamped nearer
-  RefusedByModel,  ///< the dynamic model takes no fixes
+  RefusedByModel,  ///< no model refuses fixes now (both take them); kept for its callers
 };
 const char* fixOutcomeName(FixOutcome outcome);
 
@@ -90,15 +90,17 @@ struct ErrorState {
   Eigen::Vector3d bias_B = Eigen::Vector3d::Zero();  ///< estimated bias (rad/s), body frame
 };
 
-/// One entry of the fix history: a rate input as the model received it (after rate_delay and
-/// the configured bias; the bias estimate is subtracted when it is applied), and the model and
-/// the error state after it, at the stamp the state then held at.
+/// One entry of the fix history: a step of the model (a rate input as the model received it,
+/// after rate_delay and the configured bias, the bias estimate subtracted when it is applied;
+/// a torque; an advance of the dynamic model to a grid stamp), and the model, its orientation
+/// and the error state after it, at the stamp the state then held at.
 struct FixHistoryEntry {
-  Input input;
-  KinematicPropagator model;
+  ModelStep step;
+  ModelSnapshot model;
+  Eigen::Quaterniond q_WB = Eigen::Quaterniond::Identity();
   ErrorState error;
   Stamp stamp = 0;
-  /// The state was not reached by an input (the newest one when the history started, a pinned
+  /// The state was not reached by a step (the newest one when the history started, a pinned
   /// state): restored, never replayed.
   bool base = false;
 };
@@ -173,7 +175,8 @@ class AttitudeEngine : private PropagatorHost {
   /// (rad^2) of its rotation-vector error in the body frame, like P_B; all zero: fix_stddev^2 I.
   /// Applied at its stamp (fix_mode: fuse or reset) and the rate inputs since replayed, so the
   /// newest state is what it would have been had the fix arrived on time; the state is published
-  /// with the next output. Kinematic model only. Never throws. docs/design.md §6.9.
+  /// with the next output. Both models (dynamic: the torques and rates since its stamp replayed,
+  /// the angular velocity its own). Never throws. docs/design.md §6.9.
   FixOutcome submitFix(Stamp stamp, const Eigen::Quaterniond& q_WB,
                        const Eigen::Matrix3d& covariance_B);
   /// Fixes waiting for the rates to reach their stamps.
@@ -247,6 +250,7 @@ class AttitudeEngine : private PropagatorHost {
   void propagateCovariance(double h, const Eigen::Vector3d& w_step,
                            const Eigen::Matrix3d& rate_covariance_B) override;
   void anchorCovariance() override;
+  void stepTaken(const ModelStep& step) override;
 
   void rebaseIfFar(Stamp stamp);
   bool clockWentBack(Stamp now);
@@ -271,14 +275,22 @@ class AttitudeEngine : private PropagatorHost {
   };
   /// Hands a rate input to the model, the bias estimate subtracted.
   void submitToModel(const Input& input);
-  /// Appends the model's state after `input` to the history, drops what is too old.
-  void recordHistory(const Input& input, bool base = false);
+  /// Appends the model's state after `step` to the history, drops what is too old.
+  void recordHistory(const ModelStep& step, bool base = false);
+  /// Repeats a saved step, the current bias estimate subtracted from a rate.
+  void replayStep(const ModelStep& step);
+  /// Whether the bias estimate is subtracted from this input.
+  bool takesBiasEstimate(const Input& input) const {
+    return config_.fixes.estimate_gyro_bias && input.source != Source::Torque;
+  }
   void clearHistory();
   FixHistoryEntry& historyEntry(std::size_t i) {
     return history_[(history_head_ + i) % history_.size()];
   }
   /// Applies a fix stamped at or before the newest entry.
   FixOutcome applyFix(const PendingFix& fix);
+  /// Saves the model's state after a replayed step into its entry.
+  void saveReplayed(FixHistoryEntry& entry);
   /// Applies the waiting fixes the rates have reached.
   void applyDueFixes();
   void countFix(FixOutcome outcome);
@@ -311,6 +323,8 @@ class AttitudeEngine : private PropagatorHost {
   std::vector<PendingFix> pending_fixes_;  // sorted by stamp, at most kMaxPendingFixes
   int rejected_in_a_row_ = 0;
   bool replaying_ = false;
+  const Input* submitting_ = nullptr;  // the input being handed to the model, as received
+  ModelSnapshot live_;                 // the newest state while a fix is worked out
 };
 
 }  // namespace attitude_propagator

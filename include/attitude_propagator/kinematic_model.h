@@ -35,9 +35,20 @@ class KinematicModel final : public Propagator {
   double energyDrift() const override { return 0.0; }
   double momentumDrift() const override { return 0.0; }
   const KinematicPropagator* kinematic() const override { return &kinematic_; }
-  KinematicPropagator* replayableState() override { return &kinematic_; }
+
+  std::optional<double> savedTime() const override;
+  void save(ModelSnapshot& into) const override { into = kinematic_; }
+  void restore(const ModelSnapshot& from) override;
+  bool advanceForFix(double /*t*/) override { return false; }  // a step needs the next sample
+  void correctOrientation(const Eigen::Quaterniond& q_WB) override {
+    kinematic_.correctOrientation(q_WB);
+  }
+  void replay(const ModelStep& step) override { apply(step.input); }
 
  private:
+  /// One input through the propagator: the covariance, the state published.
+  void apply(const Input& input);
+
   PropagatorHost& host_;
   KinematicPropagator kinematic_;
   std::string model_name_ = "kinematic";

@@ -96,11 +96,13 @@ constexpr double kMaxOrientationVariance = 3.14159265358979323846 * 3.1415926535
 
 /// Largest `fix_history` (s): how far back a fix may be stamped and still be applied at its stamp.
 constexpr double kMaxFixHistory = 10.0;
-/// The history's memory bound: at most this many rate inputs are kept (the oldest dropped
-/// first, so at high rates the history is shorter than fix_history). One entry is the input as
-/// applied, the kinematic propagator after it and the error state, sizeof(FixHistoryEntry)
-/// bytes (1600 on x86-64, printed by test_fixes.cpp): 6.6 MB at most, 10 s at
-/// 400 Hz. Nothing is kept until the first fix is submitted.
+/// The history's memory bound: at most this many steps of the model are kept (the oldest dropped
+/// first, so at high rates the history is shorter than fix_history). One entry is the step
+/// (an input as applied, or a dynamic grid advance), the model's state after it and the error
+/// state, sizeof(FixHistoryEntry) bytes (1792 on x86-64, printed by test_fixes.cpp): 7.3 MB at
+/// most, 10 s at 400 Hz; in the dynamic model each entry also holds the propagator's state on
+/// the heap (1168 bytes more, test_dynamic_fixes.cpp): 12.1 MB at most. Nothing is kept until
+/// the first fix is submitted.
 constexpr std::size_t kMaxFixHistorySamples = 4096;
 /// Fixes stamped ahead of the newest rate wait for the rates to reach them, at most this many;
 /// past it the one stamped furthest ahead is dropped (fixes_queue_full).

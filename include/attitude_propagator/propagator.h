@@ -12,17 +12,19 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <variant>
 
 #include <Eigen/Geometry>
 
+#include "attitude_propagator/dynamic_propagator.h"
 #include "attitude_propagator/dynamic_state.h"
 #include "attitude_propagator/integrator.h"
+#include "attitude_propagator/kinematic_propagator.h"
 #include "attitude_propagator/source_timeline.h"
 #include "attitude_propagator/time_policy.h"
 
 namespace attitude_propagator {
 
-class KinematicPropagator;
 struct EngineConfig;
 
 /// Where an input came from; chooses what it means and how it is logged.
@@ -41,6 +43,26 @@ struct Input {
   /// IMU message here, to republish it with the orientation at its stamp).
   std::shared_ptr<const void> payload;
 };
+
+/// What moved a model's state: kept in the fix history and repeated by a replay of a late fix
+/// (docs/design.md §6.9). An input handed to the model, or (dynamic model) its advance to a
+/// grid stamp, `input.stamp`.
+struct ModelStep {
+  Input input;
+  bool advance = false;
+};
+
+/// The dynamic model's whole state for a replay: the propagator (knots, grid, held torque) and
+/// the torque sample it holds. Inputs still waiting for the clock are not part of it: they
+/// have not acted yet.
+struct DynamicReplayState {
+  DynamicPropagator dynamic;
+  std::optional<Input> held_torque;
+};
+
+/// A model's whole state, saved after each step while fixes are on (plain values, copied into
+/// reused slots): the kinematic propagator, or the dynamic one.
+using ModelSnapshot = std::variant<std::monostate, KinematicPropagator, DynamicReplayState>;
 
 /// The state to publish at a stamp.
 struct EngineState {
@@ -93,7 +115,7 @@ struct EngineCounters {
   std::uint64_t fixes_bad_quaternion = 0;  ///< non-finite, or not of unit norm
   std::uint64_t fixes_bad_covariance = 0;  ///< non-finite, asymmetric, negative or above pi^2
   std::uint64_t fixes_queue_full = 0;      ///< ahead of the newest rate, the queue full: dropped
-  std::uint64_t fixes_refused_model = 0;   ///< the dynamic model takes no fixes
+  std::uint64_t fixes_refused_model = 0;   ///< no model refuses fixes now: stays 0
 };
 
 /// Something the node should log (throttled per kind).
@@ -143,6 +165,9 @@ class PropagatorHost {
   virtual void propagateCovariance(double h, const Eigen::Vector3d& w_step,
                                    const Eigen::Matrix3d& rate_covariance_B) = 0;
   virtual void anchorCovariance() = 0;
+  /// The model took a step (kept for late fixes; the model calls it after each input it
+  /// handled, whatever became of it, and after each advance to a grid stamp).
+  virtual void stepTaken(const ModelStep& step) = 0;
 
  protected:
   ~PropagatorHost() = default;
@@ -194,10 +219,25 @@ class Propagator {
   virtual bool takesRepeatedRateStamps() const { return false; }
   /// The kinematic propagator, for its diagnostics; nullptr in the dynamic model.
   virtual const KinematicPropagator* kinematic() const { return nullptr; }
-  /// The model's whole state when it can be saved and restored for a replay of late fixes
-  /// (kinematic: the KinematicPropagator is the model's state); nullptr when the model takes no
-  /// fixes (dynamic). docs/design.md §6.9.
-  virtual KinematicPropagator* replayableState() { return nullptr; }
+
+  // Late fixes (docs/design.md §6.9): the engine saves the model after each step, sets it back
+  // to a saved state, corrects it there and repeats the steps since.
+  /// The model's core time when it has a state to save (anchored); empty otherwise.
+  virtual std::optional<double> savedTime() const = 0;
+  /// Saves the whole state into `into` (reusing its storage when it holds this model's).
+  virtual void save(ModelSnapshot& into) const = 0;
+  /// Back to a state saved by this model (a snapshot of another kind is ignored).
+  virtual void restore(const ModelSnapshot& from) = 0;
+  /// Moves a restored model on to core time t, short of its next saved step, so that a fix
+  /// stamped there acts at its own stamp. False when the model moves only by its steps
+  /// (kinematic: a step needs the next sample; the fix is then carried back to the model's
+  /// time along the geodesic).
+  virtual bool advanceForFix(double t) = 0;
+  /// Replaces the orientation at the model's time; everything else (the rate, the sample
+  /// window, the knots and grid, the held torque) stays.
+  virtual void correctOrientation(const Eigen::Quaterniond& q_WB) = 0;
+  /// Repeats a saved step in a replay (the host then neither counts nor publishes).
+  virtual void replay(const ModelStep& step) = 0;
 };
 
 /// The time policy of the model `config` asks for.

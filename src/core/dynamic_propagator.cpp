@@ -353,6 +353,19 @@ DynamicPropagator::~DynamicPropagator() = default;
 DynamicPropagator::DynamicPropagator(DynamicPropagator&&) noexcept = default;
 DynamicPropagator& DynamicPropagator::operator=(DynamicPropagator&&) noexcept = default;
 
+DynamicPropagator::DynamicPropagator(const DynamicPropagator& other)
+    : impl_(std::make_unique<Impl>(*other.impl_)) {}
+
+DynamicPropagator& DynamicPropagator::operator=(const DynamicPropagator& other) {
+  if (this == &other) return *this;
+  if (impl_ && other.impl_) {
+    *impl_ = *other.impl_;  // into the existing Impl: no allocation per history entry
+  } else {
+    impl_ = other.impl_ ? std::make_unique<Impl>(*other.impl_) : nullptr;
+  }
+  return *this;
+}
+
 Integrator DynamicPropagator::integrator() const { return impl_->integrator; }
 
 std::string DynamicPropagator::modelName() const {
@@ -426,6 +439,23 @@ void DynamicPropagator::reset() {
   impl_->anchored = false;
 }
 
+void DynamicPropagator::correctOrientation(const Eigen::Quaterniond& q_WB) {
+  Impl& d = *impl_;
+  const std::optional<Eigen::Quaterniond> unit = safeNormalized(q_WB);
+  if (!d.anchored || !unit) return;
+  d.beginCall();
+  // The current state becomes a knot (the same step from the last knot that computed it), so
+  // the correction acts at time() and the grid after it is unchanged.
+  if (!d.commitAt(d.time)) {
+    d.pin(d.time, DynamicState{*unit, d.current_B.w_B});  // cannot happen: the step succeeded
+    return;
+  }
+  // Only the orientation: q_WP = q_WB (x) q_BP; w_P and M_P (the body's own state) stay.
+  d.knot.q_WP = *unit * d.config.body.q_BP();
+  d.stuck = false;
+  d.setCurrent(d.knot_time, d.knot);
+}
+
 void DynamicPropagator::restartInputOrder() {
   impl_->torque_sample_stamp = -std::numeric_limits<double>::infinity();
   impl_->rate_sample_stamp = -std::numeric_limits<double>::infinity();
@@ -437,6 +467,7 @@ const DynamicState& DynamicPropagator::state() const { return impl_->current_B; 
 std::uint64_t DynamicPropagator::steps() const { return impl_->steps; }
 std::uint64_t DynamicPropagator::failedSteps() const { return impl_->failed_steps; }
 StepStatus DynamicPropagator::lastFailure() const { return impl_->last_failure; }
+std::size_t DynamicPropagator::stateBytes() { return sizeof(Impl); }
 std::uint64_t DynamicPropagator::lastCallWork() const { return impl_->work; }
 double DynamicPropagator::normError() const { return impl_->norm_error; }
 

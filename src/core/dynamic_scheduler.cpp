@@ -5,6 +5,7 @@
 #include <iterator>
 #include <stdexcept>
 #include <utility>
+#include <variant>
 
 #include "attitude_propagator/engine.h"
 
@@ -66,6 +67,16 @@ void DynamicScheduler::applyDynamic(const Input& input) {
   // The core places an input that arrives after the clock passed its stamp (transport
   // latency) at the last grid point, and drops one not newer than the stream's previous one.
   const bool late = dynamic_.anchored() && t < dynamic_.time();
+  const StampOutcome outcome = applyToModel(input);
+  if (late && outcome == StampOutcome::Advanced) ++host_.mutableCounters().late;
+  if (host_.handleOutcome(outcome, input.source, input.stamp)) {
+    host_.inputApplied(input, input.stamp);
+  }
+  host_.stepTaken(ModelStep{input, false});
+}
+
+StampOutcome DynamicScheduler::applyToModel(const Input& input) {
+  const double t = host_.coreTime(input.stamp);
   StampOutcome outcome;
   try {
     outcome = input.source == Source::Torque ? dynamic_.setTorque(t, input.value, input.frame)
@@ -75,11 +86,8 @@ void DynamicScheduler::applyDynamic(const Input& input) {
     // (no torque subscription), so this is a programming error caught rather than propagated.
     outcome = StampOutcome::RejectedNonFinite;
   }
-  if (late && outcome == StampOutcome::Advanced) ++host_.mutableCounters().late;
   if (input.source == Source::Torque && stateHoldsAtStamp(outcome)) held_torque_ = input;
-  if (host_.handleOutcome(outcome, input.source, input.stamp)) {
-    host_.inputApplied(input, input.stamp);
-  }
+  return outcome;
 }
 
 void DynamicScheduler::applyPendingUpTo(Stamp stamp) {
@@ -139,7 +147,11 @@ void DynamicScheduler::publishGridStamp(Stamp stamp) {
   if (dynamic_.anchored() && t < dynamic_.time()) return;  // set_state pinned a later time
   if (!dynamic_.anchored() || t > dynamic_.time()) {
     const StampOutcome outcome = dynamic_.advanceTo(t);
-    if (!host_.handleOutcome(outcome, std::nullopt, stamp)) return;
+    const bool holds = host_.handleOutcome(outcome, std::nullopt, stamp);
+    Input grid;
+    grid.stamp = stamp;
+    host_.stepTaken(ModelStep{grid, true});
+    if (!holds) return;
   }
   host_.emitState(stamp);  // also when an input stamped exactly here brought the state to it
 }
@@ -178,6 +190,48 @@ void DynamicScheduler::reconfigure(const EngineConfig& next) {
   max_pending_ = next.max_pending;
   grid_budget_ = next.grid_budget;
   work_budget_ = next.work_budget;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Late fixes (docs/design.md §6.9): the steps are the inputs applied and the advances to grid
+// stamps, so a replay repeats exactly the calls that made the state; the knots depend only on
+// them (§4.4), so the state after a replay is the one a fix on time would have given.
+// ---------------------------------------------------------------------------------------------
+
+std::optional<double> DynamicScheduler::savedTime() const {
+  if (!dynamic_.anchored()) return std::nullopt;
+  return dynamic_.time();
+}
+
+void DynamicScheduler::save(ModelSnapshot& into) const {
+  if (auto* saved = std::get_if<DynamicReplayState>(&into)) {
+    saved->dynamic = dynamic_;  // into the slot's own storage
+    saved->held_torque = held_torque_;
+    return;
+  }
+  into = DynamicReplayState{dynamic_, held_torque_};
+}
+
+void DynamicScheduler::restore(const ModelSnapshot& from) {
+  if (const auto* saved = std::get_if<DynamicReplayState>(&from)) {
+    dynamic_ = saved->dynamic;
+    held_torque_ = saved->held_torque;
+  }
+}
+
+bool DynamicScheduler::advanceForFix(double t) {
+  // From a saved state short of the next step: no input acts in between, so the state at t is
+  // the last knot advanced to t, as the live model had it there.
+  if (dynamic_.anchored() && t > dynamic_.time()) dynamic_.advanceTo(t);
+  return true;
+}
+
+void DynamicScheduler::replay(const ModelStep& step) {
+  if (step.advance) {
+    dynamic_.advanceTo(host_.coreTime(step.input.stamp));
+    return;
+  }
+  applyToModel(step.input);
 }
 
 EngineState DynamicScheduler::state() const {

@@ -201,15 +201,20 @@ void AttitudeEngine::clockTick(Stamp now) {
   const bool jumped = !back && clock_ && static_cast<double>(now - *clock_) * 1e-9 > max_dt;
   advanceClock(now, back);
   propagator_->publishDue(jumped);
+  if (keep_history_) applyDueFixes();  // the dynamic model's time moved on
 }
 
 void AttitudeEngine::poll(Stamp now) {
   if (now <= 0) return;
   advanceClock(now, clockWentBack(now));
   propagator_->publishDue(false);
+  if (keep_history_) applyDueFixes();
 }
 
-void AttitudeEngine::drain() { propagator_->publishDue(false); }
+void AttitudeEngine::drain() {
+  propagator_->publishDue(false);
+  if (keep_history_) applyDueFixes();
+}
 
 bool AttitudeEngine::tooFarAhead(Stamp stamp) const {
   return clock_ && static_cast<double>(stamp - *clock_) * 1e-9 > config_.max_future;
@@ -264,20 +269,38 @@ void AttitudeEngine::submit(const Input& raw) {
   // A bias stamped at or before the message's own stamp applies to it.
   if (input.source != Source::Torque) input.value -= biasAt(raw.stamp);
   submitToModel(input);
-  if (keep_history_) {
-    recordHistory(input);
-    applyDueFixes();
-  }
+  if (keep_history_) applyDueFixes();
 }
 
 void AttitudeEngine::submitToModel(const Input& input) {
-  if (config_.fixes.estimate_gyro_bias && input.source != Source::Torque) {
+  submitting_ = &input;  // the history keeps the input as received (stepTaken)
+  if (takesBiasEstimate(input)) {
     Input corrected = input;
     corrected.value -= error_.bias_B;
     propagator_->submit(corrected);
+  } else {
+    propagator_->submit(input);
+  }
+  submitting_ = nullptr;
+}
+
+void AttitudeEngine::stepTaken(const ModelStep& step) {
+  if (!keep_history_ || replaying_) return;
+  if (submitting_ != nullptr && !step.advance) {
+    recordHistory(ModelStep{*submitting_, false});  // before the bias estimate
     return;
   }
-  propagator_->submit(input);
+  recordHistory(step);
+}
+
+void AttitudeEngine::replayStep(const ModelStep& step) {
+  if (step.advance || !takesBiasEstimate(step.input)) {
+    propagator_->replay(step);
+    return;
+  }
+  ModelStep corrected = step;
+  corrected.input.value -= error_.bias_B;  // the estimate as it is now, after the fix
+  propagator_->replay(corrected);
 }
 
 bool AttitudeEngine::inOrder(Source source, Stamp stamp) {
@@ -512,7 +535,7 @@ std::string AttitudeEngine::setState(Stamp stamp, const Eigen::Quaterniond& q_WB
   P_B_.setZero();  // pinned: the state is what the caller says it is
   error_.P_Bb.setZero();
   clearHistory();  // a fix stamped before the pin is too old
-  if (keep_history_) recordHistory(Input{}, true);
+  if (keep_history_) recordHistory(ModelStep{}, true);
   emitState(stamp);
   return {};
 }
@@ -560,8 +583,6 @@ FixOutcome AttitudeEngine::submitFix(Stamp stamp, const Eigen::Quaterniond& q_WB
     outcome = FixOutcome::BadQuaternion;
   } else if (!validFixCovariance(covariance_B)) {
     outcome = FixOutcome::BadCovariance;
-  } else if (propagator_->replayableState() == nullptr) {
-    outcome = FixOutcome::RefusedByModel;
   }
   if (outcome != FixOutcome::Waiting) {
     countFix(outcome);
@@ -575,7 +596,7 @@ FixOutcome AttitudeEngine::submitFix(Stamp stamp, const Eigen::Quaterniond& q_WB
   if (!keep_history_) {
     // Nothing is kept until fixes arrive: the history starts at the newest state.
     keep_history_ = true;
-    recordHistory(Input{}, true);
+    recordHistory(ModelStep{}, true);
   }
   if (history_size_ > 0 && stamp <= historyEntry(history_size_ - 1).stamp) {
     outcome = applyFix(fix);
@@ -612,10 +633,10 @@ void AttitudeEngine::clearHistory() {
   history_size_ = 0;  // the entries' storage stays for reuse
 }
 
-void AttitudeEngine::recordHistory(const Input& input, bool base) {
-  const KinematicPropagator* model = propagator_->kinematic();
-  if (model == nullptr || !model->anchored()) return;
-  const std::optional<Stamp> stamp = stampAt(model->time());
+void AttitudeEngine::recordHistory(const ModelStep& step, bool base) {
+  const std::optional<double> t = propagator_->savedTime();
+  if (!t) return;
+  const std::optional<Stamp> stamp = stampAt(*t);
   if (!stamp) return;
   FixHistoryEntry* slot = nullptr;
   if (history_size_ < history_.size()) {
@@ -625,16 +646,17 @@ void AttitudeEngine::recordHistory(const Input& input, bool base) {
     std::rotate(history_.begin(), history_.begin() + static_cast<std::ptrdiff_t>(history_head_),
                 history_.end());
     history_head_ = 0;
-    history_.push_back(FixHistoryEntry{Input{}, *model, error_, *stamp, base});
+    history_.emplace_back();
     slot = &history_.back();
     ++history_size_;
   } else {
     slot = &history_[history_head_];  // full: the oldest goes (the memory bound, limits.h)
     history_head_ = (history_head_ + 1) % history_.size();
   }
-  slot->input = input;
-  slot->input.payload.reset();  // the message is not kept
-  slot->model = *model;
+  slot->step = step;
+  slot->step.input.payload.reset();  // the message is not kept
+  propagator_->save(slot->model);
+  slot->q_WB = propagator_->state().q_WB;
   slot->error = error_;
   slot->stamp = *stamp;
   slot->base = base;
@@ -647,12 +669,13 @@ void AttitudeEngine::recordHistory(const Input& input, bool base) {
   }
 }
 
-// The fix is applied at the last saved state at or before its stamp, k (docs/design.md §6.9):
-// the estimate at the fix's stamp is interpolated along the geodesic to the next state,
-// q_f = q_k (x) D, D = Exp(a Log(q_k^-1 q_k+1)), a = (t_f - t_k) / (t_k+1 - t_k); an error at t_f
-// is the error at t_k seen through D (dtheta_k = C(D) dtheta_f), so the innovation
-// r = Log(q_f^-1 (x) q_fix) and the fix's covariance are carried to t_k by C(D), and the update
-// is made there.
+// The fix is applied at the last saved state at or before its stamp, k (docs/design.md §6.9).
+// A model that can move on from k to the fix's stamp (dynamic: the knot advanced to t_f) is
+// corrected there. Otherwise the estimate at the fix's stamp is interpolated along the geodesic
+// to the next state, q_f = q_k (x) D, D = Exp(a Log(q_k^-1 q_k+1)), a = (t_f - t_k) /
+// (t_k+1 - t_k); an error at t_f is the error at t_k seen through D (dtheta_k = C(D) dtheta_f),
+// so the innovation r = Log(q_f^-1 (x) q_fix) and the fix's covariance are carried to t_k by
+// C(D), and the update is made there.
 FixOutcome AttitudeEngine::applyFix(const PendingFix& fix) {
   const std::size_t n = history_size_;
   if (n == 0) return FixOutcome::TooOld;
@@ -664,13 +687,19 @@ FixOutcome AttitudeEngine::applyFix(const PendingFix& fix) {
   if (k == 0) return FixOutcome::TooOld;  // before the oldest state kept (or the anchor)
   --k;
   FixHistoryEntry& base = historyEntry(k);
-  const Eigen::Quaterniond q_k = base.model.orientation();
+  propagator_->save(live_);  // the newest state, kept should the gate reject the fix
+  propagator_->restore(base.model);
+  Eigen::Quaterniond q_k = base.q_WB;
   Eigen::Quaterniond D = Eigen::Quaterniond::Identity();
   if (base.stamp < fix.stamp && k + 1 < n) {
-    const FixHistoryEntry& next = historyEntry(k + 1);
-    const double a =
-        static_cast<double>(fix.stamp - base.stamp) / static_cast<double>(next.stamp - base.stamp);
-    D = expMap(a * logMap(q_k.conjugate() * next.model.orientation()));
+    if (propagator_->advanceForFix(coreTime(fix.stamp))) {
+      q_k = propagator_->state().q_WB;  // the model's own state at the fix's stamp
+    } else {
+      const FixHistoryEntry& next = historyEntry(k + 1);
+      const double a = static_cast<double>(fix.stamp - base.stamp) /
+                       static_cast<double>(next.stamp - base.stamp);
+      D = expMap(a * logMap(q_k.conjugate() * next.q_WB));
+    }
   }
   const Eigen::Matrix3d C = D.toRotationMatrix();
   const Eigen::Vector3d r = C * logMap((q_k * D).conjugate() * fix.q_WB);
@@ -687,6 +716,7 @@ FixOutcome AttitudeEngine::applyFix(const PendingFix& fix) {
     if (!(d2 <= config_.fixes.gate)) {
       if (rejected_in_a_row_ < kFixRejectionRun) {
         ++rejected_in_a_row_;
+        propagator_->restore(live_);
         return FixOutcome::RejectedGate;
       }
       reset = true;  // a run of rejections: the estimate is what is wrong
@@ -716,22 +746,26 @@ FixOutcome AttitudeEngine::applyFix(const PendingFix& fix) {
   }
   rejected_in_a_row_ = 0;
 
-  // Back to the state at t_k, corrected, and the rate inputs since replayed.
-  KinematicPropagator& model = *propagator_->replayableState();
-  model = base.model;
-  model.correctOrientation(q);
+  // The corrected state replaces the saved one (moved to the fix's stamp when the model moved
+  // there), and the steps since are repeated from it.
+  propagator_->correctOrientation(q);
   error_ = e;
-  base.model = model;
-  base.error = error_;
+  saveReplayed(base);
   replaying_ = true;
   for (std::size_t i = k + 1; i < n; ++i) {
     FixHistoryEntry& entry = historyEntry(i);
-    if (!entry.base) submitToModel(entry.input);
-    entry.model = model;
-    entry.error = error_;
+    if (!entry.base) replayStep(entry.step);
+    saveReplayed(entry);
   }
   replaying_ = false;
   return reset ? FixOutcome::Reset : FixOutcome::Accepted;
+}
+
+void AttitudeEngine::saveReplayed(FixHistoryEntry& entry) {
+  propagator_->save(entry.model);
+  entry.q_WB = propagator_->state().q_WB;
+  entry.error = error_;
+  if (const std::optional<double> t = propagator_->savedTime()) entry.stamp = *stampAt(*t);
 }
 
 }  // namespace attitude_propagator

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <utility>
+#include <variant>
 
 #include "attitude_propagator/engine.h"
 #include "attitude_propagator/quaternion.h"
@@ -12,6 +13,20 @@ KinematicModel::KinematicModel(const EngineConfig& config, PropagatorHost& host)
     : host_(host), kinematic_(config.kinematic) {}
 
 void KinematicModel::submit(const Input& input) {
+  apply(input);
+  host_.stepTaken(ModelStep{input, false});  // every input changes the model, or may have
+}
+
+std::optional<double> KinematicModel::savedTime() const {
+  if (!kinematic_.anchored()) return std::nullopt;
+  return kinematic_.time();
+}
+
+void KinematicModel::restore(const ModelSnapshot& from) {
+  if (const auto* saved = std::get_if<KinematicPropagator>(&from)) kinematic_ = *saved;
+}
+
+void KinematicModel::apply(const Input& input) {
   const double t = host_.coreTime(input.stamp);
   // time() is only defined once anchored (the window is empty before).
   const double t_before = kinematic_.anchored() ? kinematic_.time() : 0.0;
