@@ -68,16 +68,15 @@ struct FixConfig {
 
 /// What became of a fix (the counters say the same: EngineCounters::fixes_*).
 enum class FixOutcome {
-  Accepted,        ///< fused at its stamp, the rates since replayed
-  Reset,           ///< the attitude replaced at its stamp, the rates since replayed
-  Waiting,         ///< stamped ahead of the newest rate: applied when the rates reach it
-  RejectedGate,    ///< fuse: the innovation is beyond the gate
-  TooOld,          ///< stamped before the history (or the last anchor)
-  BadQuaternion,   ///< non-finite, or |q| not 1 within kFixUnitTolerance
-  BadCovariance,   ///< non-finite, asymmetric, a negative variance, a variance above pi^2,
-                   ///< a correlation beyond one
-  QueueFull,       ///< waiting, and dropped: kMaxPendingFixes were stamped nearer
-  RefusedByModel,  ///< no model refuses fixes now (both take them); kept for its callers
+  Accepted,       ///< fused at its stamp, the rates since replayed
+  Reset,          ///< the attitude replaced at its stamp, the rates since replayed
+  Waiting,        ///< stamped ahead of the newest rate: applied when the rates reach it
+  RejectedGate,   ///< fuse: the innovation is beyond the gate
+  TooOld,         ///< stamped before the history (or the last anchor)
+  BadQuaternion,  ///< non-finite, or |q| not 1 within kFixUnitTolerance
+  BadCovariance,  ///< non-finite, asymmetric, a negative variance, a variance above pi^2,
+                  ///< a correlation beyond one
+  QueueFull,      ///< waiting, and dropped: kMaxPendingFixes were stamped nearer
 };
 const char* fixOutcomeName(FixOutcome outcome);
 

@@ -115,7 +115,6 @@ struct EngineCounters {
   std::uint64_t fixes_bad_quaternion = 0;  ///< non-finite, or not of unit norm
   std::uint64_t fixes_bad_covariance = 0;  ///< non-finite, asymmetric, negative or above pi^2
   std::uint64_t fixes_queue_full = 0;      ///< ahead of the newest rate, the queue full: dropped
-  std::uint64_t fixes_refused_model = 0;   ///< no model refuses fixes now: stays 0
 };
 
 /// Something the node should log (throttled per kind).

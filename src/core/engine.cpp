@@ -88,8 +88,6 @@ const char* fixOutcomeName(FixOutcome outcome) {
       return "bad_covariance";
     case FixOutcome::QueueFull:
       return "queue_full";
-    case FixOutcome::RefusedByModel:
-      return "refused_by_model";
   }
   return "unknown";
 }
@@ -569,9 +567,6 @@ void AttitudeEngine::countFix(FixOutcome outcome) {
       break;
     case FixOutcome::QueueFull:
       ++counters_.fixes_queue_full;
-      break;
-    case FixOutcome::RefusedByModel:
-      ++counters_.fixes_refused_model;
       break;
   }
 }

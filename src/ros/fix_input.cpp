@@ -45,7 +45,7 @@ void FixInput::onMessage(const topic_tools::ShapeShifter& msg, const ros::Time& 
 
 std::uint64_t FixInput::notApplied(const EngineCounters& c) const {
   return c.fixes_rejected_gate + c.fixes_too_old + c.fixes_bad_quaternion + c.fixes_bad_covariance +
-         c.fixes_queue_full + c.fixes_refused_model + decoder_.refusals().total();
+         c.fixes_queue_full + decoder_.refusals().total();
 }
 
 std::uint64_t FixInput::notAppliedInARow(const EngineCounters& c) {
@@ -75,7 +75,6 @@ void FixInput::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status,
   status.add("fixes_bad_quaternion", c.fixes_bad_quaternion);
   status.add("fixes_bad_covariance", c.fixes_bad_covariance);
   status.add("fixes_queue_full", c.fixes_queue_full);
-  status.add("fixes_refused_model", c.fixes_refused_model);
   status.add("fixes_refused", r.total());
   status.add(fixRefusedCounter(Refused::NoTransform), r.no_tf);
   status.add(fixRefusedCounter(Refused::WrongType), r.type);
@@ -148,9 +147,6 @@ void FixInput::logOutcome(FixOutcome outcome, Stamp stamp, const AttitudeEngine&
       break;
     case FixOutcome::QueueFull:
       why = "stamped ahead of the rates, and too many wait already";
-      break;
-    case FixOutcome::RefusedByModel:
-      why = "the dynamic model takes no fixes";
       break;
   }
   last_reason_ = fixOutcomeName(outcome);
