@@ -95,6 +95,20 @@ TEST(LiveParameters, ARefusedChangeKeepsTheConfigurationInForce) {
   EXPECT_EQ(line->text.rfind("reconfigure refused: integrator", 0), 0u);
 }
 
+TEST(LiveParameters, AChangeTheEngineRefusesKeepsTheConfigurationInForce) {
+  // The engine runs the dynamic model; the parameters asked for validate to the kinematic one.
+  ap::Parameters dynamic;
+  dynamic.inertia = {1.0, 2.0, 3.0};
+  NullSink sink;
+  ap::AttitudeEngine engine(ap::engineConfig(ap::validateParameters(dynamic)), sink);
+  ap::NodeConfig config = ap::validateParameters({});
+  ap::Parameters p = config.parameters;
+  p.max_dt = 0.25;
+  const std::string error = ap::applyLive(p, ap::liveChange(config.parameters, p), engine, config);
+  EXPECT_EQ(error, "model: cannot change while running");
+  EXPECT_EQ(config.parameters.max_dt, ap::Parameters{}.max_dt);
+}
+
 TEST(LiveParameters, AnAcceptedChangeIsInForce) {
   ap::NodeConfig config = ap::validateParameters({});
   NullSink sink;

@@ -80,7 +80,7 @@ TEST(InputWindow, EachWindowCountsFromItsStart) {
   w.closeInputWindow(at(0), {}, 1.0);
   w.closeInputWindow(at(1), gapsOf(100, 80), 1.0);
   EXPECT_NE(w.problem(), "");
-  w.closeInputWindow(at(2), gapsOf(200, 90), 1.0);  // 10 of the next 100 lost
+  w.closeInputWindow(at(2), gapsOf(200, 110), 1.0);  // 30 of the next 100 lost
   EXPECT_EQ(w.problem(), "");
 }
 
