@@ -4,7 +4,9 @@
 // attitude_state and diagnostics. Every policy (time, queueing, publish grid, covariance,
 // counting) is the engine's (attitude_propagator/engine.h), every reading of a message the
 // message layer's; this class owns the ROS side only: parameters, topics, the tf listener the
-// decoders look sensor frames up in, timers, services and logging.
+// decoders look sensor frames up in, timers, services and logging. What it logs and shows in
+// diagnostics is composed without ROS beside it: note_text.h, input_text.h, model_text.h,
+// tf_conflict_watch.h, node_diagnostics.h (with input_window.h), live_parameters.h.
 //
 // Threading: every callback (subscriptions, timers, services) runs on the callback queue of
 // the node handles given to the constructor. The node spins one thread; the nodelet passes
@@ -16,6 +18,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -42,6 +45,9 @@
 #include "attitude_propagator/messages/input_decoders.h"
 #include "attitude_propagator/messages/outputs.h"
 #include "attitude_propagator/ros/fix_input.h"
+#include "attitude_propagator/ros/log_text.h"
+#include "attitude_propagator/ros/node_diagnostics.h"
+#include "attitude_propagator/ros/tf_conflict_watch.h"
 
 namespace attitude_propagator {
 
@@ -77,6 +83,9 @@ class AttitudePropagatorRos : public EngineSink {
   /// callback (a numeric surprise must never take the node down).
   template <class F>
   void guarded(const char* where, F&& f);
+  /// Logs a line composed elsewhere (note_text.h, input_text.h ...), throttled per kind
+  /// (kWarnPeriod of ROS time) unless its kind is empty.
+  void log(const std::optional<LogLine>& line);
 
   // Inputs.
   void onImu(const ros::MessageEvent<const sensor_msgs::Imu>& event);
@@ -102,16 +111,9 @@ class AttitudePropagatorRos : public EngineSink {
   /// Under wall time the clock is read from callbacks; under sim time /clock drives.
   void pollClock();
 
-  /// Watches /tf and /tf_static for another parent of the frame we publish as a child (or the
-  /// same edge from another node): warns with the fix, counts, and with `tf_conflict: stop`
-  /// stops publishing tf rather than fight over the tree, until the conflict is over
-  /// (resumeTfIfClear) or publish_tf is switched off and on.
+  /// A message on /tf or /tf_static from another node, for the tf-conflict watch
+  /// (tf_conflict_watch.h).
   void onTfSeen(const ros::MessageEvent<const tf2_msgs::TFMessage>& event, bool latched);
-  /// Resumes tf stopped by a conflict on /tf once no other parent has been seen there for
-  /// kTfConflictClearance. A /tf_static parent stays in every tf buffer: no time clears it.
-  void resumeTfIfClear();
-  /// Clears a stop (publish_tf switched off and on, or reverse_tf changing our child frame).
-  void resumeTf(const char* why);
 
   // Outputs.
   void publishTf(const EngineState& state);
@@ -125,15 +127,10 @@ class AttitudePropagatorRos : public EngineSink {
   // Services and diagnostics.
   bool onReset(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
   bool onSetState(SetState::Request& request, SetState::Response& response);
-  /// The mean lag of a source whose inputs arrive further from ROS time than
-  /// kInputLagWarning, if any.
-  std::optional<double> inputLagBeyondWarning() const;
+  /// The status computed by node_diagnostics.h.
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status);
-  /// Closes the one-second window of input counters when it is due: what became of the rate
-  /// samples received in it (input_window_problem_ names the cause when most were lost).
-  void closeInputWindow();
-  /// dynamic_reconfigure: validated like the start-up parameters; a refused change is
-  /// logged and the values shown in rqt_reconfigure go back to those in force.
+  /// dynamic_reconfigure (live_parameters.h): validated like the start-up parameters; a
+  /// refused change is logged and the values shown in rqt_reconfigure go back to those in force.
   void onReconfigure(AttitudePropagatorConfig& live, std::uint32_t level);
 
   ros::NodeHandle nh_;
@@ -168,11 +165,7 @@ class AttitudePropagatorRos : public EngineSink {
   ros::Subscriber fix_sub_;
   ros::Subscriber tf_watch_sub_;
   ros::Subscriber tf_static_watch_sub_;
-  std::uint64_t tf_conflicts_ = 0;
-  bool tf_stopped_ = false;
-  bool tf_conflict_latched_ = false;  // the stop came from /tf_static: only a toggle clears it
-  ros::WallTime last_tf_conflict_;    // the latest other parent of our child frame seen on /tf
-  std::uint64_t tf_resumes_ = 0;
+  TfConflictWatch tf_watch_;
   ros::Publisher tf_pub_;
   ros::Publisher tf_static_pub_;
   ros::Publisher imu_pub_;
@@ -184,14 +177,9 @@ class AttitudePropagatorRos : public EngineSink {
 
   diagnostic_updater::Updater updater_;
   std::unique_ptr<dynamic_reconfigure::Server<AttitudePropagatorConfig>> reconfigure_server_;
+  NodeDiagnostics diagnostics_;
   std::uint64_t callback_errors_ = 0;
-  std::uint64_t accepted_at_last_diagnosis_ = 0;
-  ros::WallTime last_diagnosis_;
-  ros::WallTime last_input_;
-  // The input window: counters at its start, and the verdict on the last complete one.
-  EngineCounters window_start_counters_;
-  ros::WallTime window_start_;
-  std::string input_window_problem_;  // empty: most rate samples were used
+  std::map<std::string, double> last_logged_;  // per kind of line: ROS time (s) last logged
 };
 
 }  // namespace attitude_propagator

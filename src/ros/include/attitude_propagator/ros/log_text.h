@@ -7,6 +7,8 @@
 #include <cstddef>
 #include <string>
 
+#include <ros/console_backend.h>
+
 namespace attitude_propagator {
 
 /// Longest text from a message that is logged as it is (bytes). A tf frame id or a message
@@ -19,5 +21,17 @@ constexpr std::size_t kLogTextBytes = 64;
 /// ASCII: rosconsole under the C locale turns every byte above 0x7F into '?'. max_bytes is
 /// raised for text that quotes message strings inside a longer explanation (tf's errors).
 std::string logText(const std::string& text, std::size_t max_bytes = kLogTextBytes);
+
+/// printf into a string (the log lines are composed before the wrapper logs them).
+std::string formatted(const char* format, ...) __attribute__((format(printf, 1, 2)));
+
+/// A line for the log, composed without ROS: the wrapper logs it, throttled per kind.
+struct LogLine {
+  ros::console::levels::Level level = ros::console::levels::Warn;
+  /// Lines of one kind share one throttle, so a flood of one kind never hides another;
+  /// empty: logged every time.
+  std::string kind;
+  std::string text;
+};
 
 }  // namespace attitude_propagator

@@ -1,0 +1,68 @@
+#include "attitude_propagator/ros/live_parameters.h"
+
+#include <stdexcept>
+#include <utility>
+
+namespace attitude_propagator {
+
+Parameters liveParameters(const Parameters& in_force, const AttitudePropagatorConfig& live) {
+  Parameters p = in_force;
+  p.angular_velocity_stddev = live.angular_velocity_stddev;
+  p.max_dt = live.max_dt;
+  p.torque_timeout = live.torque_timeout;
+  p.publish_tf = live.publish_tf;
+  p.reverse_tf = live.reverse_tf;
+  p.integrator = live.integrator;
+  return p;
+}
+
+LiveChange liveChange(const Parameters& now, const Parameters& p) {
+  LiveChange change;
+  change.engine_changes = p.angular_velocity_stddev != now.angular_velocity_stddev ||
+                          p.max_dt != now.max_dt || p.torque_timeout != now.torque_timeout ||
+                          p.integrator != now.integrator;
+  change.tf_toggled = p.publish_tf != now.publish_tf;
+  change.child_changed = p.reverse_tf != now.reverse_tf;
+  return change;
+}
+
+std::string applyLive(const Parameters& p, const LiveChange& change, AttitudeEngine& engine,
+                      NodeConfig& config) {
+  std::string error;
+  try {
+    NodeConfig next = validateParameters(p);
+    if (change.engine_changes) error = engine.reconfigure(engineConfig(next));
+    if (error.empty()) config = std::move(next);
+  } catch (const std::invalid_argument& e) {
+    error = e.what();
+  }
+  return error;
+}
+
+std::optional<LogLine> reconfigureText(const std::string& error, bool engine_changes,
+                                       const Parameters& in_force, Integrator integrator) {
+  if (!error.empty()) {
+    // The text quotes the value asked for (the integrator name is any string a client sends).
+    return LogLine{ros::console::levels::Warn, "",
+                   formatted("reconfigure refused: %s; keeping the values in force",
+                             logText(error, 4 * kLogTextBytes).c_str())};
+  }
+  if (!engine_changes) return std::nullopt;
+  return LogLine{
+      ros::console::levels::Info, "",
+      formatted("reconfigured: integrator %s, max_dt %g s, torque_timeout %g s, "
+                "angular_velocity_stddev %g rad/s (the propagator goes on from the current state)",
+                integratorName(integrator).c_str(), in_force.max_dt, in_force.torque_timeout,
+                in_force.angular_velocity_stddev)};
+}
+
+void showInForce(const Parameters& in_force, AttitudePropagatorConfig& live) {
+  live.angular_velocity_stddev = in_force.angular_velocity_stddev;
+  live.max_dt = in_force.max_dt;
+  live.torque_timeout = in_force.torque_timeout;
+  live.publish_tf = in_force.publish_tf;
+  live.reverse_tf = in_force.reverse_tf;
+  live.integrator = in_force.integrator;
+}
+
+}  // namespace attitude_propagator

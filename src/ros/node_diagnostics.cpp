@@ -1,0 +1,113 @@
+#include "attitude_propagator/ros/node_diagnostics.h"
+
+#include <cmath>
+
+namespace attitude_propagator {
+
+std::optional<double> lagBeyondWarning(std::initializer_list<std::optional<double>> lags) {
+  for (const std::optional<double>& lag : lags) {
+    if (lag && std::abs(*lag) > kInputLagWarning) return lag;
+  }
+  return std::nullopt;
+}
+
+std::optional<double> inputLagBeyondWarning(const AttitudeEngine& engine) {
+  return lagBeyondWarning({engine.inputLag(Source::Imu), engine.inputLag(Source::Twist),
+                           engine.inputLag(Source::Torque)});
+}
+
+void summarize(diagnostic_updater::DiagnosticStatusWrapper& status, bool expects_input,
+               double silence, const std::string& window_problem, FixInput& fixes,
+               const EngineCounters& c, std::optional<double> lag) {
+  if (expects_input && (silence < 0.0 || silence > 1.0)) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no rate input in the last second");
+  } else if (!window_problem.empty()) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, window_problem);
+  } else if (const std::string warning = fixes.warning(c); !warning.empty()) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, warning);
+  } else if (lag) {
+    status.summaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                    "inputs arrive %.3f s %s ROS time (sensor clock skewed, or a queue): tf "
+                    "lookups at now will miss",
+                    std::abs(*lag), *lag > 0.0 ? "behind" : "ahead of");
+  } else {
+    status.summary(diagnostic_msgs::DiagnosticStatus::OK, "propagating");
+  }
+}
+
+void NodeDiagnostics::diagnose(const ros::WallTime& now, const NodeConfig& config,
+                               const AttitudeEngine& engine, FixInput& fixes,
+                               const TfConflictWatch& tf, std::uint64_t callback_errors,
+                               diagnostic_updater::DiagnosticStatusWrapper& status) {
+  const EngineCounters& c = engine.counters();
+  const double dt = (now - last_diagnosis_).toSec();
+  const double input_rate = dt > 0.0 ? (c.accepted - accepted_at_last_diagnosis_) / dt : 0.0;
+  last_diagnosis_ = now;
+  accepted_at_last_diagnosis_ = c.accepted;
+
+  const bool expects_input = config.rate_input != RateInput::None;
+  const double silence = last_input_.isZero() ? -1.0 : (now - last_input_).toSec();
+  summarize(status, expects_input, silence, window_.problem(), fixes, c,
+            inputLagBeyondWarning(engine));
+  const EngineState state = engine.state();
+  status.add("model", engine.modelName());
+  status.add("integrator", integratorName(engine.integrator()));
+  status.add("input_rate_hz", input_rate);
+  status.add("received", c.received);
+  status.add("accepted", c.accepted);
+  status.add("pending", engine.pending());
+  status.add("rejected_non_finite", c.rejected_non_finite);
+  status.add("rejected_out_of_range", c.rejected_out_of_range);
+  status.add("rejected_no_rate", c.rejected_no_rate);
+  status.add("rejected_type", c.rejected_type);
+  status.add("rejected_covariance", c.rejected_covariance);
+  status.add("dropped_stale", c.dropped_stale);
+  status.add("dropped_no_tf", c.dropped_no_tf);
+  status.add("dropped_no_time", c.dropped_no_time);
+  status.add("late", c.late);
+  status.add("gaps", c.gaps);
+  status.add("resets", c.resets);
+  status.add("jumps_back", c.jumps_back);
+  status.add("rejected_future", c.rejected_future);
+  status.add("dropped_on_reset", c.dropped_on_reset);
+  // Mean ROS time minus stamp on arrival: a constant skew between the sensor's clock and
+  // this machine's shows here (WARN above kInputLagWarning).
+  for (Source source : {Source::Imu, Source::Twist, Source::Torque}) {
+    if (const std::optional<double> lag = engine.inputLag(source)) {
+      status.add(source == Source::Torque ? "torque_lag_s" : "rate_lag_s", *lag);
+    }
+  }
+  status.add("failed_steps", c.failed_steps);
+  status.add("pending_overflow", c.pending_overflow);
+  status.add("deferred_ticks", c.deferred_ticks);
+  status.add("callback_errors", callback_errors);
+  status.add("rejected_bias", c.rejected_bias);
+  status.add("tf_conflicts", tf.conflicts());
+  status.add("tf_stopped", tf.stopped());
+  status.add("tf_resumes", tf.resumes());
+  const Eigen::Vector3d& b = engine.gyroBias();
+  status.addf("gyro_bias", "[%g, %g, %g]", b.x(), b.y(), b.z());
+  fixes.diagnose(status, engine);
+  if (const KinematicPropagator* k = engine.kinematic()) {
+    status.add("rate_samples", config.parameters.rate_samples);
+    status.add("filled_samples", k->filledSamples());
+    if (const SensorClockFilter* f = k->stampFilter()) {
+      status.add("stamp_filter_period_s", f->period());
+      status.add("stamp_filter_offset_s", f->offset());
+      status.add("stamp_filter_jitter_s", f->jitter());
+      status.add("stamp_filter_rejected", f->rejected());
+      status.add("stamp_filter_missed_periods", f->missed());
+      status.add("stamp_filter_restarts", f->restarts());
+      status.add("stamp_batch", f->batchSize());
+      status.add("stamp_filter_unfiltered", f->unfiltered());
+    }
+  }
+  status.add("norm_error", state.norm_error);
+  if (engine.dynamicModel()) {
+    status.add("kinetic_energy", state.kinetic_energy);
+    status.add("energy_drift", engine.energyDrift());
+    status.add("momentum_drift", engine.momentumDrift());
+  }
+}
+
+}  // namespace attitude_propagator

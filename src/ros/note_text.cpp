@@ -1,0 +1,74 @@
+#include "attitude_propagator/ros/note_text.h"
+
+#include <string>
+
+namespace attitude_propagator {
+
+namespace {
+
+std::string noteText(const EngineNote& note, const EngineCounters& c, const Parameters& p,
+                     bool dynamic_model, const char* what, double t) {
+  switch (note.kind) {
+    case EngineNote::Gap:
+      return formatted(
+          "%s: gap longer than max_dt = %g s before %.6f: not integrated across, state held "
+          "(%lu gaps so far)",
+          what, p.max_dt, t, c.gaps);
+    case EngineNote::StampsJumpedBack:
+      return formatted(
+          "%s: stamps jumped back to %.3f and went on from there (looped bag, restarted "
+          "driver?): %s (%lu jumps so far)",
+          what, t,
+          dynamic_model ? "its inputs now act late, on ROS time" : "reset to the initial state",
+          c.jumps_back);
+    case EngineNote::Future:
+      return formatted(
+          "%s: stamp %.6f more than max_future = %g s ahead of ROS time: rejected (%lu so far; "
+          "unsynchronised clocks?)",
+          what, t, p.max_future, c.rejected_future);
+    case EngineNote::ClockJumpedBack:
+      return formatted(
+          "ROS time jumped back to %.3f s (looped bag or restarted clock): reset to the initial "
+          "state (%lu resets so far)",
+          t, c.resets);
+    case EngineNote::Stale:
+      return formatted("%s: stamp %.6f at or before the last one: dropped (%lu so far)", what, t,
+                       c.dropped_stale);
+    case EngineNote::NonFinite:
+      return formatted("%s: NaN or infinite value or stamp: rejected (%lu so far)", what,
+                       c.rejected_non_finite);
+    case EngineNote::OutOfRange:
+      return formatted(
+          "%s: value out of the accepted range (its energy or step would overflow): rejected "
+          "(%lu so far)",
+          what, c.rejected_out_of_range);
+    case EngineNote::FailedStep:
+      return formatted(
+          "%s: the integrator could not complete the step to %.6f: state held (%lu failed so "
+          "far)",
+          what, t, c.failed_steps);
+    case EngineNote::PendingFull:
+      return formatted(
+          "%s: more inputs stamped ahead of ROS time than the queue holds: the one stamped "
+          "furthest ahead dropped (%lu so far)",
+          what, c.pending_overflow);
+    case EngineNote::Deferred:
+      return formatted(
+          "publishing fell behind ROS time at %.3f s: the rest of the grid follows on the next "
+          "tick (%lu so far)",
+          t, c.deferred_ticks);
+  }
+  return {};
+}
+
+}  // namespace
+
+LogLine noteText(const EngineNote& note, const EngineCounters& c, const Parameters& p,
+                 bool dynamic_model) {
+  const char* what = note.source ? sourceName(*note.source) : "ROS time";
+  const double t = static_cast<double>(note.stamp) * 1e-9;
+  return {ros::console::levels::Warn, "note " + std::to_string(note.kind),
+          noteText(note, c, p, dynamic_model, what, t)};
+}
+
+}  // namespace attitude_propagator

@@ -1,0 +1,202 @@
+// The node's diagnostics (src/ros/node_diagnostics.cpp, input_window.cpp) against their
+// documented rules (docs/node.md, diagnostics): each WARN rule on both sides of its boundary,
+// the order of the rules, and what the input window blames. Wall times are given, not read.
+#include <cmath>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "attitude_propagator/ros/node_diagnostics.h"
+
+namespace ap = attitude_propagator;
+using diagnostic_msgs::DiagnosticStatus;
+
+namespace {
+
+ros::WallTime at(double s) { return ros::WallTime(1000.0 + s); }
+
+/// Counters after `received` rate samples of which `lost` were gaps, the rest accepted.
+ap::EngineCounters gapsOf(std::uint64_t received, std::uint64_t gaps) {
+  ap::EngineCounters c;
+  c.received = received;
+  c.accepted = received - gaps;
+  c.gaps = gaps;
+  return c;
+}
+
+/// The problem of a window from zero counters at 0 s to `c` at `seconds`.
+std::string windowProblem(const ap::EngineCounters& c, double seconds = 1.0, double max_dt = 1.0) {
+  ap::InputWindow w;
+  w.closeInputWindow(at(0), {}, max_dt);
+  w.closeInputWindow(at(seconds), c, max_dt);
+  return w.problem();
+}
+
+class NullSink : public ap::EngineSink {
+ public:
+  void publishState(const ap::EngineState&) override {}
+  void inputApplied(const ap::Input&, const ap::EngineState&) override {}
+  void note(const ap::EngineNote&) override {}
+};
+
+std::string value(const diagnostic_updater::DiagnosticStatusWrapper& s, const std::string& key) {
+  for (const auto& kv : s.values) {
+    if (kv.key == key) return kv.value;
+  }
+  ADD_FAILURE() << "no key " << key;
+  return {};
+}
+
+}  // namespace
+
+TEST(InputWindow, MostSamplesLostIsAProblemHalfIsNot) {
+  EXPECT_EQ(windowProblem(gapsOf(100, 50)), "");
+  EXPECT_EQ(windowProblem(gapsOf(100, 51)),
+            "most rate samples of the last second were lost (51 of 100): gaps longer than max_dt "
+            "1 s (input period 0.01 s): messages lost on the way or stamps far apart");
+  EXPECT_EQ(windowProblem(gapsOf(0, 0)), "");  // nothing received: nothing lost
+}
+
+TEST(InputWindow, TheWindowClosesAfterOneSecondAndNotBefore) {
+  ap::InputWindow w;
+  w.closeInputWindow(at(0), {}, 1.0);
+  w.closeInputWindow(at(ap::kInputWindow - 1e-3), gapsOf(100, 100), 1.0);
+  EXPECT_EQ(w.problem(), "");  // still open
+  w.closeInputWindow(at(ap::kInputWindow), gapsOf(100, 100), 1.0);
+  EXPECT_NE(w.problem(), "");
+}
+
+TEST(InputWindow, TheFirstCallOnlyOpensAWindow) {
+  ap::InputWindow w;
+  w.closeInputWindow(at(0), gapsOf(100, 100), 1.0);
+  EXPECT_EQ(w.problem(), "");
+  // Losses before the window opened are not the window's.
+  w.closeInputWindow(at(1), gapsOf(200, 100), 1.0);
+  EXPECT_EQ(w.problem(), "");
+}
+
+TEST(InputWindow, EachWindowCountsFromItsStart) {
+  ap::InputWindow w;
+  w.closeInputWindow(at(0), {}, 1.0);
+  w.closeInputWindow(at(1), gapsOf(100, 80), 1.0);
+  EXPECT_NE(w.problem(), "");
+  w.closeInputWindow(at(2), gapsOf(200, 110), 1.0);  // 30 of the next 100 lost
+  EXPECT_EQ(w.problem(), "");
+}
+
+TEST(InputWindow, TheCommonestCauseIsNamedTheFirstOnATie) {
+  ap::EngineCounters c;
+  c.received = 10;
+  c.dropped_stale = 3;
+  c.rejected_no_rate = 4;
+  c.dropped_no_time = 4;
+  // 11 losses counted for 10 received (one input can count twice): never more than received.
+  EXPECT_EQ(windowProblem(c),
+            "most rate samples of the last second were lost (10 of 10): "
+            "angular_velocity_covariance[0] == -1 (REP-145: no rate)");
+}
+
+TEST(InputWindow, AMaxDtBelowTheInputPeriodIsNamed) {
+  // 100 samples in 1 s: a period of 0.01 s.
+  EXPECT_NE(windowProblem(gapsOf(100, 100), 1.0, 0.01).find("gaps longer than max_dt 0.01 s"),
+            std::string::npos);
+  EXPECT_EQ(windowProblem(gapsOf(100, 100), 1.0, 0.0099),
+            "most rate samples of the last second were lost (100 of 100): max_dt 0.0099 s is "
+            "below the input period 0.01 s");
+}
+
+TEST(InputLag, BeyondHalfASecondEitherWay) {
+  const double limit = ap::kInputLagWarning;
+  EXPECT_FALSE(ap::lagBeyondWarning({limit, -limit, std::nullopt}));
+  EXPECT_EQ(ap::lagBeyondWarning({limit + 1e-9}), limit + 1e-9);
+  EXPECT_EQ(ap::lagBeyondWarning({-limit - 1e-9}), -limit - 1e-9);
+  EXPECT_EQ(ap::lagBeyondWarning({std::nullopt, 0.1, 0.7, -0.9}), 0.7);  // the first beyond
+}
+
+class Summary : public ::testing::Test {
+ protected:
+  diagnostic_updater::DiagnosticStatusWrapper summarize(bool expects_input, double silence,
+                                                        const std::string& window = "",
+                                                        std::uint64_t fixes_not_applied = 0,
+                                                        std::optional<double> lag = {}) {
+    ap::EngineCounters c;
+    c.fixes_rejected_gate = fixes_not_applied;
+    diagnostic_updater::DiagnosticStatusWrapper status;
+    ap::summarize(status, expects_input, silence, window, fixes_, c, lag);
+    return status;
+  }
+  ap::FixInput fixes_{ap::validateParameters({})};
+};
+
+TEST_F(Summary, NoRateInputForMoreThanASecond) {
+  const std::string none = "no rate input in the last second";
+  EXPECT_EQ(summarize(true, -1.0).message, none);  // none yet
+  EXPECT_EQ(summarize(true, -1.0).level, DiagnosticStatus::WARN);
+  EXPECT_EQ(summarize(true, 1.0).message, "propagating");
+  EXPECT_EQ(summarize(true, 1.0).level, DiagnosticStatus::OK);
+  EXPECT_EQ(summarize(true, 1.0 + 1e-9).message, none);
+  EXPECT_EQ(summarize(false, -1.0).message, "propagating");  // no rate input expected
+}
+
+TEST_F(Summary, TheFirstRuleThatHoldsIsTheSummary) {
+  EXPECT_EQ(summarize(true, -1.0, "lost", ap::kFixWarnRun, 0.9).message,
+            "no rate input in the last second");
+  EXPECT_EQ(summarize(true, 0.0, "lost", ap::kFixWarnRun, 0.9).message, "lost");
+  const auto fixes = summarize(true, 0.0, "", ap::kFixWarnRun, 0.9);
+  EXPECT_EQ(fixes.level, DiagnosticStatus::WARN);
+  EXPECT_EQ(fixes.message.rfind("the last 3 orientation fixes were not applied", 0), 0u);
+  EXPECT_EQ(summarize(true, 0.0, "", ap::kFixWarnRun - 1, 0.9).message.rfind("inputs arrive", 0),
+            0u);
+}
+
+TEST_F(Summary, ALagSaysWhichWay) {
+  const auto behind = summarize(true, 0.0, "", 0, 0.75);
+  EXPECT_EQ(behind.level, DiagnosticStatus::WARN);
+  EXPECT_EQ(behind.message,
+            "inputs arrive 0.750 s behind ROS time (sensor clock skewed, or a queue): tf lookups "
+            "at now will miss");
+  EXPECT_EQ(summarize(true, 0.0, "", 0, -1.25).message,
+            "inputs arrive 1.250 s ahead of ROS time (sensor clock skewed, or a queue): tf "
+            "lookups at now will miss");
+}
+
+TEST(NodeDiagnostics, TheInputRateAndTheWrappersCounts) {
+  const ap::NodeConfig config = ap::validateParameters({});
+  NullSink sink;
+  ap::AttitudeEngine engine(ap::engineConfig(config), sink);
+  ap::FixInput fixes(config);
+  ap::TfConflictWatch tf;
+  ap::Parameters stop;
+  stop.tf_conflict = "stop";
+  tf2_msgs::TFMessage other;
+  other.transforms.resize(1);
+  other.transforms[0].child_frame_id = stop.body_frame;
+  tf.onTfSeen(other, "/a", false, stop, at(0));
+
+  ap::NodeDiagnostics diagnostics(at(0));
+  for (int i = 1; i <= 4; ++i) {
+    ap::Input in;
+    in.stamp = 1000000000LL * 100 + i * 10000000LL;
+    in.value = Eigen::Vector3d(0.1, 0.0, 0.0);
+    engine.submit(in);
+  }
+  diagnostics.inputArrived(at(1.5));
+  diagnostic_updater::DiagnosticStatusWrapper status;
+  diagnostics.diagnose(at(2), config, engine, fixes, tf, 7, status);
+  EXPECT_EQ(status.message, "propagating");  // an input 0.5 s ago
+  const std::uint64_t accepted = engine.counters().accepted;
+  EXPECT_EQ(accepted, 4u);
+  EXPECT_EQ(std::stod(value(status, "input_rate_hz")), accepted / 2.0);
+  EXPECT_EQ(value(status, "accepted"), "4");
+  EXPECT_EQ(value(status, "callback_errors"), "7");
+  EXPECT_EQ(value(status, "tf_conflicts"), "1");
+  EXPECT_EQ(value(status, "tf_stopped"), "True");
+  EXPECT_EQ(value(status, "tf_resumes"), "0");
+  EXPECT_EQ(diagnostics.lastDiagnosis(), at(2));
+
+  // The next interval counts from this diagnosis: no input since.
+  diagnostic_updater::DiagnosticStatusWrapper later;
+  diagnostics.diagnose(at(3), config, engine, fixes, tf, 7, later);
+  EXPECT_EQ(std::stod(value(later, "input_rate_hz")), 0.0);
+  EXPECT_EQ(later.message, "no rate input in the last second");  // 1.5 s since
+}
