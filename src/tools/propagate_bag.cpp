@@ -75,10 +75,11 @@ the next, as over the unsplit recording.
   --rates TOPIC          rate topic (default /imu/data_raw, or /body_twist for rate_input twist)
   --torque TOPIC         torque topic, dynamic model with torque_input (default /torque)
   --clock TOPIC          clock topic driving the engine when present (default /clock)
-  --fixes TOPIC          absolute attitude fixes, as the node's orientation_fix (PoseWithCovariance-
-                         Stamped, PoseStamped, QuaternionStamped or sensor_msgs/Imu): each applied
-                         at its record time, as the node at receipt (fix_mode, fix_frame, ...)
   --no-clock             ignore the clock topic: input stamps drive the engine
+  --fixes TOPIC          absolute attitude fixes, as the node's orientation_fix takes them
+                         (PoseWithCovarianceStamped, PoseStamped, QuaternionStamped, or Imu with
+                         an orientation), each submitted at its record time as the node does at
+                         receipt (fix_mode, fix_frame, estimate_gyro_bias, ...); default: none
 
 Output topics, named as the node's would be (relative names resolved in --ns, as ROS does):
   --ns NS                namespace of the relative output topics (default /): with --ns r1,
