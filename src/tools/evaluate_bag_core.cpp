@@ -9,7 +9,8 @@
 // per method, each timed over the batch for its cost per sample), and each truth sample waits
 // until every method's states reach past its stamp, where they are interpolated to it. Memory
 // holds the calibration window, the batch, and the truth and states between the two streams'
-// latest stamps.
+// latest stamps. With --fixes, each fix goes to every engine between the rates it was recorded
+// between, as the node would receive it.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -24,6 +25,7 @@
 
 #include <geometry_msgs/PoseStamped.h>
 #include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <geometry_msgs/QuaternionStamped.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <geometry_msgs/Twist.h>
 #include <geometry_msgs/TwistStamped.h>
@@ -34,6 +36,7 @@
 #include "alignment.h"
 #include "attitude_propagator/engine.h"
 #include "attitude_propagator/messages/conversions.h"
+#include "attitude_propagator/messages/fix_decoder.h"
 #include "attitude_propagator/messages/input_decoders.h"
 #include "attitude_propagator/quaternion.h"
 #include "bag_input.h"
@@ -63,6 +66,9 @@ time, in whatever order they are given.
   --truth TOPIC        geometry_msgs/PoseStamped, PoseWithCovarianceStamped, TransformStamped
                        or nav_msgs/Odometry
   --truth-tf P C       the transform P -> C from tf2_msgs/TFMessage on --tf-topic (default /tf)
+  --fixes TOPIC        absolute attitude fixes (the node's orientation_fix types), given to every
+                       method between the rates they were recorded between; the truth must be
+                       another topic, in the fixes' fixed frame (no world alignment then)
   --mount X Y Z W      q_ST, the truth body's orientation in the rate sensor's frame
                        (default: estimated from the data)
   --truth-clock same|separate
@@ -133,6 +139,7 @@ struct Options {
   std::string input;  // the inputs, for messages
   std::string rates_topic = "/imu/data_raw";
   std::string truth_topic;
+  std::string fixes_topic;  // empty: no fixes
   std::string tf_topic = "/tf";
   std::string tf_parent, tf_child;
   std::optional<Eigen::Quaterniond> mount;
@@ -176,6 +183,8 @@ Options parseOptions(int argc, char** argv) {
       o.rates_topic = optionValue(argc, argv, i);
     } else if (a == "--truth") {
       o.truth_topic = optionValue(argc, argv, i);
+    } else if (a == "--fixes") {
+      o.fixes_topic = optionValue(argc, argv, i);
     } else if (a == "--truth-tf") {
       o.tf_parent = optionValue(argc, argv, i);
       o.tf_child = optionValue(argc, argv, i);
@@ -225,6 +234,18 @@ Options parseOptions(int argc, char** argv) {
   if (o.truth_topic.empty() == o.tf_parent.empty()) {
     throw UsageError("give the truth as --truth TOPIC or --truth-tf PARENT CHILD (one of them)");
   }
+  if (!o.fixes_topic.empty()) {
+    // Scored against the fixes themselves, a method would be scored on what it was given.
+    const std::string truth = o.truth_topic.empty() ? o.tf_topic : o.truth_topic;
+    if (sameTopic(o.fixes_topic, truth)) {
+      throw UsageError("--fixes " + o.fixes_topic + " and the truth " + truth +
+                       " are one topic: score against a truth the fixes are not");
+    }
+    if (sameTopic(o.fixes_topic, o.rates_topic)) {
+      throw UsageError("--fixes " + o.fixes_topic + " and --rates " + o.rates_topic +
+                       " are one topic");
+    }
+  }
   if (!(o.max_offset >= 0.0) || !(o.calibration > 0.0) || (o.truth_gap && !(*o.truth_gap > 0.0))) {
     throw UsageError("--max-offset must be >= 0, --calibration and --truth-gap > 0");
   }
@@ -267,6 +288,14 @@ Options parseOptions(int argc, char** argv) {
 struct RateSample {
   Stamp stamp;
   Eigen::Vector3d w;
+  std::uint64_t seq = 0;  ///< usable rate samples read before this one
+};
+
+/// A decoded fix and where it was recorded in the rate stream: after `after` usable rate
+/// samples (it goes to the engines before the rate sample whose seq is `after`).
+struct FixSample {
+  std::uint64_t after;
+  Fix fix;
 };
 
 struct TruthSample {
@@ -348,6 +377,7 @@ class Method : public EngineSink {
     return {static_cast<int>(integratorFromName(integrator_)), averaged() ? 1 : 0};
   }
   double configuredRateDelay() const { return parameters_.rate_delay; }
+  const Parameters& parameters() const { return parameters_; }
   double maxDt() const { return parameters_.max_dt; }
 
   /// Creates the engine, with the rate_delay this method runs with (in [0, max_dt]) and the
@@ -360,8 +390,10 @@ class Method : public EngineSink {
   }
   double rateDelay() const { return parameters_.rate_delay; }
 
-  /// Feeds the batch (from a few samples before the truth's start), timing the engine alone.
-  void feed(const std::vector<RateSample>& batch, Stamp truth_start, double lead) {
+  /// Feeds the batch (from a few samples before the truth's start), timing the engine alone;
+  /// each fix (numbered from `fixes_base`) before the rate sample it was recorded before.
+  void feed(const std::vector<RateSample>& batch, const std::deque<FixSample>& fixes,
+            std::uint64_t fixes_base, Stamp truth_start, double lead) {
     Input input;
     const double shift = offset - parameters_.rate_delay;  // truth time - rate stamp
     auto first = batch.begin();
@@ -377,6 +409,7 @@ class Method : public EngineSink {
           batch.end() - first > std::ptrdiff_t(kTimedChunk) ? first + kTimedChunk : batch.end();
       const auto start = std::chrono::steady_clock::now();
       for (auto s = first; s != last; ++s) {
+        submitFixes(fixes, fixes_base, s->seq);
         input.stamp = s->stamp;
         input.value = s->w;
         engine_->submit(input);
@@ -391,6 +424,20 @@ class Method : public EngineSink {
     }
     cost_.reset();
   }
+
+  /// Submits the fixes recorded before the rate sample `seq` (all of them: the maximum).
+  void submitFixes(const std::deque<FixSample>& fixes, std::uint64_t fixes_base,
+                   std::uint64_t seq) {
+    if (!engine_) return;
+    for (; next_fix_ < fixes_base + fixes.size(); ++next_fix_) {
+      const FixSample& f = fixes[next_fix_ - fixes_base];
+      if (f.after > seq) return;
+      engine_->submitFix(f.fix.stamp, f.fix.q_WB, f.fix.R_B);  // counted in fixes_*
+    }
+  }
+  /// The first fix (numbered from the stream's first) not yet submitted.
+  std::uint64_t nextFix() const { return next_fix_; }
+  std::size_t pendingFixes() const { return engine_ ? engine_->pendingFixes() : 0; }
 
   /// Compares the truth samples from the first not yet compared, as far as the states reach;
   /// at the end, every one left.
@@ -420,6 +467,9 @@ class Method : public EngineSink {
 
   double offset = 0.0;  ///< s, truth stamp minus the states' stamp
   Eigen::Quaterniond mount = Eigen::Quaterniond::Identity();  ///< q_ST
+  /// A = q_VW from the first compared pair; off with fixes: they set the states' world, which
+  /// the truth must share (an alignment would hide the fixes' error).
+  bool align_world = true;
 
   // Results: truth samples compared, between two segments of states (a gap of the rates
   // longer than max_dt, or a reset), outside the states.
@@ -480,6 +530,7 @@ class Method : public EngineSink {
   std::unique_ptr<AttitudeEngine> engine_;
   bool started_ = false;
   std::uint64_t fed_ = 0;
+  std::uint64_t next_fix_ = 0;
   std::vector<float> chunk_costs_;  // ns per sample, one per timed chunk
   mutable std::optional<double> cost_;
   std::deque<State> states_;  // states the truth may still need
@@ -550,7 +601,10 @@ void Method::compare(const std::deque<TruthSample>& truth, bool at_end) {
 
 void Method::record(Stamp stamp, const Eigen::Quaterniond& q_WS, const Eigen::Quaterniond& q_VT) {
   // A from the first matched pair: q_VT = A q_WS q_ST there.
-  if (!align_) align_ = (q_VT * mount.conjugate() * q_WS.conjugate()).normalized();
+  if (!align_) {
+    align_ = align_world ? (q_VT * mount.conjugate() * q_WS.conjugate()).normalized()
+                         : Eigen::Quaterniond::Identity();
+  }
   if (!t0_) t0_ = stamp;
   const Compared c{stamp, *align_ * q_WS * mount, q_VT};
   const double e = rotationAngle(c.estimate, c.truth);
@@ -610,6 +664,11 @@ class Evaluation {
       }
     }
     if (methods_.empty()) throw UsageError("no method to run (--integrators, --rate-samples)");
+    if (!o.fixes_topic.empty()) {
+      // The frames are the methods' (they differ in integrator and rate_samples only).
+      fix_decoder_.emplace(FixFrames::of(validateParameters(methods_.front()->parameters())));
+      for (auto& m : methods_) m->align_world = false;
+    }
   }
 
   void run(BagSet& bag);
@@ -623,6 +682,11 @@ class Evaluation {
   void handle(const rosbag::MessageInstance& m);
   bool decodeRate(const rosbag::MessageInstance& m, RateSample& out);
   bool decodeTruth(const rosbag::MessageInstance& m, TruthSample& out);
+  /// A fix by the node's rules (FixDecoder), kept for the engines; no tf here, as for the
+  /// rates: only fixed_frame and body_frame (the rate sensor's frame) are known.
+  void addFix(const rosbag::MessageInstance& m);
+  /// The fixes' line of the report.
+  void reportFixes(std::FILE* out) const;
   void addTruth(const TruthSample& s);
   void calibrate();
   void push(const RateSample& s);
@@ -642,7 +706,7 @@ class Evaluation {
 
   const Options& o_;
   std::vector<std::unique_ptr<Method>> methods_;
-  std::string rates_topic_, truth_topic_, rates_type_, truth_type_;
+  std::string rates_topic_, truth_topic_, rates_type_, truth_type_, fixes_topic_, fixes_type_;
   std::vector<std::uint8_t> buffer_;
   // Decoding, reused.
   sensor_msgs::Imu imu_;
@@ -653,6 +717,10 @@ class Evaluation {
   nav_msgs::Odometry odometry_;
   tf2_msgs::TFMessage tf_;
   ros::Time record_;
+  // Fixes: decoded once, kept until every method has had them (numbered from fixes_base_).
+  std::optional<FixDecoder> fix_decoder_;
+  std::deque<FixSample> fixes_;
+  std::uint64_t fixes_base_ = 0, fix_count_ = 0;
   // Calibration window, then the stream.
   bool calibrating_ = true;
   std::vector<RateSample> calibration_rates_;
@@ -692,18 +760,27 @@ void Evaluation::checkTopics(BagSet& bag) {
   }
   if (sameTopic(truth_topic_, rates_topic_))
     throw UsageError("the rate and truth topics are the same");
+  if (!o_.fixes_topic.empty()) {
+    fixes_type_ = requireTopic(
+        bag, o_.fixes_topic, "fix",
+        {typeOf<geometry_msgs::PoseWithCovarianceStamped>(), typeOf<geometry_msgs::PoseStamped>(),
+         typeOf<geometry_msgs::QuaternionStamped>(), typeOf<sensor_msgs::Imu>()});
+    fixes_topic_ = o_.fixes_topic;
+  }
 }
 
 void Evaluation::run(BagSet& bag) {
   checkTopics(bag);
-  for (const std::string& overlap : bag.overlaps({rates_topic_, truth_topic_})) {
+  std::vector<std::string> topics{rates_topic_, truth_topic_};
+  if (!fixes_topic_.empty()) topics.push_back(fixes_topic_);
+  for (const std::string& overlap : bag.overlaps(topics)) {
     std::fprintf(stderr,
                  "evaluate_bag: %s of record time: their messages are interleaved by record "
                  "time\n",
                  overlap.c_str());
   }
   rosbag::View view;
-  bag.addQuery(view, {rates_topic_, truth_topic_});
+  bag.addQuery(view, topics);
   Progress progress(view.size(), o_.progress);
   std::uint64_t done = 0;
   visitMessages(view, o_.input, progress, done, [this](const rosbag::MessageInstance& m) {
@@ -721,6 +798,7 @@ void Evaluation::run(BagSet& bag) {
 }
 
 void Evaluation::handle(const rosbag::MessageInstance& m) {
+  if (!fixes_topic_.empty() && sameTopic(m.getTopic(), fixes_topic_)) return addFix(m);
   if (sameTopic(m.getTopic(), rates_topic_)) {
     RateSample s;
     if (!decodeRate(m, s)) return;
@@ -729,6 +807,7 @@ void Evaluation::handle(const rosbag::MessageInstance& m) {
       ++rate_non_finite_;
       return;
     }
+    s.seq = rate_count_;
     if (rate_count_++ == 0) first_rate_ = s.stamp;
     last_rate_ = std::max(last_rate_, s.stamp);
     if (!calibrating_) return push(s);
@@ -794,6 +873,12 @@ bool Evaluation::decodeTruth(const rosbag::MessageInstance& m, TruthSample& out)
   }
   out.q = *q;
   return true;
+}
+
+void Evaluation::addFix(const rosbag::MessageInstance& m) {
+  ++fix_count_;
+  const Decoded<Fix> fix = fix_decoder_->topic(m, record_, nullptr);  // refusals counted there
+  if (fix) fixes_.push_back({rate_count_, *fix});
 }
 
 void Evaluation::addTruth(const TruthSample& s) {
@@ -961,11 +1046,16 @@ void Evaluation::flush(bool at_end) {
   // States from a few rate periods before the truth's start: the first truth samples have
   // states on both sides.
   const double lead = (kInterpolationNodes / 2 + 1) * rate_period_;
+  std::uint64_t fixes_done = fixes_base_ + fixes_.size();
   for (auto& method : methods_) {
-    method->feed(batch_, *truth_start_, lead);
+    method->feed(batch_, fixes_, fixes_base_, *truth_start_, lead);
+    // At the end the fixes after the last rate too: they wait, counted as pending.
+    if (at_end) method->submitFixes(fixes_, fixes_base_, std::numeric_limits<std::uint64_t>::max());
     method->compare(truth_, at_end);
+    fixes_done = std::min(fixes_done, method->nextFix());
   }
   batch_.clear();
+  for (; fixes_base_ < fixes_done; ++fixes_base_) fixes_.pop_front();
 }
 
 double Evaluation::resolutionFloor() const {
@@ -1087,6 +1177,7 @@ void Evaluation::report(std::FILE* out) const {
                static_cast<unsigned long long>(first.in_gap),
                static_cast<unsigned long long>(first.outside),
                static_cast<unsigned long long>(before_truth_));
+  if (fix_decoder_) reportFixes(out);
   const auto refused = noRecommendation();
   const double floor = resolutionFloor();
   std::string unresolved;
@@ -1144,6 +1235,28 @@ void Evaluation::report(std::FILE* out) const {
                delay_estimated_ ? "" : "  # configured: not estimated from this data");
   std::fprintf(out, "  %.3f s wall for %llu messages\n", wall_,
                static_cast<unsigned long long>(rate_count_ + truth_count_));
+}
+
+void Evaluation::reportFixes(std::FILE* out) const {
+  // Per method, every fix given: accepted, rejected (gate, too old, bad), or still waiting.
+  const FixRefusals& r = fix_decoder_->refusals();
+  auto u = [](std::uint64_t x) { return static_cast<unsigned long long>(x); };
+  std::fprintf(out,
+               "  fixes %s (%s): %llu, refused before the engines %llu (no_tf %llu: only "
+               "fixed_frame and body_frame, the rates' frame, are known here; type %llu, "
+               "no_time %llu, no_orientation %llu); per method accepted/rejected_gate/too_old/"
+               "other/pending:",
+               fixes_topic_.c_str(), fixes_type_.c_str(), u(fix_count_), u(r.total()), u(r.no_tf),
+               u(r.type), u(r.no_time), u(r.no_orientation));
+  for (const auto& m : methods_) {
+    if (!m->started()) continue;
+    const EngineCounters& c = m->counters();
+    const std::uint64_t other =
+        c.fixes_bad_quaternion + c.fixes_bad_covariance + c.fixes_queue_full;
+    std::fprintf(out, " %s %llu/%llu/%llu/%llu/%llu", m->name().c_str(), u(c.fixes_accepted),
+                 u(c.fixes_rejected_gate), u(c.fixes_too_old), u(other), u(m->pendingFixes()));
+  }
+  std::fputc('\n', out);
 }
 
 void Evaluation::writeCsv(const std::string& summary_path, const std::string& series_path) {

@@ -1,10 +1,11 @@
 // propagate_bag: the node's propagation over a recorded bag, as fast as the machine allows.
-// Reads the rate topic (sensor_msgs/Imu, geometry_msgs/Twist or TwistStamped) and, in the
-// dynamic model, the torque topic, with the node's parameters and YAML, through the same core
-// engine; writes attitude_state, imu/data and /tf into an output bag at the input messages'
-// record times (or the states into a CSV). Several bags (the parts of a split recording) are
-// read as one stream merged by record time, so the state carries on across the parts. The bags
-// are read chunk by chunk (rosbag::View), never whole.
+// Reads the rate topic (sensor_msgs/Imu, geometry_msgs/Twist or TwistStamped), in the dynamic
+// model the torque topic, and with --fixes the absolute attitude fixes (orientation_fix's types),
+// with the node's parameters and YAML, through the same core engine; writes attitude_state,
+// imu/data and /tf into an output bag at the input messages' record times (or the states into a
+// CSV). Several bags (the parts of a split recording) are read as one stream merged by record time,
+// so the state carries on across the parts. The bags are read chunk by chunk (rosbag::View), never
+// whole.
 //
 // Time, as the node under sim time: a /clock topic in the bag drives the engine's clock. Without
 // one, the input stamps do (each input is submitted, then the clock ticks to its stamp, so a
@@ -22,6 +23,9 @@
 #include <utility>
 #include <vector>
 
+#include <geometry_msgs/PoseStamped.h>
+#include <geometry_msgs/PoseWithCovarianceStamped.h>
+#include <geometry_msgs/QuaternionStamped.h>
 #include <geometry_msgs/Twist.h>
 #include <geometry_msgs/TwistStamped.h>
 #include <geometry_msgs/Vector3Stamped.h>
@@ -36,6 +40,7 @@
 #include "attitude_propagator/AttitudeState.h"
 #include "attitude_propagator/engine.h"
 #include "attitude_propagator/messages/conversions.h"
+#include "attitude_propagator/messages/fix_decoder.h"
 #include "attitude_propagator/messages/frame_source.h"
 #include "attitude_propagator/messages/input_decoders.h"
 #include "attitude_propagator/messages/outputs.h"
@@ -71,6 +76,10 @@ the next, as over the unsplit recording.
   --torque TOPIC         torque topic, dynamic model with torque_input (default /torque)
   --clock TOPIC          clock topic driving the engine when present (default /clock)
   --no-clock             ignore the clock topic: input stamps drive the engine
+  --fixes TOPIC          absolute attitude fixes, as the node's orientation_fix takes them
+                         (PoseWithCovarianceStamped, PoseStamped, QuaternionStamped, or Imu with
+                         an orientation), each submitted at its record time as the node does at
+                         receipt (fix_mode, fix_frame, estimate_gyro_bias, ...); default: none
 
 Output topics, named as the node's would be (relative names resolved in --ns, as ROS does):
   --ns NS                namespace of the relative output topics (default /): with --ns r1,
@@ -102,7 +111,8 @@ output's estimated size. Every input bag is checked before any is read.
 
 The summary accounts for every rate and torque message: accepted, dropped for a named reason
 (stale, future, no-tf, ...) or still pending at the end (dynamic model: stamped after the
-last clock tick).
+last clock tick); with --fixes, for every fix: accepted, rejected for a named reason (gate,
+too old, ...), waiting at the end, or refused before the engine (frames, type, ...).
 
 Exit codes:
   0    the output is complete and holds the states of the accepted inputs
@@ -123,6 +133,7 @@ struct Options {
   std::string torque_topic = "/torque";
   std::string clock_topic = "/clock";
   std::string bias_topic = "/gyro_bias";
+  std::string fixes_topic;  // empty: no fixes read
   std::string static_tf_topic = "/tf_static";
   std::string tf_topic = "/tf";  // input transforms, heard in record order as the node hears them
   bool use_clock = true;
@@ -185,6 +196,8 @@ Options parseOptions(int argc, char** argv) {
       o.torque_topic = optionValue(argc, argv, i);
     } else if (a == "--clock") {
       o.clock_topic = optionValue(argc, argv, i);
+    } else if (a == "--fixes") {
+      o.fixes_topic = optionValue(argc, argv, i);
     } else if (a == "--no-clock") {
       o.use_clock = false;
     } else if (a == "--ns") {
@@ -244,6 +257,11 @@ Options parseOptions(int argc, char** argv) {
   refuseOutputOverInput(o.output, inputs);
   if (o.rates_topic.empty()) {
     o.rates_topic = o.parameters.rate_input == "twist" ? "/body_twist" : "/imu/data_raw";
+  }
+  for (const std::string* input : {&o.rates_topic, &o.torque_topic, &o.clock_topic}) {
+    if (!o.fixes_topic.empty() && sameTopic(o.fixes_topic, *input)) {
+      throw UsageError("--fixes " + o.fixes_topic + ": the topic of another input");
+    }
   }
   return o;
 }
@@ -454,6 +472,11 @@ class BagPropagator : public EngineSink {
   void dispatch(const rosbag::MessageInstance& m);
   void onImu(const rosbag::MessageInstance& m);
   void onBias(const rosbag::MessageInstance& m);
+  /// A fix: decoded by the node's rules (FixDecoder, the bag's frames), submitted at once as the
+  /// node submits it at receipt; the corrected state goes out with the next output.
+  void onFix(const rosbag::MessageInstance& m);
+  /// The account of the fixes read (the engine's fixes_* counters and the decoder's refusals).
+  void fixSummary(std::FILE* out) const;
   /// Counts a refused input once, or hands a decoded one to submit().
   void take(DecodedInput& in);
   void submit(Input& input);
@@ -481,12 +504,13 @@ class BagPropagator : public EngineSink {
   NodeConfig config_;
   std::unique_ptr<AttitudeEngine> engine_;
   std::unique_ptr<Writer> writer_;
-  std::string rates_, torque_, clock_, bias_, tf_;  // as recorded; empty: not read
+  std::string rates_, torque_, clock_, bias_, tf_, fixes_;  // as recorded; empty: not read
   bool clock_driven_ = false;
   ros::Time record_;  // record time of the message being handled
   std::optional<Stamp> last_tick_;
   InputDecoders decoders_{DecoderFrames::of(config_)};
   BagFrames frames_{*this};
+  FixDecoder fix_decoder_{FixFrames::of(config_)};
   ImuPayload imu_;
   geometry_msgs::Vector3Stamped bias_msg_;
   tf2_msgs::TFMessage tf_msg_;
@@ -533,6 +557,15 @@ std::vector<std::string> BagPropagator::checkTopics() {
     clock_ = o_.clock_topic;
     topics.push_back(clock_);
     clock_driven_ = true;
+  }
+  if (!o_.fixes_topic.empty()) {
+    // Every type the node takes; a second type on the topic is the decoder's to refuse.
+    requireTopic(
+        bags_, o_.fixes_topic, "fix",
+        {typeOf<geometry_msgs::PoseWithCovarianceStamped>(), typeOf<geometry_msgs::PoseStamped>(),
+         typeOf<geometry_msgs::QuaternionStamped>(), typeOf<sensor_msgs::Imu>()});
+    fixes_ = o_.fixes_topic;
+    topics.push_back(fixes_);
   }
   if (config_.rate_input != RateInput::None && topicType(bags_, o_.bias_topic)) {
     requireTopic(bags_, o_.bias_topic, "gyro bias", {typeOf<geometry_msgs::Vector3Stamped>()});
@@ -624,6 +657,8 @@ void BagPropagator::dispatch(const rosbag::MessageInstance& m) {
     if (!o_.io_floor) engine_->clockTick(toStamp(clock_msg_.clock));
   } else if (!bias_.empty() && sameTopic(topic, bias_)) {
     onBias(m);
+  } else if (!fixes_.empty() && sameTopic(topic, fixes_)) {
+    onFix(m);
   }
 }
 
@@ -646,6 +681,12 @@ void BagPropagator::onBias(const rosbag::MessageInstance& m) {
   const Decoded<BiasSample> bias = decoders_.bias(bias_msg_, record_);
   if (!bias) return countRefusal(*engine_, bias.refusal->why);
   if (!o_.io_floor && engine_->submitBias(bias->stamp, bias->b_B)) ++bias_used_;
+}
+
+void BagPropagator::onFix(const rosbag::MessageInstance& m) {
+  const Decoded<Fix> fix = fix_decoder_.topic(m, record_, &frames_);  // refusals counted there
+  if (!fix || o_.io_floor) return;
+  engine_->submitFix(fix->stamp, fix->q_WB, fix->R_B);  // counted in the engine's fixes_*
 }
 
 void BagPropagator::take(DecodedInput& in) {
@@ -823,6 +864,40 @@ void BagPropagator::summary(std::FILE* out, bool written) const {
                  static_cast<unsigned long long>(bias_used_),
                  static_cast<unsigned long long>(c.rejected_bias));
   }
+  if (!fixes_.empty()) fixSummary(out);
+}
+
+void BagPropagator::fixSummary(std::FILE* out) const {
+  // Every fix read is refused by the decoder, or submitted: then counted by the engine once
+  // it is applied or rejected, or still waiting for the rates at the end.
+  const EngineCounters& c = engine_->counters();
+  const FixRefusals& r = fix_decoder_.refusals();
+  std::uint64_t n = 0;
+  for (const auto& [topic, count] : read_) n += sameTopic(topic, fixes_) ? count : 0;
+  const std::uint64_t pending = engine_->pendingFixes();
+  const std::uint64_t accounted = c.fixes_accepted + c.fixes_rejected_gate + c.fixes_too_old +
+                                  c.fixes_bad_quaternion + c.fixes_bad_covariance +
+                                  c.fixes_queue_full + pending + r.total();
+  auto u = [](std::uint64_t x) { return static_cast<unsigned long long>(x); };
+  std::fprintf(out,
+               "  fixes: %llu = %llu accepted (%llu as resets) + %llu rejected_gate + %llu "
+               "too_old + %llu bad_quaternion + %llu bad_covariance + %llu queue_full + %llu "
+               "pending at the end + %llu refused (no_tf %llu, type %llu, "
+               "no_time %llu, no_orientation %llu)",
+               u(n), u(c.fixes_accepted), u(c.fixes_reset), u(c.fixes_rejected_gate),
+               u(c.fixes_too_old), u(c.fixes_bad_quaternion), u(c.fixes_bad_covariance),
+               u(c.fixes_queue_full), u(pending), u(r.total()), u(r.no_tf), u(r.type), u(r.no_time),
+               u(r.no_orientation));
+  if (accounted != n) {
+    // A reset drops the waiting fixes with the waiting inputs (the engine's dropped_on_reset).
+    std::fprintf(out, " (%lld dropped at a reset or not accounted for)",
+                 static_cast<long long>(n) - static_cast<long long>(accounted));
+  }
+  if (config_.parameters.estimate_gyro_bias) {
+    const Eigen::Vector3d& b = engine_->gyroBiasEstimate();
+    std::fprintf(out, "; gyro bias estimate [%g, %g, %g] rad/s", b.x(), b.y(), b.z());
+  }
+  std::fputc('\n', out);
 }
 
 std::string valueText(const std::string& v) { return v.empty() ? "''" : v; }
@@ -849,6 +924,7 @@ void BagPropagator::dryRun(std::FILE* out) {
                                            {torque_, "torque"},
                                            {clock_, "clock: drives the engine"},
                                            {bias_, "gyro bias"},
+                                           {fixes_, "fixes"},
                                            {o_.static_tf_topic, "static transforms (mounts)"},
                                            {tf_, "transforms (mounts, torque frames)"}};
   for (std::size_t i = 0; i < bags_.size(); ++i) {
