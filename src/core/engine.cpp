@@ -477,7 +477,9 @@ void AttitudeEngine::resetState(bool forget_time) {
   P_B_ = initialCovariance();
   error_.P_Bb.setZero();  // the bias estimate stays: it belongs to the gyro, not to the timeline
   clearHistory();
-  counters_.dropped_on_reset += pending_fixes_.size();
+  // Waiting fixes are stamped before the new anchor now: too old (docs/design.md §6.9), not
+  // inputs dropped at the reset.
+  counters_.fixes_too_old += pending_fixes_.size();
   pending_fixes_.clear();
   if (forget_time) {
     origin_.reset();

@@ -889,8 +889,7 @@ void BagPropagator::fixSummary(std::FILE* out) const {
                u(c.fixes_queue_full), u(pending), u(r.total()), u(r.no_tf), u(r.type), u(r.no_time),
                u(r.no_orientation));
   if (accounted != n) {
-    // A reset drops the waiting fixes with the waiting inputs (the engine's dropped_on_reset).
-    std::fprintf(out, " (%lld dropped at a reset or not accounted for)",
+    std::fprintf(out, " (%lld not accounted for)",
                  static_cast<long long>(n) - static_cast<long long>(accounted));
   }
   if (config_.parameters.estimate_gyro_bias) {
