@@ -15,6 +15,7 @@
 #include "attitude_propagator/config/parameters.h"
 #include "attitude_propagator/dynamic_propagator.h"
 #include "attitude_propagator/engine.h"
+#include "attitude_propagator/kinematic_propagator.h"
 #include "attitude_propagator/limits.h"
 #include "attitude_propagator/orientation_covariance.h"
 #include "attitude_propagator/publish_grid.h"
@@ -440,6 +441,31 @@ TEST(Boundaries, DISABLED_FifoReadStampedOnAWholeSecondIsIntegrated) {
   for (int i = 0; i < 3; ++i) engine.submit(rateAt(at(1.0), Eigen::Vector3d(0.1, 0.2, 0.3)));
   EXPECT_EQ(engine.counters().rejected_non_finite, 0u);
   EXPECT_EQ(engine.counters().accepted, 3u);
+}
+
+TEST(Boundaries, AMeanStampedAtItsStartOrMidpointRepeatedIsStale) {
+  // §6.2 for means stamped at their start or midpoint (numerics.md §3): a mean waits for the
+  // next stamp, which ends its interval; a sample repeating the waiting stamp (t <= the last
+  // stamp given) is stale and changes nothing.
+  for (ap::AverageStamp position : {ap::AverageStamp::Mid, ap::AverageStamp::Start}) {
+    ap::KinematicConfig config;
+    config.rate_samples = ap::RateSamples::IntervalAverage;
+    config.average_stamp = position;
+    ap::KinematicPropagator k(config);
+    const Eigen::Vector3d w(0.0, 0.0, 1.0);
+    const double end = position == ap::AverageStamp::Mid ? 0.5 : 1.0;  // of the interval
+    EXPECT_EQ(k.addSample(0.0, w), ap::StampOutcome::Waiting);
+    EXPECT_EQ(k.addSample(0.01, w), ap::StampOutcome::Anchored);
+    EXPECT_DOUBLE_EQ(k.time(), 0.01 * end);
+    EXPECT_EQ(k.addSample(0.01, w), ap::StampOutcome::DroppedStale);
+    EXPECT_EQ(k.addSample(0.01 - 1e-9, w), ap::StampOutcome::DroppedStale);
+    EXPECT_DOUBLE_EQ(k.time(), 0.01 * end);
+    EXPECT_EQ(k.addSample(0.02, w), ap::StampOutcome::Advanced);
+    EXPECT_DOUBLE_EQ(k.time(), 0.01 + 0.01 * end);
+    // One interval of 0.01 s at 1 rad/s about z.
+    EXPECT_NEAR(k.orientation().angularDistance(aboutAxis(Eigen::Vector3d::UnitZ(), 0.01)), 0.0,
+                1e-12);
+  }
 }
 
 TEST(Boundaries, StragglerThresholdIsOneSecondInclusive) {
