@@ -202,6 +202,31 @@ TEST(Boundaries, InertiaMomentsWithinTheDoor) {
   }
 }
 
+TEST(Boundaries, StepBudgetCoversTheFinestGridAcrossMaxDt) {
+  // §7.6, limits.h: a propagator call may spend step_budget units (one per fixed step); the
+  // budget must cover max_dt / max_step + kBudgetHeadroomSteps, and the default 2^17 covers the
+  // finest grid the validator accepts, kMaxGridStepsPerCall steps.
+  EXPECT_EQ(ap::kDefaultStepBudget, std::uint64_t{1} << 17);
+  EXPECT_GE(static_cast<double>(ap::kDefaultStepBudget),
+            ap::kMaxGridStepsPerCall + ap::kBudgetHeadroomSteps);
+  ap::DynamicConfig d;
+  d.integrator = ap::Integrator::Rk4;
+  d.max_step = ap::kMinMaxStep;
+  d.time_policy.max_dt = ap::kMinMaxStep * ap::kMaxGridStepsPerCall;  // 1 s
+  d.initial.w_B = Eigen::Vector3d(0.0, 0.0, 0.5);
+  ap::DynamicPropagator p(d);
+  EXPECT_EQ(p.advanceTo(0.0), ap::StampOutcome::Anchored);
+  EXPECT_EQ(p.advanceTo(d.time_policy.max_dt), ap::StampOutcome::Advanced);
+  // A torque-free sphere turns at its constant rate: 0.5 rad about z in 1 s.
+  EXPECT_NEAR(p.state().q_WB.angularDistance(aboutAxis(Eigen::Vector3d::UnitZ(), 0.5)), 0.0, 1e-9);
+  // Exactly representable: 1 s / 0.0625 s = 16 steps, + 8 = 24 units needed.
+  d.max_step = 0.0625;
+  d.step_budget = 24;
+  EXPECT_NO_THROW(ap::DynamicPropagator{d});
+  d.step_budget = 23;
+  EXPECT_THROW(ap::DynamicPropagator{d}, std::invalid_argument);
+}
+
 // ---- Door bounds of the propagators and the engine (§7.2) ------------------------------------
 
 TEST(Boundaries, RateSampleAtMostTheLargestBodyRate) {
