@@ -178,24 +178,6 @@ TEST(LateFix, TheWaitingQueueIsBounded) {
   EXPECT_EQ(engine.pendingFixes(), ap::kMaxPendingFixes);
 }
 
-// A reset makes every waiting fix older than the new anchor: each is counted too old, none as an
-// input dropped at the reset, so the fixes' account and the inputs' both add up.
-TEST(LateFix, FixesWaitingAtAResetAreTooOld) {
-  Recorder sink;
-  ap::AttitudeEngine engine(fixConfig(ap::Integrator::Exp, ap::FixMode::Fuse, false), sink);
-  engine.submit(rate(0.0, Eigen::Vector3d::Zero()));
-  const Eigen::Matrix3d R = 1e-4 * Eigen::Matrix3d::Identity();
-  for (int j = 0; j < 3; ++j) {
-    EXPECT_EQ(engine.submitFix(at(0.1 + 0.01 * j), Eigen::Quaterniond::Identity(), R),
-              ap::FixOutcome::Waiting);
-  }
-  const std::uint64_t too_old = engine.counters().fixes_too_old;
-  engine.reset();
-  EXPECT_EQ(engine.pendingFixes(), 0u);
-  EXPECT_EQ(engine.counters().fixes_too_old, too_old + 3u);
-  EXPECT_EQ(engine.counters().dropped_on_reset, 0u);
-}
-
 // ---- the update itself against its closed form -----------------------------------------------
 
 // P = p I and R = rho I: K = p / (p + rho) I, the estimate moves that fraction of the
