@@ -107,7 +107,7 @@ class SensorClockFilter {
  private:
   void start(double t_receipt);
   Result restartAfter(double t_receipt);
-  /// The smallest stamp after t: returned stamps increase strictly.
+  /// The smallest stamp after t, at least 1 ps later: returned stamps increase strictly.
   static double after(double t);
   void shiftOrigin(std::uint64_t steps, double dt);
   void moveNewest(std::uint64_t steps);

@@ -52,7 +52,10 @@ void SensorClockFilter::reset() {
 double SensorClockFilter::jitter() const { return std::sqrt(variance_); }
 
 double SensorClockFilter::after(double t) {
-  return std::nextafter(t, std::numeric_limits<double>::infinity());
+  // At least a picosecond: next to the origin (core time 0 on a whole second) the next double is
+  // a denormal, a step cf4 cannot take (its result is not finite). A picosecond is still far
+  // below a stamp's nanosecond, so a FIFO read's samples keep sharing one published stamp.
+  return std::max(std::nextafter(t, std::numeric_limits<double>::infinity()), t + 1e-12);
 }
 
 double SensorClockFilter::lineMinus(std::uint64_t index, double t) const {

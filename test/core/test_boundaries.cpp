@@ -448,17 +448,12 @@ TEST(Boundaries, StampEqualToTheLastIsStale) {
   }
 }
 
-// DISABLED: a real bug, left to the owners of the stamp filter and the kinematic steps. A FIFO
-// read whose repeated stamp is the very first stamp on a whole second (core time 0: the origin
-// is the whole second at or before the first stamp, §6.1) gets from the sensor-clock filter
-// the stamps 0 and nextafter(0) = 4.9e-324 s. cf4 (the default `auto`) cannot take a step of a
-// denormal length: its result is not finite, so every further sample of the read is refused as
-// RejectedNonFinite and counted rejected_non_finite, although each is a good, finite sample
-// (rk4 takes the same step; at 0.25 s past the whole second both do, as the test above shows).
-// The rule broken is §6.8 (the read's samples get stamps within a nanosecond of each other and
-// share one published state, "not stale") and §7.1 (only NaN or infinite values are
-// RejectedNonFinite).
-TEST(Boundaries, DISABLED_FifoReadStampedOnAWholeSecondIsIntegrated) {
+// A FIFO read whose repeated stamp is the very first stamp on a whole second (core time 0: the
+// origin is the whole second at or before the first stamp, §6.1). The sensor-clock filter keeps
+// its stamps strictly increasing; next to 0 the next double is a denormal, a step cf4 (the
+// default `auto`) cannot take (its result is not finite), so the filter steps by at least a
+// picosecond (§6.8). Every sample of the read is a good, finite sample: accepted (§7.1).
+TEST(Boundaries, FifoReadStampedOnAWholeSecondIsIntegrated) {
   Recorder sink;
   ap::EngineConfig c = engine_fixtures::kinematicConfig();
   c.kinematic.stamp_filter = ap::StampFilter::SensorClock;
