@@ -55,7 +55,7 @@ start=$SECONDS
 mkdir -p "$package" "$results"
 # A copy, not a link: the mutants are written into it. Unchanged files keep their times, so the
 # workspace rebuilds only what changed since the last run.
-rsync -a --delete --exclude .git "$REPO_DIR/" "$package/"
+/usr/bin/python3 "$driver" sync --package "$REPO_DIR" "$package" || exit 2
 echo "mutants_ros: building the node in $ws"
 if ! (cd "$ws" && catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 \
   -DPython3_EXECUTABLE=/usr/bin/python3 -j"$(nproc)" "${targets[@]}" >"$dir/build.log" 2>&1); then

@@ -6,6 +6,7 @@ that must notice it.
   mutate.py list [--list NAME ...] [--only ID ...] [--root DIR]
                       the mutants of the lists (default: all); each must apply (exit 1 if not)
   mutate.py sync REPO SCRATCH     copy the sources the plain CMake build needs to SCRATCH
+  mutate.py sync --package REPO SCRATCH   copy the whole package (but .git) to SCRATCH
   mutate.py run BUILD RESULTS [--list NAME ...] [--only ID ...] [--jobs N] [--timeout S]
                 [--bag-timeout S]
                       the gtest lists (default mutants.txt and mutants_messages.txt) against the
@@ -208,27 +209,38 @@ def select(mutants, only):
 
 # ---- The scratch copy -------------------------------------------------------------------------
 
-def sync(repo, scratch):
-    """Makes SCRATCH hold exactly the files the build reads, writing only those whose content
-    differs (unchanged files keep their times, so the build stays incremental)."""
+def sync(repo, scratch, package=False):
+    """Makes SCRATCH hold exactly the files the build reads (package: every file but .git's),
+    writing only those whose content differs (unchanged files keep their times, so the build
+    stays incremental)."""
     wanted = {}
-    for folder in SYNCED:
+    folders = SYNCED
+    if package:
+        folders = sorted(p.name for p in repo.iterdir() if p.is_dir() and p.name != ".git")
+        for path in repo.iterdir():
+            if path.is_file():
+                wanted[path.relative_to(repo)] = path
+    for folder in folders:
         for path in (repo / folder).rglob("*"):
             if path.is_file() and "__pycache__" not in path.parts:
                 wanted[path.relative_to(repo)] = path
-    for name in SYNCED_FILES:
+    for name in () if package else SYNCED_FILES:
         wanted[pathlib.Path(name)] = repo / name
     written = 0
     for relative, source in wanted.items():
         target = scratch / relative
         data = source.read_bytes()
+        mode = source.stat().st_mode & 0o777  # programs stay programs (nodes, rostest scripts)
         if target.is_file() and target.read_bytes() == data:
+            if target.stat().st_mode & 0o777 != mode:
+                target.chmod(mode)
             continue
         target.parent.mkdir(parents=True, exist_ok=True)
         target.write_bytes(data)
+        target.chmod(mode)
         written += 1
     removed = 0
-    for folder in SYNCED:
+    for folder in folders:
         for path in sorted((scratch / folder).rglob("*"), reverse=True):
             if path.is_file() and path.relative_to(scratch) not in wanted:
                 path.unlink()
@@ -627,6 +639,7 @@ def main():
     groups.add_argument("--only", action="append", default=[])
     groups.add_argument("--root", default=str(HERE.parent.parent))
     copy = commands.add_parser("sync")
+    copy.add_argument("--package", action="store_true")
     copy.add_argument("repo")
     copy.add_argument("scratch")
     run = commands.add_parser("run")
@@ -651,7 +664,8 @@ def main():
         if args.command == "groups":
             return command_groups(args)
         if args.command == "sync":
-            sync(pathlib.Path(args.repo).resolve(), pathlib.Path(args.scratch).resolve())
+            sync(pathlib.Path(args.repo).resolve(), pathlib.Path(args.scratch).resolve(),
+                 args.package)
             return 0
         if args.command == "ros":
             return command_ros(args)
