@@ -510,9 +510,8 @@ def command_run(args):
 # ---- The node's list: rostests in a scratch catkin workspace ----------------------------------
 
 def rostest_failures(output):
-    """The failing test cases rostest --text names, or the last lines of its output."""
-    failed = re.findall(r"^\[[^\]]*\]\[FAILURE\]\s*(\S+)", output, re.M)
-    failed += re.findall(r"^(?:FAIL|ERROR): (\S+)", output, re.M)
+    """The failing test cases rostest's summary names, or the last lines of its output."""
+    failed = re.findall(r"^\s*\* (?:ERRORS|FAILURES): \d+ \[([^\]]+)\]", output, re.M)
     if failed:
         return ", ".join(dict.fromkeys(failed))
     lines = [line for line in output.splitlines() if line.strip()]
@@ -520,10 +519,11 @@ def rostest_failures(output):
 
 
 def run_rostest(workspace, name, timeout):
-    """Runs one rostest of the package in the scratch workspace: (passed, why, seconds)."""
+    """Runs one rostest of the package in the scratch workspace: (passed, why, seconds). Not
+    with --text: rostest then cannot read the test's results, and exits 0 whatever they say."""
     setup = workspace / "devel" / "setup.bash"
     command = (f"source {setup} && export ROS_HOME={workspace / 'ros_home'} && "
-               f"rostest --text attitude_propagator {name}")
+               f"rostest attitude_propagator {name}")
     start = time.monotonic()
     process = subprocess.Popen(["/bin/bash", "-c", command], stdout=subprocess.PIPE,
                                stderr=subprocess.STDOUT, text=True, start_new_session=True)
@@ -534,7 +534,7 @@ def run_rostest(workspace, name, timeout):
         process.communicate()
         return False, f"{name}: timeout after {timeout:g} s", time.monotonic() - start
     seconds = time.monotonic() - start
-    if process.returncode == 0:
+    if process.returncode == 0 and "RESULT: SUCCESS" in output:
         return True, "", seconds
     return False, f"{name}: {rostest_failures(output)}", seconds
 
