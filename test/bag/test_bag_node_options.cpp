@@ -13,6 +13,7 @@
 
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
+#include <sensor_msgs/Imu.h>
 #include <tf2_msgs/TFMessage.h>
 
 #include "attitude_propagator/AttitudeState.h"
@@ -128,6 +129,57 @@ TEST(NodeOptions, ReverseTfWithNedKeepsTfInRep103Axes) {
   EXPECT_LT(worst, 1e-6);
   EXPECT_EQ(out.states.front().header.frame_id, "world_ned");
   EXPECT_EQ(out.count.at("/tf_static"), 1u);
+}
+
+// imu/data is reported in the IMU's frame with the orientation of that frame (docs/node.md):
+// an IMU mounted at q_BI (base_link -> imu_link on /tf_static) measuring w_I = q_BI^-1 w_B of
+// the cone gives q_WI = q_WB q_BI, the state's orientation times the mount.
+TEST(NodeOptions, ImuOutputCarriesTheMountedFramesOrientation) {
+  TempDir dir;
+  const Motion body = coning();
+  const Eigen::Quaterniond q_BI(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()));
+  {
+    rosbag::Bag bag(dir.file("in.bag"), rosbag::bagmode::Write);
+    tf2_msgs::TFMessage mount;
+    mount.transforms.resize(1);
+    auto& t = mount.transforms[0];
+    t.header.stamp = rosTime(stampAt(0.0));
+    t.header.frame_id = "base_link";
+    t.child_frame_id = "imu_link";
+    t.transform.rotation.x = q_BI.x();
+    t.transform.rotation.y = q_BI.y();
+    t.transform.rotation.z = q_BI.z();
+    t.transform.rotation.w = q_BI.w();
+    bag.write("/tf_static", rosTime(stampAt(0.0)), mount);
+    for (long k = 0; k <= 400; ++k) {
+      const double time = k / 200.0;
+      sensor_msgs::Imu m;
+      m.header.stamp = rosTime(stampAt(time));
+      m.header.frame_id = "imu_link";
+      const Eigen::Vector3d w_I = q_BI.conjugate() * body.rate(time);
+      m.angular_velocity.x = w_I.x();
+      m.angular_velocity.y = w_I.y();
+      m.angular_velocity.z = w_I.z();
+      bag.write("/imu/data_raw", m.header.stamp, m);
+    }
+  }
+  const RunResult r = run(kPropagate + " " + dir.file("in.bag") + " -o " + dir.file("out.bag") +
+                          " --set integrator=cf4 --no-progress" +
+                          setQuaternion("initial_orientation", body.attitude(0.0)));
+  ASSERT_EQ(r.status, 0) << r.output;
+  rosbag::Bag out(dir.file("out.bag"), rosbag::bagmode::Read);
+  std::vector<sensor_msgs::Imu> imu;
+  for (const auto& m : rosbag::View(out, rosbag::TopicQuery("/imu/data"))) {
+    imu.push_back(*m.instantiate<sensor_msgs::Imu>());
+  }
+  ASSERT_EQ(imu.size(), 401u);
+  double worst = 0.0;
+  for (const auto& m : imu) {
+    EXPECT_EQ(m.header.frame_id, "imu_link");
+    worst = std::max(worst, ap::rotationAngle(toEigen(m.orientation),
+                                              body.attitude(secondsAt(m.header.stamp)) * q_BI));
+  }
+  EXPECT_LT(worst, 1e-6);
 }
 
 // publish_tf false: no /tf at all; the states and the republished IMU messages as before.
