@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Mutation check of the core, the message layer and the bag tools: plants each plausible bug of
-# test/mutants/mutants.txt (src/core, src/config) and mutants_messages.txt (src/messages,
-# src/tools) in its source, one at a time, and runs the gtest suite that must notice it: the
+# test/mutants/mutants.txt (src/core, src/config) and mutants_messages.txt (src/messages), or
+# with --list-file mutants_tools.txt of that list (src/tools; minutes per mutant, so not by
+# default), in its source, one at a time, and runs the gtest suite that must notice it: the
 # core suite (test/core), the message layer's (test/messages), or the bag tools' (test/bag, on
 # the tools rebuilt with the mutant). Every mutant must be killed (a test fails, the suite
 # crashes or runs past the timeout). The node's list (mutants_ros.txt) is scripts/mutants_ros.sh's.

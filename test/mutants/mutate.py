@@ -9,16 +9,17 @@ that must notice it.
   mutate.py sync --package REPO SCRATCH   copy the whole package (but .git) to SCRATCH
   mutate.py run BUILD RESULTS [--list NAME ...] [--only ID ...] [--jobs N] [--timeout S]
                 [--bag-timeout S]
-                      the gtest lists (default mutants.txt and mutants_messages.txt) against the
-                      plain CMake build of test/mutants/CMakeLists.txt
+                      the gtest lists (default mutants.txt and mutants_messages.txt; also
+                      mutants_tools.txt) against the plain CMake build of
+                      test/mutants/CMakeLists.txt
   mutate.py ros WORKSPACE RESULTS [--only ID ...] [--timeout S]
                       mutants_ros.txt in a scratch catkin workspace (scripts/mutants_ros.sh)
 
 The lists, by the files their mutants live in and the tests that must notice them:
   mutants.txt           src/core, src/config   the core suite (test/core)
   mutants_messages.txt  src/messages           the message layer's suite (test/messages)
-                        src/tools              the bag tools' suite (test/bag), run on the tools
-                                               rebuilt with the mutant
+  mutants_tools.txt     src/tools              the bag tools' suite (test/bag), run on the tools
+                                               rebuilt with the mutant (not in the test command)
   mutants_ros.txt       src/ros                the rostests named by the mutant's `tests:`
 
 In the gtest lists a mutant is never written into a source tree: its mutated file goes to a
@@ -53,10 +54,13 @@ KEYS = ("id", "file", "bug", "original", "mutant", "tests")
 # Each list and where its mutants may live.
 LISTS = {
     "mutants.txt": re.compile(r"^src/(core|config)/[A-Za-z0-9_]+\.cpp$"),
-    "mutants_messages.txt": re.compile(r"^src/(messages|tools)/[A-Za-z0-9_]+\.cpp$"),
+    "mutants_messages.txt": re.compile(r"^src/messages/[A-Za-z0-9_]+\.cpp$"),
+    "mutants_tools.txt": re.compile(r"^src/tools/[A-Za-z0-9_]+\.cpp$"),
     "mutants_ros.txt": re.compile(r"^src/ros/[A-Za-z0-9_]+\.cpp$"),
 }
-GTEST_LISTS = ("mutants.txt", "mutants_messages.txt")
+GTEST_LISTS = ("mutants.txt", "mutants_messages.txt", "mutants_tools.txt")
+# What `run` runs unless told: the lists that fit the test command's time.
+DEFAULT_LISTS = ("mutants.txt", "mutants_messages.txt")
 ROS_LIST = "mutants_ros.txt"
 # The bag tools and the files each is built from (CMakeLists.txt); alignment.cpp is also
 # compiled into the bag suite.
@@ -457,7 +461,7 @@ def command_run(args):
     xml = results / "mutants.xml"
     xml.unlink(missing_ok=True)
     root = pathlib.Path(args.root).resolve()
-    mutants = select(read_lists(root, args.list or GTEST_LISTS), args.only)
+    mutants = select(read_lists(root, args.list or DEFAULT_LISTS), args.only)
     if any(m.group == "ros" for m in mutants):
         raise ListError(f"{ROS_LIST} runs with `mutate.py ros` (scripts/mutants_ros.sh)")
     timeouts = {"core": args.timeout, "messages": args.timeout, "tools": args.bag_timeout}
@@ -601,7 +605,7 @@ def command_ros(args):
 def command_groups(args):
     """The groups of the selected mutants, one a line (scripts/mutants.sh builds their suites)."""
     root = pathlib.Path(args.root).resolve()
-    mutants = select(read_lists(root, args.list or GTEST_LISTS), args.only)
+    mutants = select(read_lists(root, args.list or DEFAULT_LISTS), args.only)
     for group in dict.fromkeys(m.group for m in mutants):
         print(group)
     return 0
