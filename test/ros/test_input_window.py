@@ -6,6 +6,7 @@ one window's share whatever the machine's load: one straggler in four (a quarter
 leave the status OK, three in four must turn it WARN with the stragglers' cause. Neither
 depends on how many bursts a window holds."""
 import threading
+import time
 import unittest
 
 import rospy
@@ -17,6 +18,7 @@ from ap_test_util import Node, NodeDiagnostics, make_imu, wait_connected, wait_f
 
 WIN = "/win/attitude_propagator"
 BURST_PERIOD = 0.04  # s between bursts
+WINDOW_S = 1.0  # the diagnostics' window of rate samples (kInputWindow)
 
 
 class StragglerFeed:
@@ -56,6 +58,12 @@ class InputWindowTest(unittest.TestCase):
     def test_a_quarter_lost_is_no_warning(self):
         feed = StragglerFeed(self.imu, stale=1)
         try:
+            wait_for(lambda: int((self.status.get() or (0, "", {}))[2].get("dropped_stale", "0"))
+                     > 0, 20.0, "stragglers counted")
+            # Before a window holding stragglers has closed, OK would prove nothing: wait for
+            # several windows (1 s each) to close first. Each holds a quarter of stragglers,
+            # whatever the load, so the status is OK after any of them.
+            time.sleep(3.0 * WINDOW_S)
             wait_for(lambda: (self.status.get() or ())[:2] == (DiagnosticStatus.OK, "propagating"),
                      20.0, "diagnostics OK with one straggler in four")
         finally:
