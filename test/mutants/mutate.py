@@ -62,12 +62,9 @@ GTEST_LISTS = ("mutants.txt", "mutants_messages.txt", "mutants_tools.txt")
 # What `run` runs unless told: the lists that fit the test command's time.
 DEFAULT_LISTS = ("mutants.txt", "mutants_messages.txt")
 ROS_LIST = "mutants_ros.txt"
-# The bag tools and the files each is built from (CMakeLists.txt); alignment.cpp is also
-# compiled into the bag suite.
-TOOL_FILES = {
-    "propagate_bag": ("bag_check", "propagate_bag", "tool_support"),
-    "evaluate_bag_core": ("alignment", "bag_check", "evaluate_bag_core", "tool_support"),
-}
+# The bag tools by their main files; every other file of src/tools is linked into both (an
+# object a tool does not use costs nothing). alignment.cpp is also compiled into the bag suite.
+TOOL_NAMES = ("propagate_bag", "evaluate_bag_core")
 BAG_SUITE_FILES = ("alignment",)
 # What the build and the suites read: the sources, the headers, the suites, this folder, the
 # files the parameter tests compare against (the table in docs/parameters.md, config/*.yaml),
@@ -306,9 +303,9 @@ class Slot:
             return [f"messages_tests_slot{n}"], self.build / f"messages_tests_slot{n}", {}
         stem = pathlib.Path(mutant.file).stem
         targets, environment = [], {}
-        for tool, files in TOOL_FILES.items():
+        for tool in TOOL_NAMES:
             variable = "AP_" + tool.upper()
-            if stem not in files:
+            if stem in TOOL_NAMES and stem != tool:  # the other tool's main file
                 environment[variable] = str(self.build / "tools" / tool)
                 continue
             targets.append(f"{tool}_slot{n}_{'main' if stem == tool else 'lib'}")
@@ -321,7 +318,7 @@ class Slot:
 
     def output_of(self, target):
         """Where a target's program is written: a tool into the slot's folder."""
-        tool = next((t for t in TOOL_FILES if target.startswith(t + "_slot")), None)
+        tool = next((t for t in TOOL_NAMES if target.startswith(t + "_slot")), None)
         return self.tools / tool if tool else self.build / target
 
     def build_mutant(self, text, targets):
