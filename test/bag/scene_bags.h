@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdlib>
 #include <functional>
 #include <string>
 #include <vector>
@@ -118,9 +119,15 @@ class TempDir {
   std::string path_;
 };
 
-/// The programs under test, as built (their paths come from CMake).
-inline const std::string kPropagate = PROPAGATE_BAG;
-inline const std::string kEvaluateCore = EVALUATE_BAG_CORE;
+/// The programs under test, as built (their paths come from CMake), unless the environment
+/// names others: the mutation check (scripts/mutants.sh) runs this suite on tools rebuilt with
+/// a mutant, one pair per parallel worker.
+inline std::string programPath(const char* variable, const char* built) {
+  const char* given = std::getenv(variable);
+  return given && *given ? given : built;
+}
+inline const std::string kPropagate = programPath("AP_PROPAGATE_BAG", PROPAGATE_BAG);
+inline const std::string kEvaluateCore = programPath("AP_EVALUATE_BAG_CORE", EVALUATE_BAG_CORE);
 inline const std::string kEvaluate = EVALUATE_BAG;
 
 /// Every message of a bag: topic, record time and serialised bytes, in rosbag's time order.

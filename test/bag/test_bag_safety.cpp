@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <sys/mount.h>
 #include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -20,6 +21,9 @@
 #include <string>
 #include <thread>
 #include <vector>
+
+#include <geometry_msgs/WrenchStamped.h>
+#include <rosbag/bag.h>
 
 #include "scene_bags.h"
 
@@ -193,6 +197,36 @@ TEST(BagSafety, TooLittleFreeSpaceIsRefusedAtTheStart) {
   writeSceneBag(dir.file("short.bag"), scene);
   const RunResult r = run(kPropagate + " " + dir.file("short.bag") + " -o " + dir.file("small/o"));
   EXPECT_EQ(r.status, 0) << r.output;
+}
+
+// Without a small file system: an output larger than the free space of the disk the test runs
+// on. The dynamic model publishes publish_rate states a second of record time (docs/node.md),
+// so two torques 1e7 s apart at 1000 Hz make 1e10 states, each over 100 bytes serialised: at
+// least 1e12 bytes, refused at the start when the disk has less free (statvfs, as df says).
+TEST(BagSafety, OutputLargerThanTheDiskIsRefusedAtTheStart) {
+  TempDir dir;
+  const double span = 1e7, rate = 1000.0, least_per_state = 100.0;
+  struct statvfs fs {};
+  ASSERT_EQ(::statvfs(dir.file("").c_str(), &fs), 0);
+  const double free_bytes = double(fs.f_bavail) * double(fs.f_frsize);
+  if (free_bytes >= rate * span * least_per_state) GTEST_SKIP() << "a disk of over 1 TB free";
+  {
+    rosbag::Bag bag(dir.file("in.bag"), rosbag::bagmode::Write);
+    for (const double t : {0.0, span}) {
+      geometry_msgs::WrenchStamped m;
+      m.header.stamp = rosTime(stampAt(t));
+      m.header.frame_id = "base_link";
+      m.wrench.torque.z = 0.3;
+      bag.write("/torque", m.header.stamp, m);
+    }
+  }
+  const RunResult r = run(kPropagate + " " + dir.file("in.bag") + " -o " + dir.file("out.bag") +
+                          " --set inertia=[2,3,4] --set torque_input=true --set rate_input=none" +
+                          " --set publish_rate=1000 --no-progress");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("needs about "), std::string::npos) << r.output;
+  EXPECT_EQ(lines(r.output), 1) << r.output;
+  EXPECT_FALSE(exists(dir.file("out.bag")));
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -356,6 +356,24 @@ TEST(ImuDecoder, NonFiniteValuesPassToTheEngine) {
   EXPECT_TRUE(std::isnan(in->value.y()));
 }
 
+// A NaN or infinite covariance is rejected as non-finite, like a NaN rate (docs/node.md, the
+// table of bad inputs: `rejected_non_finite`), not as a covariance that is no covariance: the
+// decoder passes it on and the engine counts it once, under rejected_non_finite.
+TEST(ImuDecoder, NonFiniteCovarianceIsTheEnginesNonFiniteRejection) {
+  NullSink sink;
+  ap::AttitudeEngine engine(ap::engineConfig(ap::validateParameters(ap::Parameters())), sink);
+  ap::InputDecoders decoders(frames());
+  sensor_msgs::Imu m = imu("base_link");
+  m.angular_velocity_covariance[4] = std::numeric_limits<double>::infinity();
+  const ap::DecodedInput in = decoders.imu(m, kArrival, nullptr);
+  ASSERT_TRUE(in);
+  EXPECT_FALSE(in->rate_covariance_B.allFinite());
+  engine.submit(*in.value);
+  EXPECT_EQ(engine.counters().rejected_non_finite, 1u);
+  EXPECT_EQ(engine.counters().rejected_covariance, 0u);
+  EXPECT_EQ(engine.counters().accepted, 0u);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Stamps
 // ---------------------------------------------------------------------------------------------

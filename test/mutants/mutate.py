@@ -1,28 +1,48 @@
 #!/usr/bin/env python3
-"""The mutation check's driver (scripts/mutants.sh runs it): plants each mutant of
-test/mutants/mutants.txt in the core sources, one at a time, and runs the core gtest suite on it.
+"""The mutation check's driver (scripts/mutants.sh and scripts/mutants_ros.sh run it): plants
+each mutant of a list in test/mutants/ in its source file, one at a time, and runs the tests
+that must notice it.
 
-  mutate.py list [--only ID ...] [--root DIR]   the mutants; each must apply (exit 1 if not)
-  mutate.py sync REPO SCRATCH                   copy the sources the build needs to SCRATCH
-  mutate.py run BUILD RESULTS [--only ID ...] [--jobs N] [--timeout S]
+  mutate.py list [--list NAME ...] [--only ID ...] [--root DIR]
+                      the mutants of the lists (default: all); each must apply (exit 1 if not)
+  mutate.py sync REPO SCRATCH     copy the sources the plain CMake build needs to SCRATCH
+  mutate.py sync --package REPO SCRATCH   copy the whole package (but .git) to SCRATCH
+  mutate.py run BUILD RESULTS [--list NAME ...] [--only ID ...] [--jobs N] [--timeout S]
+                [--bag-timeout S]
+                      the gtest lists (default mutants.txt and mutants_messages.txt; also
+                      mutants_tools.txt) against the plain CMake build of
+                      test/mutants/CMakeLists.txt
+  mutate.py ros WORKSPACE RESULTS [--only ID ...] [--timeout S]
+                      mutants_ros.txt in a scratch catkin workspace (scripts/mutants_ros.sh)
 
-A mutant is never written into a source tree: its mutated file goes to a slot source in the
-build folder (mutant_slot<N>.cpp, one per parallel worker), which is compiled alone and linked
-ahead of the unchanged core archive, so that the linker takes the mutated definitions and
-never pulls the original object. Each mutant thus costs one compile and one link, and there is
-nothing to restore.
+The lists, by the files their mutants live in and the tests that must notice them:
+  mutants.txt           src/core, src/config   the core suite (test/core)
+  mutants_messages.txt  src/messages           the message layer's suite (test/messages)
+  mutants_tools.txt     src/tools              the bag tools' suite (test/bag), run on the tools
+                                               rebuilt with the mutant (not in the test command)
+  mutants_ros.txt       src/ros                the rostests named by the mutant's `tests:`
 
-A mutant is killed when the suite fails on it (the first failing test is recorded), crashes, or
-runs past the timeout; it survives when the suite passes. A mutant whose original text does not
-occur exactly once, or whose mutated file does not build, is an error of the list. The results
-go to RESULTS/mutants.xml (JUnit: one test case per mutant, a survivor or an error fails).
+In the gtest lists a mutant is never written into a source tree: its mutated file goes to a
+slot source in the build folder (mutant_slot<N>.cpp, one per parallel worker), which is
+compiled alone and linked ahead of the unchanged archives, so that the linker takes the mutated
+definitions and never pulls the original object. Each mutant thus costs one compile and one
+link per program that holds its file, and there is nothing to restore. The node's list is
+planted in the scratch catkin workspace's copy of the package and restored after each mutant.
+
+A mutant is killed when its tests fail on it (the first failing test is recorded), crash, or
+run past the timeout; it survives when they pass. A mutant whose original text does not occur
+exactly once, or whose mutated file does not build, is an error of the list. The results go to
+RESULTS/mutants.xml (mutants_ros.xml for the node's list; JUnit: one test case per mutant, a
+survivor or an error fails).
 """
 import argparse
 import concurrent.futures
 import dataclasses
 import json
+import os
 import pathlib
 import re
+import signal
 import subprocess
 import sys
 import threading
@@ -30,15 +50,28 @@ import time
 import xml.etree.ElementTree as ET
 
 HERE = pathlib.Path(__file__).resolve().parent
-LIST_NAME = "mutants.txt"
-KEYS = ("id", "file", "bug", "original", "mutant")
-# Where a mutant may live: a source file compiled into the core or config library.
-MUTABLE = re.compile(r"^src/(core|config)/[A-Za-z0-9_]+\.cpp$")
-# What the build and the core suite read: the sources, the headers, the suite, this folder,
-# and the files the parameter tests compare against (the table in docs/parameters.md,
-# config/*.yaml).
-SYNCED = ("src/core", "src/config", "include", "test/core", "test/mutants", "config")
-SYNCED_FILES = ("docs/parameters.md",)
+KEYS = ("id", "file", "bug", "original", "mutant", "tests")
+# Each list and where its mutants may live.
+LISTS = {
+    "mutants.txt": re.compile(r"^src/(core|config)/[A-Za-z0-9_]+\.cpp$"),
+    "mutants_messages.txt": re.compile(r"^src/messages/[A-Za-z0-9_]+\.cpp$"),
+    "mutants_tools.txt": re.compile(r"^src/tools/[A-Za-z0-9_]+\.cpp$"),
+    "mutants_ros.txt": re.compile(r"^src/ros/[A-Za-z0-9_]+\.cpp$"),
+}
+GTEST_LISTS = ("mutants.txt", "mutants_messages.txt", "mutants_tools.txt")
+# What `run` runs unless told: the lists that fit the test command's time.
+DEFAULT_LISTS = ("mutants.txt", "mutants_messages.txt")
+ROS_LIST = "mutants_ros.txt"
+# The bag tools by their main files; every other file of src/tools is linked into both (an
+# object a tool does not use costs nothing). alignment.cpp is also compiled into the bag suite.
+TOOL_NAMES = ("propagate_bag", "evaluate_bag_core")
+BAG_SUITE_FILES = ("alignment",)
+# What the build and the suites read: the sources, the headers, the suites, this folder, the
+# files the parameter tests compare against (the table in docs/parameters.md, config/*.yaml),
+# evaluate_bag (the bag suite runs it) and package.xml (the tools' --version).
+SYNCED = ("src/core", "src/config", "src/messages", "src/tools", "include", "test/core",
+          "test/messages", "test/bag", "test/mutants", "config", "nodes")
+SYNCED_FILES = ("docs/parameters.md", "package.xml")
 
 
 class ListError(Exception):
@@ -52,13 +85,21 @@ class Mutant:
     bug: str
     pairs: list  # (original, replacement) in turn
     line: int  # of the block in the list
+    list_name: str = "mutants.txt"
+    tests: tuple = ()  # the rostests that must notice it (the node's list)
+
+    @property
+    def group(self):
+        """core, messages, tools or ros: the folder of its file."""
+        folder = self.file.split("/")[1]
+        return "core" if folder == "config" else folder
 
     def apply(self, text):
         for original, replacement in self.pairs:
             count = text.count(original)
             if count != 1:
                 raise ListError(
-                    f"{LIST_NAME}:{self.line}: {self.id}: the original text occurs {count} "
+                    f"{self.list_name}:{self.line}: {self.id}: the original text occurs {count} "
                     f"times in {self.file} "
                     f"(must be exactly once): {original!r}")
             text = text.replace(original, replacement)
@@ -109,7 +150,7 @@ def make_mutant(name, start, block):
     single = {}
     pairs, pending = [], None
     for key, value in block:
-        if key in ("id", "file", "bug"):
+        if key in ("id", "file", "bug", "tests"):
             if key in single:
                 raise ListError(f"{where}: '{key}' given twice")
             single[key] = value
@@ -129,11 +170,32 @@ def make_mutant(name, start, block):
         raise ListError(f"{where}: needs id, file, bug and original/mutant pairs")
     if not re.fullmatch(r"[a-z0-9][a-z0-9-]*", single["id"]):
         raise ListError(f"{where}: id {single['id']!r}: lower case, digits and '-' only")
-    if not MUTABLE.match(single["file"]):
-        raise ListError(f"{where}: {single['file']}: not a src/core or src/config .cpp file")
+    if not LISTS[name].match(single["file"]):
+        raise ListError(f"{where}: {single['file']}: not a file of this list "
+                        f"({LISTS[name].pattern})")
     if any(not original for original, _ in pairs):
         raise ListError(f"{where}: empty original text")
-    return Mutant(single["id"], single["file"], single["bug"], pairs, start)
+    tests = tuple(single.get("tests", "").split())
+    if (name == ROS_LIST) != bool(tests):
+        raise ListError(f"{where}: 'tests' is given in {ROS_LIST}, and only there")
+    bad = [t for t in tests if not re.fullmatch(r"[A-Za-z0-9_]+\.test", t)]
+    if bad:
+        raise ListError(f"{where}: tests: {' '.join(bad)}: not rostest file names")
+    return Mutant(single["id"], single["file"], single["bug"], pairs, start, name, tests)
+
+
+def read_lists(root, names):
+    """The mutants of the named lists, in turn; an id is unique across all lists."""
+    mutants, seen = [], {}
+    for name in names:
+        if name not in LISTS:
+            raise ListError(f"no list {name} (the lists: {', '.join(LISTS)})")
+        for mutant in parse_list(root / "test" / "mutants" / name):
+            if mutant.id in seen:
+                raise ListError(f"{name}:{mutant.line}: id {mutant.id} is also in {seen[mutant.id]}")
+            seen[mutant.id] = name
+            mutants.append(mutant)
+    return mutants
 
 
 def select(mutants, only):
@@ -148,27 +210,38 @@ def select(mutants, only):
 
 # ---- The scratch copy -------------------------------------------------------------------------
 
-def sync(repo, scratch):
-    """Makes SCRATCH hold exactly the files the build reads, writing only those whose content
-    differs (unchanged files keep their times, so the build stays incremental)."""
+def sync(repo, scratch, package=False):
+    """Makes SCRATCH hold exactly the files the build reads (package: every file but .git's),
+    writing only those whose content differs (unchanged files keep their times, so the build
+    stays incremental)."""
     wanted = {}
-    for folder in SYNCED:
+    folders = SYNCED
+    if package:
+        folders = sorted(p.name for p in repo.iterdir() if p.is_dir() and p.name != ".git")
+        for path in repo.iterdir():
+            if path.is_file():
+                wanted[path.relative_to(repo)] = path
+    for folder in folders:
         for path in (repo / folder).rglob("*"):
             if path.is_file() and "__pycache__" not in path.parts:
                 wanted[path.relative_to(repo)] = path
-    for name in SYNCED_FILES:
+    for name in () if package else SYNCED_FILES:
         wanted[pathlib.Path(name)] = repo / name
     written = 0
     for relative, source in wanted.items():
         target = scratch / relative
         data = source.read_bytes()
+        mode = source.stat().st_mode & 0o777  # programs stay programs (nodes, rostest scripts)
         if target.is_file() and target.read_bytes() == data:
+            if target.stat().st_mode & 0o777 != mode:
+                target.chmod(mode)
             continue
         target.parent.mkdir(parents=True, exist_ok=True)
         target.write_bytes(data)
+        target.chmod(mode)
         written += 1
     removed = 0
-    for folder in SYNCED:
+    for folder in folders:
         for path in sorted((scratch / folder).rglob("*"), reverse=True):
             if path.is_file() and path.relative_to(scratch) not in wanted:
                 path.unlink()
@@ -187,47 +260,92 @@ class Outcome:
     run_seconds: float = 0.0
 
 
+def run_command(command, directory):
+    """Runs a build command: None, or the lines that say why it failed."""
+    done = subprocess.run(command, shell=True, cwd=directory, stdout=subprocess.PIPE,
+                          stderr=subprocess.STDOUT, text=True)
+    if done.returncode == 0:
+        return None
+    lines = done.stdout.splitlines()
+    errors = [line for line in lines if "error" in line] or lines
+    return "\n".join(errors[:10])
+
+
 class Slot:
     """One worker's mutant source in the build folder, with the commands CMake generated to
-    compile it and to link it ahead of the core archive."""
+    compile it and to link each program that may hold it ahead of the archives."""
 
     def __init__(self, build, index):
         self.build = build
+        self.index = index
         self.source = build / f"mutant_slot{index}.cpp"
-        self.binary = build / f"core_tests_slot{index}"
+        self.tools = build / f"slot{index}"  # this slot's propagate_bag and evaluate_bag_core
         commands = json.loads((build / "compile_commands.json").read_text())
         entry = next((c for c in commands if pathlib.Path(c["file"]) == self.source), None)
-        link = build / "CMakeFiles" / f"core_tests_slot{index}.dir" / "link.txt"
-        if entry is None or not link.is_file():
+        if entry is None:
             raise ListError(f"{build} has no slot {index}: configure it with MUTANT_SLOTS "
                             "at least --jobs (the Unix Makefiles generator)")
         self.compile = (entry["command"], entry["directory"])
-        self.link = (link.read_text().strip(), str(build))
 
-    def build_mutant(self, text):
+    def link_command(self, target):
+        link = self.build / "CMakeFiles" / f"{target}.dir" / "link.txt"
+        if not link.is_file():
+            raise ListError(f"{self.build} has no target {target}: configure it with "
+                            "MUTANTS_MESSAGE_INCLUDE for the message layer and the tools")
+        return link.read_text().strip()
+
+    def programs(self, mutant):
+        """(targets to link, suite to run, environment) for the mutant's group."""
+        n = self.index
+        if mutant.group == "core":
+            return [f"core_tests_slot{n}"], self.build / f"core_tests_slot{n}", {}
+        if mutant.group == "messages":
+            return [f"messages_tests_slot{n}"], self.build / f"messages_tests_slot{n}", {}
+        stem = pathlib.Path(mutant.file).stem
+        targets, environment = [], {}
+        for tool in TOOL_NAMES:
+            variable = "AP_" + tool.upper()
+            if stem in TOOL_NAMES and stem != tool:  # the other tool's main file
+                environment[variable] = str(self.build / "tools" / tool)
+                continue
+            targets.append(f"{tool}_slot{n}_{'main' if stem == tool else 'lib'}")
+            environment[variable] = str(self.tools / tool)
+        suite = self.build / "bag_tools_tests_mutants"
+        if stem in BAG_SUITE_FILES:
+            targets.append(f"bag_tools_tests_slot{n}")
+            suite = self.build / f"bag_tools_tests_slot{n}"
+        return targets, suite, environment
+
+    def output_of(self, target):
+        """Where a target's program is written: a tool into the slot's folder."""
+        tool = next((t for t in TOOL_NAMES if target.startswith(t + "_slot")), None)
+        return self.tools / tool if tool else self.build / target
+
+    def build_mutant(self, text, targets):
         self.source.write_text(text)
-        self.binary.unlink(missing_ok=True)
-        for command, directory in (self.compile, self.link):
-            done = subprocess.run(command, shell=True, cwd=directory, stdout=subprocess.PIPE,
-                                  stderr=subprocess.STDOUT, text=True)
-            if done.returncode != 0:
-                lines = done.stdout.splitlines()
-                errors = [line for line in lines if "error" in line] or lines
-                return "\n".join(errors[:10])
-        return None
+        problem = run_command(*self.compile)
+        for target in targets:
+            if problem is not None:
+                break
+            self.output_of(target).unlink(missing_ok=True)  # a failed link leaves nothing stale
+            problem = run_command(self.link_command(target), str(self.build))
+        return problem
 
 
-def run_suite(binary, cwd, timeout, fail_fast):
+def run_suite(binary, cwd, timeout, fail_fast, environment=None):
     """Runs the suite: (passed, why it failed, seconds)."""
     command = [str(binary), "--gtest_color=no"] + (["--gtest_fail_fast"] if fail_fast else [])
+    env = dict(os.environ, **(environment or {}))
     start = time.monotonic()
     process = subprocess.Popen(command, cwd=cwd, stdout=subprocess.PIPE,
-                               stderr=subprocess.STDOUT, text=True)
+                               stderr=subprocess.STDOUT, text=True, env=env,
+                               start_new_session=True)
     try:
         output, _ = process.communicate(timeout=timeout)
         timed_out = False
     except subprocess.TimeoutExpired:
-        process.kill()  # the suite we started, by its handle
+        # The suite we started and the programs it runs: its own process group.
+        os.killpg(process.pid, signal.SIGKILL)
         output, _ = process.communicate()
         timed_out = True
     seconds = time.monotonic() - start
@@ -246,23 +364,34 @@ def run_suite(binary, cwd, timeout, fail_fast):
     return True, "", seconds
 
 
-def run_mutant(slot, root, mutant, timeout):
-    original = (root / mutant.file).read_text()
+def mutated_text(root, mutant):
+    """The mutated file, or the Outcome of a mutant that does not apply."""
     try:
-        text = mutant.apply(original)
+        return mutant.apply((root / mutant.file).read_text()), None
     except ListError as error:
-        return Outcome(mutant, "error", str(error))
+        return None, Outcome(mutant, "error", str(error))
+
+
+def run_mutant(slot, root, mutant, timeouts):
+    text, failed = mutated_text(root, mutant)
+    if failed:
+        return failed
     # #line keeps compiler messages and __FILE__ pointing at the file the mutant stands for.
     text = f'#line 1 "{root / mutant.file}"\n' + text
+    targets, suite, environment = slot.programs(mutant)
     start = time.monotonic()
-    problem = slot.build_mutant(text)
+    problem = slot.build_mutant(text, targets)
     built = time.monotonic() - start
     if problem is not None:
         return Outcome(mutant, "error", f"does not build: {problem}", built)
-    passed, why, seconds = run_suite(slot.binary, slot.build, timeout, fail_fast=True)
+    passed, why, seconds = run_suite(suite, slot.build, timeouts[mutant.group], True, environment)
     if passed:
-        return Outcome(mutant, "survived", "the core suite passes", built, seconds)
+        return Outcome(mutant, "survived", f"the {SUITES[mutant.group]} passes", built, seconds)
     return Outcome(mutant, "killed", why, built, seconds)
+
+
+SUITES = {"core": "core suite", "messages": "message layer's suite", "tools": "bag tools' suite",
+          "ros": "rostests"}
 
 
 def report_line(outcome):
@@ -272,18 +401,19 @@ def report_line(outcome):
     return f"  {outcome.verdict.upper():8} {m.id} ({m.file}; {timing}): {first}"
 
 
-def write_junit(path, outcomes, seconds):
-    suite = ET.Element("testsuite", name="mutants", tests=str(len(outcomes)),
+def write_junit(path, outcomes, seconds, name="mutants"):
+    suite = ET.Element("testsuite", name=name, tests=str(len(outcomes)),
                        failures=str(sum(o.verdict == "survived" for o in outcomes)),
                        errors=str(sum(o.verdict == "error" for o in outcomes)),
                        time=f"{seconds:.1f}")
     for o in outcomes:
         stem = pathlib.Path(o.mutant.file).stem
-        case = ET.SubElement(suite, "testcase", classname="mutants." + stem, name=o.mutant.id,
+        case = ET.SubElement(suite, "testcase", classname=f"{name}.{stem}", name=o.mutant.id,
                              time=f"{o.build_seconds + o.run_seconds:.1f}")
         if o.verdict == "survived":
             ET.SubElement(case, "failure", message="survived: " + o.mutant.bug).text = (
-                f"{o.mutant.file}: {o.mutant.bug}\nThe core suite passes with this bug planted.")
+                f"{o.mutant.file}: {o.mutant.bug}\n"
+                f"The {SUITES[o.mutant.group]} passes with this bug planted.")
         elif o.verdict == "error":
             error = ET.SubElement(case, "error", message="the mutant does not apply or build")
             error.text = o.detail
@@ -294,12 +424,31 @@ def write_junit(path, outcomes, seconds):
     ET.ElementTree(root).write(path, encoding="utf-8", xml_declaration=True)
 
 
-def write_baseline_failure(path, why):
+def write_baseline_failure(path, why, name="mutants"):
     root = ET.Element("testsuites")
-    suite = ET.SubElement(root, "testsuite", name="mutants", tests="1", failures="0", errors="1")
-    case = ET.SubElement(suite, "testcase", classname="mutants", name="baseline")
-    ET.SubElement(case, "error", message="the unmutated core suite fails").text = why
+    suite = ET.SubElement(root, "testsuite", name=name, tests="1", failures="0", errors="1")
+    case = ET.SubElement(suite, "testcase", classname=name, name="baseline")
+    ET.SubElement(case, "error", message="an unmutated suite fails").text = why
     ET.ElementTree(root).write(path, encoding="utf-8", xml_declaration=True)
+
+
+def summarise(outcomes, total, xml):
+    killed = [o for o in outcomes if o.verdict == "killed"]
+    survived = [o for o in outcomes if o.verdict == "survived"]
+    errors = [o for o in outcomes if o.verdict == "error"]
+    per = sum(o.build_seconds + o.run_seconds for o in outcomes) / max(len(outcomes), 1)
+    for group in SUITES:
+        mine = [o for o in outcomes if o.mutant.group == group]
+        if mine:
+            print(f"mutants: {group}: {sum(o.verdict == 'killed' for o in mine)} killed of "
+                  f"{len(mine)}")
+    print(f"mutants: {len(killed)} killed, {len(survived)} survived of {len(outcomes)} "
+          f"({total:.0f} s, {per:.1f} s per mutant and worker; results {xml})")
+    for o in survived:
+        print(f"  survivor {o.mutant.id} ({o.mutant.file}): {o.mutant.bug}")
+    for o in errors:
+        print(f"  error {o.mutant.id} ({o.mutant.file}): {o.detail}")
+    return 0 if not survived and not errors else 1
 
 
 def command_run(args):
@@ -309,16 +458,28 @@ def command_run(args):
     xml = results / "mutants.xml"
     xml.unlink(missing_ok=True)
     root = pathlib.Path(args.root).resolve()
-    mutants = select(parse_list(root / "test" / "mutants" / LIST_NAME), args.only)
+    mutants = select(read_lists(root, args.list or DEFAULT_LISTS), args.only)
+    if any(m.group == "ros" for m in mutants):
+        raise ListError(f"{ROS_LIST} runs with `mutate.py ros` (scripts/mutants_ros.sh)")
+    timeouts = {"core": args.timeout, "messages": args.timeout, "tools": args.bag_timeout}
 
     # Without a passing suite every mutant would look killed.
-    passed, why, seconds = run_suite(build / "core_tests_mutants", build, args.timeout, False)
-    if not passed:
-        print(f"mutants: the unmutated core suite fails ({why}); no mutant was run")
-        write_baseline_failure(xml, why)
-        return 2
-    print(f"mutants: the unmutated suite passes in {seconds:.1f} s; running {len(mutants)} "
-          f"mutants, {args.jobs} at a time (timeout {args.timeout:g} s each)")
+    suites = {"core": build / "core_tests_mutants", "messages": build / "messages_tests_mutants",
+              "tools": build / "bag_tools_tests_mutants"}
+    for group in dict.fromkeys(m.group for m in mutants):
+        if not suites[group].is_file():
+            raise ListError(f"{suites[group]} is not built (scripts/mutants.sh builds it)")
+        environment = {"AP_PROPAGATE_BAG": str(build / "tools" / "propagate_bag"),
+                       "AP_EVALUATE_BAG_CORE": str(build / "tools" / "evaluate_bag_core")}
+        passed, why, seconds = run_suite(suites[group], build, timeouts[group], False,
+                                         environment)
+        if not passed:
+            print(f"mutants: the unmutated {SUITES[group]} fails ({why}); no mutant was run")
+            write_baseline_failure(xml, f"{SUITES[group]}: {why}")
+            return 2
+        print(f"mutants: the unmutated {SUITES[group]} passes in {seconds:.1f} s")
+    print(f"mutants: running {len(mutants)} mutants, {args.jobs} at a time (timeout "
+          f"{args.timeout:g} s each, {args.bag_timeout:g} s for the bag tools' suite)")
 
     start = time.monotonic()
     slots = [Slot(build, i) for i in range(args.jobs)]
@@ -329,7 +490,7 @@ def command_run(args):
         with lock:
             slot = free.pop()
         try:
-            outcome = run_mutant(slot, root, mutant, args.timeout)
+            outcome = run_mutant(slot, root, mutant, timeouts)
         finally:
             with lock:
                 free.append(slot)
@@ -337,27 +498,119 @@ def command_run(args):
             print(report_line(outcome), flush=True)
         return outcome
 
+    # The slowest first (the bag tools' suite), so that the workers finish together.
+    order = sorted(mutants, key=lambda m: m.group != "tools")
     with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
-        outcomes = list(pool.map(work, mutants))
+        done = {o.mutant.id: o for o in pool.map(work, order)}
+    outcomes = [done[m.id] for m in mutants]
     total = time.monotonic() - start
     write_junit(xml, outcomes, total)
+    return summarise(outcomes, total, xml)
 
-    killed = [o for o in outcomes if o.verdict == "killed"]
-    survived = [o for o in outcomes if o.verdict == "survived"]
-    errors = [o for o in outcomes if o.verdict == "error"]
-    per = sum(o.build_seconds + o.run_seconds for o in outcomes) / max(len(outcomes), 1)
-    print(f"mutants: {len(killed)} killed, {len(survived)} survived of {len(outcomes)} "
-          f"({total:.0f} s, {per:.1f} s per mutant and worker; results {xml})")
-    for o in survived:
-        print(f"  survivor {o.mutant.id} ({o.mutant.file}): {o.mutant.bug}")
-    for o in errors:
-        print(f"  error {o.mutant.id} ({o.mutant.file}): {o.detail}")
-    return 0 if not survived and not errors else 1
+
+# ---- The node's list: rostests in a scratch catkin workspace ----------------------------------
+
+def rostest_failures(output):
+    """The failing test cases rostest's summary names, or the last lines of its output."""
+    failed = re.findall(r"^\s*\* (?:ERRORS|FAILURES): \d+ \[([^\]]+)\]", output, re.M)
+    if failed:
+        return ", ".join(dict.fromkeys(failed))
+    lines = [line for line in output.splitlines() if line.strip()]
+    return " / ".join(lines[-3:]) if lines else "no output"
+
+
+def run_rostest(workspace, name, timeout):
+    """Runs one rostest of the package in the scratch workspace: (passed, why, seconds). Not
+    with --text: rostest then cannot read the test's results, and exits 0 whatever they say."""
+    setup = workspace / "devel" / "setup.bash"
+    command = (f"source {setup} && export ROS_HOME={workspace / 'ros_home'} && "
+               f"rostest attitude_propagator {name}")
+    start = time.monotonic()
+    process = subprocess.Popen(["/bin/bash", "-c", command], stdout=subprocess.PIPE,
+                               stderr=subprocess.STDOUT, text=True, start_new_session=True)
+    try:
+        output, _ = process.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(process.pid, signal.SIGKILL)  # rostest and the nodes it started
+        process.communicate()
+        return False, f"{name}: timeout after {timeout:g} s", time.monotonic() - start
+    seconds = time.monotonic() - start
+    if process.returncode == 0 and "RESULT: SUCCESS" in output:
+        return True, "", seconds
+    return False, f"{name}: {rostest_failures(output)}", seconds
+
+
+def command_ros(args):
+    workspace = pathlib.Path(args.workspace).resolve()
+    package = workspace / "src" / "attitude_propagator"
+    results = pathlib.Path(args.results).resolve()
+    results.mkdir(parents=True, exist_ok=True)
+    xml = results / "mutants_ros.xml"
+    xml.unlink(missing_ok=True)
+    mutants = select(read_lists(package, [ROS_LIST]), args.only)
+    build = f"catkin_make -j{os.cpu_count() or 2} {' '.join(args.target)}"
+    # Without passing rostests every mutant would look killed: each one named, unmutated, once.
+    for test in dict.fromkeys(t for m in mutants for t in m.tests):
+        passed, why, seconds = run_rostest(workspace, test, args.timeout)
+        if not passed:
+            print(f"mutants: the unmutated {test} fails ({why}); no mutant was run")
+            write_baseline_failure(xml, why, name="mutants_ros")
+            return 2
+        print(f"mutants: the unmutated {test} passes in {seconds:.0f} s", flush=True)
+    print(f"mutants: running {len(mutants)} mutants of the node, one at a time (rostests: "
+          f"timeout {args.timeout:g} s each)", flush=True)
+    start = time.monotonic()
+    outcomes = []
+    for mutant in mutants:
+        text, failed = mutated_text(package, mutant)
+        if failed:
+            outcomes.append(failed)
+            print(report_line(failed), flush=True)
+            continue
+        path = package / mutant.file
+        original = path.read_text()
+        began = time.monotonic()
+        try:
+            path.write_text(text)
+            problem = run_command(build, str(workspace))
+            built = time.monotonic() - began
+            if problem is not None:
+                outcome = Outcome(mutant, "error", f"does not build: {problem}", built)
+            else:
+                why, seconds = "", 0.0
+                for test in mutant.tests:
+                    passed, why, spent = run_rostest(workspace, test, args.timeout)
+                    seconds += spent
+                    if not passed:
+                        break
+                verdict = "killed" if why else "survived"
+                outcome = Outcome(mutant, verdict, why or f"{' '.join(mutant.tests)} pass",
+                                  built, seconds)
+        finally:
+            path.write_text(original)
+        outcomes.append(outcome)
+        print(report_line(outcome), flush=True)
+    # The workspace ends built from the unmutated sources, for the next run.
+    problem = run_command(build, str(workspace))
+    if problem is not None:
+        print(f"mutants: rebuilding the unmutated package failed: {problem}")
+    total = time.monotonic() - start
+    write_junit(xml, outcomes, total, name="mutants_ros")
+    return summarise(outcomes, total, xml)
+
+
+def command_groups(args):
+    """The groups of the selected mutants, one a line (scripts/mutants.sh builds their suites)."""
+    root = pathlib.Path(args.root).resolve()
+    mutants = select(read_lists(root, args.list or DEFAULT_LISTS), args.only)
+    for group in dict.fromkeys(m.group for m in mutants):
+        print(group)
+    return 0
 
 
 def command_list(args):
     root = pathlib.Path(args.root).resolve()
-    mutants = select(parse_list(root / "test" / "mutants" / LIST_NAME), args.only)
+    mutants = select(read_lists(root, args.list or list(LISTS)), args.only)
     bad = 0
     for m in mutants:
         try:
@@ -366,8 +619,11 @@ def command_list(args):
         except (ListError, OSError) as error:
             status = f"   ERROR: {error}"
             bad += 1
-        print(f"{m.id:32} {m.file:38} {m.bug}{status}")
-    print(f"{len(mutants)} mutants, {len(mutants) - bad} apply")
+        tests = f" [{' '.join(m.tests)}]" if m.tests else ""
+        print(f"{m.id:36} {m.file:38} {m.bug}{tests}{status}")
+    counts = ", ".join(f"{name} {sum(m.list_name == name for m in mutants)}" for name in LISTS
+                       if any(m.list_name == name for m in mutants))
+    print(f"{len(mutants)} mutants ({counts}), {len(mutants) - bad} apply")
     return 1 if bad else 0
 
 
@@ -376,25 +632,44 @@ def main():
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     commands = parser.add_subparsers(dest="command", required=True)
     listing = commands.add_parser("list")
+    listing.add_argument("--list", action="append", default=[])
     listing.add_argument("--only", action="append", default=[])
     listing.add_argument("--root", default=str(HERE.parent.parent))
+    groups = commands.add_parser("groups")
+    groups.add_argument("--list", action="append", default=[])
+    groups.add_argument("--only", action="append", default=[])
+    groups.add_argument("--root", default=str(HERE.parent.parent))
     copy = commands.add_parser("sync")
+    copy.add_argument("--package", action="store_true")
     copy.add_argument("repo")
     copy.add_argument("scratch")
     run = commands.add_parser("run")
     run.add_argument("build")
     run.add_argument("results")
+    run.add_argument("--list", action="append", default=[])
     run.add_argument("--only", action="append", default=[])
     run.add_argument("--jobs", type=int, default=2)
     run.add_argument("--timeout", type=float, default=30.0)
+    run.add_argument("--bag-timeout", type=float, default=300.0)
     run.add_argument("--root", default=str(HERE.parent.parent))
+    ros = commands.add_parser("ros")
+    ros.add_argument("workspace")
+    ros.add_argument("results")
+    ros.add_argument("--only", action="append", default=[])
+    ros.add_argument("--timeout", type=float, default=300.0)
+    ros.add_argument("--target", action="append", default=[])
     args = parser.parse_args()
     try:
         if args.command == "list":
             return command_list(args)
+        if args.command == "groups":
+            return command_groups(args)
         if args.command == "sync":
-            sync(pathlib.Path(args.repo).resolve(), pathlib.Path(args.scratch).resolve())
+            sync(pathlib.Path(args.repo).resolve(), pathlib.Path(args.scratch).resolve(),
+                 args.package)
             return 0
+        if args.command == "ros":
+            return command_ros(args)
         if args.jobs < 1:
             raise ListError("--jobs: at least 1")
         return command_run(args)
