@@ -293,6 +293,17 @@ std::string quote(const std::string& text) {
   return q + "'";
 }
 
+std::string setQuaternion(const char* name, const Eigen::Quaterniond& q) {
+  char text[200];
+  std::snprintf(text, sizeof text, "%s=[%.17g, %.17g, %.17g, %.17g]", name, q.x(), q.y(), q.z(),
+                q.w());
+  return " --set " + quote(text);
+}
+
+Eigen::Quaterniond toEigen(const geometry_msgs::Quaternion& q) {
+  return Eigen::Quaterniond(q.w, q.x, q.y, q.z);
+}
+
 TempDir::TempDir() {
   char pattern[] = "/tmp/bag_tools_test.XXXXXX";
   if (!::mkdtemp(pattern)) throw std::runtime_error("mkdtemp failed");

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include <geometry_msgs/Quaternion.h>
 #include <ros/time.h>
 #include <Eigen/Geometry>
 
@@ -105,6 +106,10 @@ RunResult run(const std::string& command);
 
 /// Quoting for a shell command line.
 std::string quote(const std::string& text);
+/// `--set name=[x, y, z, w]` for a tool's command line, every digit of q kept.
+std::string setQuaternion(const char* name, const Eigen::Quaterniond& q);
+/// A message's quaternion, read here rather than through the message layer the tools use.
+Eigen::Quaterniond toEigen(const geometry_msgs::Quaternion& q);
 
 /// A fresh directory under /tmp, removed with everything in it by the destructor (kept when
 /// BAG_TESTS_KEEP is set, to look at a test's files).

@@ -41,10 +41,6 @@ geometry_msgs::Quaternion toMsg(const Eigen::Quaterniond& q) {
   m.x = q.x(), m.y = q.y(), m.z = q.z(), m.w = q.w();
   return m;
 }
-Eigen::Quaterniond toEigen(const geometry_msgs::Quaternion& q) {
-  return Eigen::Quaterniond(q.w, q.x, q.y, q.z);
-}
-
 /// A fix of the cone's true attitude, stamped at `stamp` and recorded `late` s after it (and
 /// 1 us more, after the rate sample of the same record time); frame_id the fixed frame.
 geometry_msgs::PoseStamped poseFix(Stamp stamp, const std::string& frame = "world") {
@@ -95,6 +91,7 @@ std::vector<ap::AttitudeState> readStates(const std::string& path) {
   return states;
 }
 
+using bagtest::toEigen;  // the quaternion, beside this overload
 Eigen::Vector3d toEigen(const geometry_msgs::Vector3& v) { return {v.x, v.y, v.z}; }
 
 double errorOf(const ap::AttitudeState& s) {

@@ -25,17 +25,6 @@ using namespace bagtest;
 
 namespace {
 
-Eigen::Quaterniond toEigen(const geometry_msgs::Quaternion& q) {
-  return Eigen::Quaterniond(q.w, q.x, q.y, q.z);
-}
-
-std::string setQuaternion(const char* name, const Eigen::Quaterniond& q) {
-  char text[200];
-  std::snprintf(text, sizeof text, "%s=[%.17g, %.17g, %.17g, %.17g]", name, q.x(), q.y(), q.z(),
-                q.w());
-  return " --set " + quote(text);
-}
-
 struct Output {
   std::vector<ap::AttitudeState> states;
   std::vector<geometry_msgs::TransformStamped> tf;  // the transforms on /tf

@@ -45,10 +45,6 @@ void toMsg(const Eigen::Quaterniond& q, geometry_msgs::Quaternion& m) {
   m.w = q.w();
 }
 
-Eigen::Quaterniond toEigen(const geometry_msgs::Quaternion& q) {
-  return Eigen::Quaterniond(q.w, q.x, q.y, q.z);
-}
-
 /// A static transform parent -> child, rotation q_PC, as a latched /tf_static records it.
 geometry_msgs::TransformStamped edge(const std::string& parent, const std::string& child,
                                      const Eigen::Quaterniond& q_PC, const Eigen::Vector3d& p) {

@@ -20,10 +20,13 @@
 #include "attitude_propagator/messages/fix_decoder.h"
 #include "attitude_propagator/messages/outputs.h"
 #include "attitude_propagator/quaternion.h"
+#include "serialized_message.h"
 
 namespace ap = attitude_propagator;
 
 namespace {
+
+using messages_test::Serialized;
 
 Eigen::Quaterniond about(const Eigen::Vector3d& axis, double angle) {
   return Eigen::Quaterniond(Eigen::AngleAxisd(angle, axis.normalized()));
@@ -112,27 +115,6 @@ sensor_msgs::Imu imuFix(const std::string& frame, const Eigen::Quaterniond& q,
   m.angular_velocity_covariance[0] = -1.0;  // no rate: a fix needs none
   return m;
 }
-
-/// A message serialised as a topic_tools::ShapeShifter or a rosbag::MessageInstance holds it.
-struct Serialized {
-  std::string datatype, md5;
-  std::vector<std::uint8_t> bytes;
-  template <class M>
-  static Serialized of(const M& msg) {
-    Serialized s{ros::message_traits::datatype<M>(), ros::message_traits::md5sum<M>(), {}};
-    s.bytes.resize(ros::serialization::serializationLength(msg));
-    ros::serialization::OStream out(s.bytes.data(), s.bytes.size());
-    ros::serialization::serialize(out, msg);
-    return s;
-  }
-  const std::string& getDataType() const { return datatype; }
-  const std::string& getMD5Sum() const { return md5; }
-  std::uint32_t size() const { return static_cast<std::uint32_t>(bytes.size()); }
-  template <class Stream>
-  void write(Stream& stream) const {
-    std::copy(bytes.begin(), bytes.end(), stream.advance(bytes.size()));
-  }
-};
 
 struct NullSink : ap::EngineSink {
   void publishState(const ap::EngineState&) override {}

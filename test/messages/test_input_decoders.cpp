@@ -15,10 +15,13 @@
 #include "attitude_propagator/messages/conversions.h"
 #include "attitude_propagator/messages/frame_source.h"
 #include "attitude_propagator/messages/input_decoders.h"
+#include "serialized_message.h"
 
 namespace ap = attitude_propagator;
 
 namespace {
+
+using messages_test::Serialized;
 
 const Eigen::Vector3d kMountAxis = Eigen::Vector3d(1, 2, 3).normalized();
 constexpr double kMountAngle = 0.7;
@@ -73,28 +76,6 @@ Eigen::Matrix3d R_S() {
       -5e-5, 2e-5, 2e-4;
   return R;
 }
-
-/// A message serialised as a topic_tools::ShapeShifter or a rosbag::MessageInstance holds it:
-/// its type, MD5 sum and bytes.
-struct Serialized {
-  std::string datatype, md5;
-  std::vector<std::uint8_t> bytes;
-  template <class M>
-  static Serialized of(const M& msg) {
-    Serialized s{ros::message_traits::datatype<M>(), ros::message_traits::md5sum<M>(), {}};
-    s.bytes.resize(ros::serialization::serializationLength(msg));
-    ros::serialization::OStream out(s.bytes.data(), s.bytes.size());
-    ros::serialization::serialize(out, msg);
-    return s;
-  }
-  const std::string& getDataType() const { return datatype; }
-  const std::string& getMD5Sum() const { return md5; }
-  std::uint32_t size() const { return static_cast<std::uint32_t>(bytes.size()); }
-  template <class Stream>
-  void write(Stream& stream) const {
-    std::copy(bytes.begin(), bytes.end(), stream.advance(bytes.size()));
-  }
-};
 
 geometry_msgs::Twist twist(double x, double y, double z) {
   geometry_msgs::Twist t;
