@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Builds the package and runs every test: the core's gtest suite, the rostest integration
 # tests, the repository checks, the core suite again under ASan + UBSan (scripts/sanitize.sh),
-# the mutation check of the core (scripts/mutants.sh), and, when clang with libFuzzer is
-# present, the fuzz regression inputs and each fuzz target for FUZZ_SECONDS (default 60; 0
-# skips the fuzzing, not the regressions; scripts/fuzz.sh).
+# the mutation check of the core and the message layer (scripts/mutants.sh), and, when clang
+# with libFuzzer is present, the fuzz regression inputs and each fuzz target for FUZZ_SECONDS
+# (default 60; 0 skips the fuzzing, not the regressions; scripts/fuzz.sh).
 # Ends with a line "N passed, M failed" (every gtest case, sanitized ones too, every mutant,
 # and every fuzz target run or regression input counts as one); exits non-zero if anything
 # failed.
