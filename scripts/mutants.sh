@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # Mutation check of the core, the message layer and the bag tools: plants each plausible bug of
-# test/mutants/mutants.txt (src/core, src/config) and mutants_messages.txt (src/messages), or
-# with --list-file mutants_tools.txt of that list (src/tools; minutes per mutant, so not by
-# default), in its source, one at a time, and runs the gtest suite that must notice it: the
-# core suite (test/core), the message layer's (test/messages), or the bag tools' (test/bag, on
-# the tools rebuilt with the mutant). Every mutant must be killed (a test fails, the suite
-# crashes or runs past the timeout). The node's list (mutants_ros.txt) is scripts/mutants_ros.sh's.
+# test/mutants/mutants.txt (src/core, src/config), mutants_messages.txt (src/messages) and
+# mutants_tools.txt (src/tools), or with --list-file of the named lists only, in its source, one
+# at a time, and runs the gtest suite that must notice it: the core suite (test/core), the
+# message layer's (test/messages), or the bag tools' (test/bag, on the tools rebuilt with the
+# mutant). Every mutant must be killed (a test fails, the suite crashes or runs past the
+# timeout). The node's list (mutants_ros.txt) is scripts/mutants_ros.sh's.
 #   bash scripts/mutants.sh [--list-file NAME]... [--only ID]... [--jobs N] [--timeout S] [results_dir]
 #   bash scripts/mutants.sh --list [--list-file NAME]... [--only ID]...
 #                                  the mutants of every list, and whether each still applies

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Mutation check of the node (src/ros), slower and outside CI: plants each plausible bug of
-# test/mutants/mutants_ros.txt, one at a time, in a scratch copy of the package, rebuilds the
-# node in a scratch catkin workspace (one file compiled, the wrapper library and the node
-# relinked) and runs the rostests the mutant names (`tests:`); every mutant must be killed (a
+# Mutation check of the node (src/ros), in the test command after scripts/mutants.sh: plants
+# each plausible bug of test/mutants/mutants_ros.txt, one at a time, in a scratch copy of the
+# package, rebuilds the node in a scratch catkin workspace (one file compiled, the wrapper
+# library and the node relinked) and runs the rostests the mutant names (`tests:`); every mutant must be killed (a
 # rostest fails or runs past the timeout). The checkout is never modified.
 #   bash scripts/mutants_ros.sh [--only ID]... [--timeout S] [results_dir]
 #   bash scripts/mutants.sh --list --list-file mutants_ros.txt   the mutants, and whether each applies

@@ -72,7 +72,7 @@ enum class FixOutcome {
   Reset,          ///< the attitude replaced at its stamp, the rates since replayed
   Waiting,        ///< stamped ahead of the newest rate: applied when the rates reach it
   RejectedGate,   ///< fuse: the innovation is beyond the gate
-  TooOld,         ///< stamped before the history (or the last anchor)
+  TooOld,         ///< stamped before the history, the last anchor or an applied fix no longer kept
   BadQuaternion,  ///< non-finite, or |q| not 1 within kFixUnitTolerance
   BadCovariance,  ///< non-finite, asymmetric, a negative variance, a variance above pi^2,
                   ///< a correlation beyond one
@@ -286,8 +286,13 @@ class AttitudeEngine : private PropagatorHost {
   FixHistoryEntry& historyEntry(std::size_t i) {
     return history_[(history_head_ + i) % history_.size()];
   }
+  /// Applies a fix stamped at or before the newest entry, then again the fixes applied earlier
+  /// that are stamped after it, in stamp order: the order they would have had on time.
+  FixOutcome applyInStampOrder(const PendingFix& fix);
   /// Applies a fix stamped at or before the newest entry.
   FixOutcome applyFix(const PendingFix& fix);
+  /// Keeps an applied fix (stamped at or after those kept) to be applied again.
+  void keepApplied(const PendingFix& fix);
   /// Saves the model's state after a replayed step into its entry.
   void saveReplayed(FixHistoryEntry& entry);
   /// Applies the waiting fixes the rates have reached.
@@ -320,6 +325,8 @@ class AttitudeEngine : private PropagatorHost {
   std::size_t history_head_ = 0;
   std::size_t history_size_ = 0;
   std::vector<PendingFix> pending_fixes_;  // sorted by stamp, at most kMaxPendingFixes
+  std::vector<PendingFix> applied_fixes_;  // the newest applied, by stamp, kMaxFixesReapplied
+  std::optional<Stamp> forgotten_fix_;     // the newest applied fix's stamp no longer kept
   int rejected_in_a_row_ = 0;
   bool replaying_ = false;
   const Input* submitting_ = nullptr;  // the input being handed to the model, as received

@@ -107,6 +107,10 @@ constexpr std::size_t kMaxFixHistorySamples = 4096;
 /// Fixes stamped ahead of the newest rate wait for the rates to reach them, at most this many;
 /// past it the one stamped furthest ahead is dropped (fixes_queue_full).
 constexpr std::size_t kMaxPendingFixes = 8;
+/// A fix stamped before fixes already applied is applied at its stamp and those after it are
+/// applied again, in stamp order (each a replay). The newest this many applied fixes are kept
+/// for it; a fix stamped before one no longer kept is too old (fixes_too_old).
+constexpr std::size_t kMaxFixesReapplied = 8;
 /// A fix's quaternion must have |q| within this of 1 (it is then normalised).
 constexpr double kFixUnitTolerance = 1e-5;
 /// Fuse mode: after this many fixes in a row rejected by the gate, the next one that fails the

@@ -596,7 +596,7 @@ FixOutcome AttitudeEngine::submitFix(Stamp stamp, const Eigen::Quaterniond& q_WB
     recordHistory(ModelStep{}, true);
   }
   if (history_size_ > 0 && stamp <= historyEntry(history_size_ - 1).stamp) {
-    outcome = applyFix(fix);
+    outcome = applyInStampOrder(fix);
     countFix(outcome);
     return outcome;
   }
@@ -621,13 +621,15 @@ void AttitudeEngine::applyDueFixes() {
          pending_fixes_.front().stamp <= historyEntry(history_size_ - 1).stamp) {
     const PendingFix fix = pending_fixes_.front();
     pending_fixes_.erase(pending_fixes_.begin());
-    countFix(applyFix(fix));
+    countFix(applyInStampOrder(fix));
   }
 }
 
 void AttitudeEngine::clearHistory() {
   history_head_ = 0;
   history_size_ = 0;  // the entries' storage stays for reuse
+  applied_fixes_.clear();
+  forgotten_fix_.reset();
 }
 
 void AttitudeEngine::recordHistory(const ModelStep& step, bool base) {
@@ -663,6 +665,38 @@ void AttitudeEngine::recordHistory(const ModelStep& step, bool base) {
   while (history_size_ > 1 && *stamp - historyEntry(1).stamp >= span) {
     history_head_ = (history_head_ + 1) % history_.size();
     --history_size_;
+  }
+}
+
+// A fix stamped before fixes already applied (an earlier fix that arrived later) is applied at
+// its stamp, and the later ones again after it, each with its replay, so that the newest state
+// is the one all of them on time would have given (docs/design.md §6.9). Fixes of equal stamps
+// keep their order of arrival. The re-applications are not counted again; one the gate now
+// rejects is dropped, and the gate's run of rejections is the arrivals'.
+FixOutcome AttitudeEngine::applyInStampOrder(const PendingFix& fix) {
+  if (forgotten_fix_ && fix.stamp < *forgotten_fix_) return FixOutcome::TooOld;
+  const auto later =
+      std::upper_bound(applied_fixes_.begin(), applied_fixes_.end(), fix.stamp,
+                       [](Stamp t, const PendingFix& other) { return t < other.stamp; });
+  const std::vector<PendingFix> again(later, applied_fixes_.end());
+  const FixOutcome outcome = applyFix(fix);
+  if (outcome != FixOutcome::Accepted && outcome != FixOutcome::Reset) return outcome;
+  applied_fixes_.resize(applied_fixes_.size() - again.size());
+  keepApplied(fix);
+  const int rejected_in_a_row = rejected_in_a_row_;
+  for (const PendingFix& g : again) {
+    const FixOutcome o = applyFix(g);
+    if (o == FixOutcome::Accepted || o == FixOutcome::Reset) keepApplied(g);
+  }
+  rejected_in_a_row_ = rejected_in_a_row;
+  return outcome;
+}
+
+void AttitudeEngine::keepApplied(const PendingFix& fix) {
+  applied_fixes_.push_back(fix);
+  if (applied_fixes_.size() > kMaxFixesReapplied) {
+    forgotten_fix_ = applied_fixes_.front().stamp;
+    applied_fixes_.erase(applied_fixes_.begin());
   }
 }
 

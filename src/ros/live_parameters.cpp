@@ -5,14 +5,25 @@
 
 namespace attitude_propagator {
 
+namespace {
+
+// The live parameters, named alike in Parameters and in the reconfigure server's
+// AttitudePropagatorConfig (cfg/AttitudePropagator.cfg): one list for both directions.
+template <class From, class To>
+void copyLiveValues(const From& from, To& to) {
+  to.angular_velocity_stddev = from.angular_velocity_stddev;
+  to.max_dt = from.max_dt;
+  to.torque_timeout = from.torque_timeout;
+  to.publish_tf = from.publish_tf;
+  to.reverse_tf = from.reverse_tf;
+  to.integrator = from.integrator;
+}
+
+}  // namespace
+
 Parameters liveParameters(const Parameters& in_force, const AttitudePropagatorConfig& live) {
   Parameters p = in_force;
-  p.angular_velocity_stddev = live.angular_velocity_stddev;
-  p.max_dt = live.max_dt;
-  p.torque_timeout = live.torque_timeout;
-  p.publish_tf = live.publish_tf;
-  p.reverse_tf = live.reverse_tf;
-  p.integrator = live.integrator;
+  copyLiveValues(live, p);
   return p;
 }
 
@@ -57,12 +68,7 @@ std::optional<LogLine> reconfigureText(const std::string& error, bool engine_cha
 }
 
 void showInForce(const Parameters& in_force, AttitudePropagatorConfig& live) {
-  live.angular_velocity_stddev = in_force.angular_velocity_stddev;
-  live.max_dt = in_force.max_dt;
-  live.torque_timeout = in_force.torque_timeout;
-  live.publish_tf = in_force.publish_tf;
-  live.reverse_tf = in_force.reverse_tf;
-  live.integrator = in_force.integrator;
+  copyLiveValues(in_force, live);
 }
 
 }  // namespace attitude_propagator

@@ -54,6 +54,21 @@ std::vector<Recorded> readRecorded(const std::string& path) {
   return all;
 }
 
+OutputBag readOutputBag(const std::string& path) {
+  rosbag::Bag bag(path, rosbag::bagmode::Read);
+  OutputBag out;
+  for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
+    ++out.count[m.getTopic()];
+    if (auto s = m.instantiate<attitude_propagator::AttitudeState>()) out.states.push_back(*s);
+    if (auto i = m.instantiate<sensor_msgs::Imu>()) out.imu.push_back(*i);
+    if (m.getTopic() != "/tf") continue;
+    if (auto t = m.instantiate<tf2_msgs::TFMessage>()) {
+      out.tf.insert(out.tf.end(), t->transforms.begin(), t->transforms.end());
+    }
+  }
+  return out;
+}
+
 namespace {
 
 void toMsg(const Eigen::Quaterniond& q, geometry_msgs::Quaternion& m) {

@@ -7,12 +7,17 @@
 #include <cstdint>
 #include <cstdlib>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
 #include <geometry_msgs/Quaternion.h>
+#include <geometry_msgs/TransformStamped.h>
 #include <ros/time.h>
+#include <sensor_msgs/Imu.h>
 #include <Eigen/Geometry>
+
+#include "attitude_propagator/AttitudeState.h"
 
 namespace bagtest {
 
@@ -145,6 +150,16 @@ struct Recorded {
   }
 };
 std::vector<Recorded> readRecorded(const std::string& path);
+
+/// What propagate_bag wrote, decoded: the states, the IMU messages, every transform on /tf in
+/// order (one per state unless publish_tf is off) and the messages per topic.
+struct OutputBag {
+  std::vector<attitude_propagator::AttitudeState> states;
+  std::vector<sensor_msgs::Imu> imu;
+  std::vector<geometry_msgs::TransformStamped> tf;
+  std::map<std::string, std::size_t> count;
+};
+OutputBag readOutputBag(const std::string& path);
 
 /// No temporary output (".partial") left in the directory.
 bool noPartialFiles(const TempDir& dir);

@@ -25,26 +25,6 @@ using namespace bagtest;
 
 namespace {
 
-struct Output {
-  std::vector<ap::AttitudeState> states;
-  std::vector<geometry_msgs::TransformStamped> tf;  // the transforms on /tf
-  std::map<std::string, std::size_t> count;         // messages per topic
-};
-
-Output readOutput(const std::string& path) {
-  rosbag::Bag bag(path, rosbag::bagmode::Read);
-  Output out;
-  for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
-    ++out.count[m.getTopic()];
-    if (auto s = m.instantiate<ap::AttitudeState>()) out.states.push_back(*s);
-    if (m.getTopic() != "/tf") continue;
-    if (auto t = m.instantiate<tf2_msgs::TFMessage>()) {
-      out.tf.insert(out.tf.end(), t->transforms.begin(), t->transforms.end());
-    }
-  }
-  return out;
-}
-
 double secondsAt(const ros::Time& stamp) { return secondsOf(static_cast<Stamp>(stamp.toNSec())); }
 
 /// A coning IMU bag (200 Hz, 3 s) and the command that propagates it from the cone's attitude.
@@ -74,7 +54,7 @@ TEST(NodeOptions, ReverseTfWritesTheInverseFromTheBody) {
   const RunResult r = run(run_.command + " --set reverse_tf=true" +
                           setQuaternion("initial_orientation", motion.attitude(0.0)));
   ASSERT_EQ(r.status, 0) << r.output;
-  const Output out = readOutput(run_.dir.file("out.bag"));
+  const OutputBag out = readOutputBag(run_.dir.file("out.bag"));
   ASSERT_EQ(out.states.size(), run_.written.rate_stamps.size());
   ASSERT_EQ(out.tf.size(), out.states.size());
   double worst_tf = 0.0, worst_state = 0.0;
@@ -105,7 +85,7 @@ TEST(NodeOptions, ReverseTfWithNedKeepsTfInRep103Axes) {
   const RunResult r = run(run_.command + " --set reverse_tf=true --set world_frame=ned" +
                           setQuaternion("initial_orientation", q_NE * motion.attitude(0.0) * q_FB));
   ASSERT_EQ(r.status, 0) << r.output;
-  const Output out = readOutput(run_.dir.file("out.bag"));
+  const OutputBag out = readOutputBag(run_.dir.file("out.bag"));
   ASSERT_EQ(out.tf.size(), out.states.size());
   double worst = 0.0;
   for (const auto& t : out.tf) {
@@ -176,7 +156,7 @@ TEST(NodeOptions, PublishTfOffWritesNoTf) {
   ConingRun run_;
   const RunResult r = run(run_.command + " --set publish_tf=false");
   ASSERT_EQ(r.status, 0) << r.output;
-  const Output out = readOutput(run_.dir.file("out.bag"));
+  const OutputBag out = readOutputBag(run_.dir.file("out.bag"));
   const std::size_t n = run_.written.rate_stamps.size();
   const std::map<std::string, std::size_t> expected{{"/attitude_state", n}, {"/imu/data", n}};
   EXPECT_EQ(out.count, expected);
@@ -193,7 +173,7 @@ TEST(NodeOptions, DynamicStatesAtEveryMultipleOfThePublishPeriod) {
                           " --set inertia=[2,3,4] --set torque_input=true --set rate_input=none"
                           " --set integrator=rk4 --set publish_rate=40 --no-progress");
   ASSERT_EQ(r.status, 0) << r.output;
-  const Output out = readOutput(dir.file("out.bag"));
+  const OutputBag out = readOutputBag(dir.file("out.bag"));
   ASSERT_EQ(out.states.size(), std::size_t(duration * rate) + 1) << r.output;
   const Motion truth = torquedFromRest(Eigen::Vector3d::UnitZ(), T, I);
   double worst = 0.0;
@@ -221,7 +201,7 @@ TEST(NodeOptions, DynamicGridCompleteBetweenSparseInputs) {
                           " --set integrator=rk4 --set publish_rate=1000 --set max_dt=5"
                           " --no-progress");
   ASSERT_EQ(r.status, 0) << r.output;
-  const Output out = readOutput(dir.file("out.bag"));
+  const OutputBag out = readOutputBag(dir.file("out.bag"));
   ASSERT_EQ(out.states.size(), std::size_t(duration * 1000) + 1) << r.output;
   for (std::size_t k = 0; k < out.states.size(); ++k) {
     ASSERT_EQ(static_cast<Stamp>(out.states[k].header.stamp.toNSec()),

@@ -1,5 +1,5 @@
 // What the engine tests share: stamps like a real ROS time, a sink that records what the engine
-// hands on, the standard configurations and inputs.
+// hands on and one that discards it, the standard configurations and inputs.
 #pragma once
 
 #include <cmath>
@@ -49,6 +49,13 @@ struct Recorder : ap::EngineSink {
     }
     return true;
   }
+};
+
+/// Takes what the engine hands on and keeps nothing: for tests that look elsewhere.
+struct DiscardingSink : ap::EngineSink {
+  void publishState(const ap::EngineState&) override {}
+  void inputApplied(const ap::Input&, const ap::EngineState&) override {}
+  void note(const ap::EngineNote&) override {}
 };
 
 inline ap::EngineConfig kinematicConfig() {

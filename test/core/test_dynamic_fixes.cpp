@@ -159,6 +159,43 @@ TEST_P(DynamicLateFix, NewestStateIsTheOnTimeOne) {
   }
 }
 
+// An earlier fix (at a torque's stamp) that arrives after a later one (between grid stamps):
+// applied at its stamp and the later one again after it, the newest state is the one both on
+// time give.
+TEST_P(DynamicLateFix, AnEarlierFixArrivingAfterALaterOneIsAppliedBeforeIt) {
+  const DynamicCase c = GetParam();
+  const ap::EngineConfig config = dynamicFixConfig(c.integrator, c.mode);
+  const Eigen::Quaterniond q_first =
+      torqued_body::initial().q_WB * ap::expMap(Eigen::Vector3d(0.02, -0.01, 0.015));
+  Recorder reference_sink;
+  runDynamic(config, {{0.1, 0.1, q_first}}, reference_sink);
+  auto fixNear = [&](double t, const Eigen::Vector3d& offset) {
+    const ap::EngineState* near = reference_sink.stateAt(at(std::floor(t * 100.0) / 100.0));
+    EXPECT_NE(near, nullptr) << t;
+    return near ? Eigen::Quaterniond(near->q_WB * ap::expMap(offset)) : q_first;
+  };
+  const Eigen::Quaterniond early = fixNear(0.4123, {0.02, -0.01, 0.015});
+  const Eigen::Quaterniond later = fixNear(0.5037, {-0.015, 0.02, 0.01});
+  Recorder on_time_sink, reversed_sink, early_only_sink;
+  std::vector<ap::FixOutcome> reversed_outcomes;
+  const ap::EngineState on_time = runDynamic(
+      config, {{0.1, 0.1, q_first}, {0.4123, 0.415, early}, {0.5037, 0.505, later}}, on_time_sink);
+  const ap::EngineState reversed =
+      runDynamic(config, {{0.1, 0.1, q_first}, {0.5037, 0.505, later}, {0.4123, 0.6, early}},
+                 reversed_sink, &reversed_outcomes);
+  const ap::FixOutcome applied =
+      c.mode == ap::FixMode::Fuse ? ap::FixOutcome::Accepted : ap::FixOutcome::Reset;
+  ASSERT_EQ(reversed_outcomes.size(), 3u);
+  EXPECT_EQ(reversed_outcomes[2], applied);
+  EXPECT_LE(ap::rotationAngle(on_time.q_WB, reversed.q_WB), 1e-12);
+  EXPECT_LE((on_time.w_B - reversed.w_B).norm(), 1e-12);
+  EXPECT_LE((on_time.P_B - reversed.P_B).cwiseAbs().maxCoeff(), 1e-15);
+  // The later fix matters: with the early one alone the state differs by far more.
+  const ap::EngineState early_only =
+      runDynamic(config, {{0.1, 0.1, q_first}, {0.4123, 0.6, early}}, early_only_sink);
+  EXPECT_GT(ap::rotationAngle(early_only.q_WB, reversed.q_WB), 1e-3);
+}
+
 INSTANTIATE_TEST_SUITE_P(EveryTorqueIntegratorAndMode, DynamicLateFix,
                          ::testing::ValuesIn(torqueIntegratorsAndModes()), caseName);
 
@@ -264,6 +301,31 @@ TEST(DynamicFix, AJumpBackClearsTheHistory) {
   EXPECT_EQ(engine.submitFix(at(1.2), q, R), ap::FixOutcome::TooOld);
   EXPECT_EQ(engine.state().q_WB.coeffs(), before.q_WB.coeffs());
   EXPECT_EQ(engine.submitFix(at(1.7), q, R), ap::FixOutcome::Reset);
+}
+
+// The fixes applied before a reset are not applied again after it: a fix stamped after the
+// reset but before one applied before it acts alone (the same run without that one is the
+// truth).
+TEST(DynamicFix, AResetForgetsTheAppliedFixes) {
+  const ap::EngineConfig config = dynamicFixConfig(ap::Integrator::Dopri5, ap::FixMode::Reset);
+  const Eigen::Matrix3d R = 1e-6 * Eigen::Matrix3d::Identity();
+  const Eigen::Quaterniond q = engine_fixtures::aboutAxis(Eigen::Vector3d(1, 0, 1), 1.0);
+  const Eigen::Quaterniond q_old = engine_fixtures::aboutAxis(Eigen::Vector3d(0, 1, 0), -0.5);
+  auto run = [&](bool fix_before_the_reset) {
+    Recorder sink;
+    ap::AttitudeEngine engine(config, sink);
+    engine.clockTick(at(0.0));
+    EXPECT_EQ(engine.submitFix(at(0.0), q, R), ap::FixOutcome::Reset);
+    engine_fixtures::runClock(engine, 0.0, 3.0, kTick);
+    if (fix_before_the_reset) EXPECT_EQ(engine.submitFix(at(2.8), q_old, R), ap::FixOutcome::Reset);
+    engine_fixtures::runClock(engine, 1.5, 3.0, kTick);  // back by 1.5 s: a reset at 1.5
+    EXPECT_EQ(engine.counters().resets, 1u);
+    EXPECT_EQ(engine.submitFix(at(2.5), q, R), ap::FixOutcome::Reset);  // before 2.8
+    return engine.state();
+  };
+  const ap::EngineState alone = run(false);
+  const ap::EngineState after_another = run(true);
+  EXPECT_LE(ap::rotationAngle(alone.q_WB, after_another.q_WB), 1e-12);
 }
 
 // Each entry of the dynamic model's history: its size, and the memory bound (printed).

@@ -116,6 +116,49 @@ TEST_P(LateFix, NewestStateIsTheOnTimeOne) {
   }
 }
 
+// Two fixes with different offsets, at 0.4 s and between two samples at 0.5025 s (after the
+// first fix at 0.1 s that starts the history), each handed in after the sample at its `submit`
+// time. Returns the newest state; `counters` gets the engine's.
+ap::EngineState runTwoFixes(const ap::EngineConfig& config, double submit_early, double submit_late,
+                            ap::EngineCounters& counters) {
+  const ap::ConingMotion cone;
+  Recorder sink;
+  ap::AttitudeEngine engine(config, sink);
+  const Eigen::Matrix3d R = 1e-4 * Eigen::Matrix3d::Identity();
+  const Eigen::Quaterniond early = cone.attitude(0.4) * ap::expMap({0.02, -0.01, 0.015});
+  const Eigen::Quaterniond late = cone.attitude(0.5025) * ap::expMap({-0.015, 0.02, 0.01});
+  for (int k = 0; k <= 200; ++k) {
+    const double t = 0.005 * k;
+    engine.submit(rate(t, cone.bodyRate(t)));
+    if (k == 20) engine.submitFix(at(0.1), cone.attitude(0.1), R);
+    if (std::abs(t - submit_early) < 1e-9) engine.submitFix(at(0.4), early, R);
+    if (std::abs(t - submit_late) < 1e-9) engine.submitFix(at(0.5025), late, R);
+  }
+  EXPECT_TRUE(sink.stampsIncrease());
+  counters = engine.counters();
+  return engine.state();
+}
+
+// An earlier fix that arrives after a later one (two sources, one slower): it is applied at its
+// stamp and the later one again after it, so the newest state is the one both on time give
+// (in reset mode the later fix wins, as on time); the outcome is counted once per fix.
+TEST_P(LateFix, AnEarlierFixArrivingAfterALaterOneIsAppliedBeforeIt) {
+  const ReplayCase c = GetParam();
+  const ap::EngineConfig config = fixConfig(c.integrator, c.mode, c.estimate_bias);
+  ap::EngineCounters on_time_counters, reversed_counters, early_only_counters;
+  const ap::EngineState on_time = runTwoFixes(config, 0.4, 0.505, on_time_counters);
+  const ap::EngineState reversed = runTwoFixes(config, 0.6, 0.505, reversed_counters);
+  EXPECT_LE(ap::rotationAngle(on_time.q_WB, reversed.q_WB), 1e-12);
+  EXPECT_LE((on_time.P_B - reversed.P_B).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_LE((on_time.gyro_bias_estimate_B - reversed.gyro_bias_estimate_B).norm(), 1e-15);
+  EXPECT_EQ(on_time_counters.fixes_accepted, 3u);
+  EXPECT_EQ(reversed_counters.fixes_accepted, 3u);
+  EXPECT_EQ(reversed_counters.fixes_reset, on_time_counters.fixes_reset);
+  // The later fix matters: with the early one alone the state differs by far more.
+  const ap::EngineState early_only = runTwoFixes(config, 0.6, 10.0, early_only_counters);
+  EXPECT_GT(ap::rotationAngle(early_only.q_WB, reversed.q_WB), 1e-3);
+}
+
 INSTANTIATE_TEST_SUITE_P(
     EveryIntegratorAndMode, LateFix,
     ::testing::Values(ReplayCase{ap::Integrator::Euler, ap::FixMode::Fuse, false},
@@ -399,6 +442,62 @@ TEST(FixHistory, AFixExactlyFixHistoryOldIsTakenOneNanosecondOlderIsNot) {
   EXPECT_EQ(engine.submitFix(at(0.5) + 1, q, R), ap::FixOutcome::Accepted);
   EXPECT_EQ(engine.counters().fixes_too_old, 1u);
   EXPECT_LE(engine.fixHistorySize(), 102u);
+}
+
+// A fix stamped before kMaxFixesReapplied applied fixes is applied (and they again after it);
+// before one more it is too old, counted, and the state untouched. Reset mode, the fixes on the
+// closed form of a constant rate, so no gate decides.
+TEST(FixHistory, AnEarlierFixIsAppliedBeforeAtMostEightLaterOnes) {
+  ASSERT_EQ(ap::kMaxFixesReapplied, 8u);
+  const ap::EngineConfig config = fixConfig(ap::Integrator::Exp2, ap::FixMode::Reset, false);
+  Recorder sink;
+  ap::AttitudeEngine engine(config, sink);
+  const Eigen::Matrix3d R = 1e-4 * Eigen::Matrix3d::Identity();
+  const Eigen::Vector3d w(0.1, 0.2, -0.3);
+  auto truth = [&w](double t) { return ap::expMap(t * w); };
+  for (int k = 0; k <= 200; ++k) {
+    engine.submit(rate(0.005 * k, w));
+    if (k == 0) engine.submitFix(at(0.0), truth(0.0), R);  // starts the history
+  }
+  // Nine more, in order: at 0.5 s, then eight from 0.55 s.
+  ASSERT_EQ(engine.submitFix(at(0.5), truth(0.5), R), ap::FixOutcome::Reset);
+  for (int i = 0; i < 8; ++i) {
+    const double t = 0.55 + 0.04 * i;
+    ASSERT_EQ(engine.submitFix(at(t), truth(t), R), ap::FixOutcome::Reset) << t;
+  }
+  // One nanosecond before the fix at 0.5 s: nine applied fixes after it.
+  const ap::EngineState before = engine.state();
+  EXPECT_EQ(engine.submitFix(at(0.5) - 1, truth(0.5) * ap::expMap({0.1, 0, 0}), R),
+            ap::FixOutcome::TooOld);
+  EXPECT_EQ(engine.counters().fixes_too_old, 1u);
+  EXPECT_EQ(engine.state().q_WB.coeffs(), before.q_WB.coeffs());
+  // At 0.5 s itself, after the fix there (equal stamps keep their order of arrival): eight.
+  EXPECT_EQ(engine.submitFix(at(0.5), truth(0.5), R), ap::FixOutcome::Reset);
+  EXPECT_EQ(engine.counters().fixes_accepted, 11u);
+  EXPECT_LE(ap::rotationAngle(engine.state().q_WB, truth(1.0)), 1e-12);
+}
+
+// Two fixes of the same stamp act in their order of arrival, as they would on time: in reset
+// mode the second one's attitude is the state, whether a fix stamped earlier arrives after
+// both or not.
+TEST(FixHistory, FixesOfEqualStampsKeepTheirOrderOfArrival) {
+  const ap::EngineConfig config = fixConfig(ap::Integrator::Exp2, ap::FixMode::Reset, false);
+  const Eigen::Matrix3d R = 1e-4 * Eigen::Matrix3d::Identity();
+  const Eigen::Vector3d w(0.1, 0.2, -0.3);
+  auto truth = [&w](double t) { return ap::expMap(t * w); };
+  const Eigen::Quaterniond first = truth(0.5) * ap::expMap({0.05, 0, 0});
+  for (bool earlier_after : {false, true}) {
+    Recorder sink;
+    ap::AttitudeEngine engine(config, sink);
+    for (int k = 0; k <= 200; ++k) {
+      engine.submit(rate(0.005 * k, w));
+      if (k == 0) engine.submitFix(at(0.0), truth(0.0), R);
+    }
+    engine.submitFix(at(0.5), first, R);
+    engine.submitFix(at(0.5), truth(0.5), R);
+    if (earlier_after) engine.submitFix(at(0.3), truth(0.3), R);
+    EXPECT_LE(ap::rotationAngle(engine.state().q_WB, truth(1.0)), 1e-12) << earlier_after;
+  }
 }
 
 TEST(FixHistory, TheMemoryBoundCapsTheInputsKept) {

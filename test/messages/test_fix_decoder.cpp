@@ -16,6 +16,7 @@
 #include <geometry_msgs/Twist.h>
 #include <tf2/buffer_core.h>
 
+#include "../core/engine_fixtures.h"
 #include "attitude_propagator/messages/conversions.h"
 #include "attitude_propagator/messages/fix_decoder.h"
 #include "attitude_propagator/messages/outputs.h"
@@ -115,12 +116,6 @@ sensor_msgs::Imu imuFix(const std::string& frame, const Eigen::Quaterniond& q,
   m.angular_velocity_covariance[0] = -1.0;  // no rate: a fix needs none
   return m;
 }
-
-struct NullSink : ap::EngineSink {
-  void publishState(const ap::EngineState&) override {}
-  void inputApplied(const ap::Input&, const ap::EngineState&) override {}
-  void note(const ap::EngineNote&) override {}
-};
 
 }  // namespace
 
@@ -393,7 +388,7 @@ TEST(FixDecoder, BadQuaternionsAndCovariancesAreRefusedByTheEngineOnce) {
   addFrames(buffer);
   ap::BufferCoreFrames frames(buffer);
   ap::FixDecoder decoder(fixFrames());
-  NullSink sink;
+  engine_fixtures::DiscardingSink sink;
   ap::AttitudeEngine engine(ap::engineConfig(ap::validateParameters(ap::Parameters{})), sink);
   const Eigen::Quaterniond q_HF = truthLookup("map", "camera");
   const double nan = std::numeric_limits<double>::quiet_NaN();

@@ -12,6 +12,7 @@
 
 #include <tf2/buffer_core.h>
 
+#include "../core/engine_fixtures.h"
 #include "attitude_propagator/messages/conversions.h"
 #include "attitude_propagator/messages/frame_source.h"
 #include "attitude_propagator/messages/input_decoders.h"
@@ -113,13 +114,6 @@ geometry_msgs::Vector3Stamped bias(const std::string& frame, const ros::Time& st
   b.vector.z = 0.03;
   return b;
 }
-
-class NullSink : public ap::EngineSink {
- public:
-  void publishState(const ap::EngineState&) override {}
-  void inputApplied(const ap::Input&, const ap::EngineState&) override {}
-  void note(const ap::EngineNote&) override {}
-};
 
 }  // namespace
 
@@ -341,7 +335,7 @@ TEST(ImuDecoder, NonFiniteValuesPassToTheEngine) {
 // table of bad inputs: `rejected_non_finite`), not as a covariance that is no covariance: the
 // decoder passes it on and the engine counts it once, under rejected_non_finite.
 TEST(ImuDecoder, NonFiniteCovarianceIsTheEnginesNonFiniteRejection) {
-  NullSink sink;
+  engine_fixtures::DiscardingSink sink;
   ap::AttitudeEngine engine(ap::engineConfig(ap::validateParameters(ap::Parameters())), sink);
   ap::InputDecoders decoders(frames());
   sensor_msgs::Imu m = imu("base_link");
@@ -605,7 +599,7 @@ TEST(BiasFrames, UnstampedFromNow) {
 // ---------------------------------------------------------------------------------------------
 
 TEST(Refusals, EachCountedOnceInItsNamedCounter) {
-  NullSink sink;
+  engine_fixtures::DiscardingSink sink;
   ap::AttitudeEngine engine(ap::engineConfig(ap::validateParameters(ap::Parameters())), sink);
   auto count = [](const ap::EngineCounters& c, const std::string& name) -> std::uint64_t {
     if (name == "rejected_no_rate") return c.rejected_no_rate;

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "../core/engine_fixtures.h"
 #include "attitude_propagator/config/parameters.h"
 #include "attitude_propagator/messages/set_state_request.h"
 
@@ -13,16 +14,9 @@ namespace ap = attitude_propagator;
 
 namespace {
 
-class NullSink : public ap::EngineSink {
- public:
-  void publishState(const ap::EngineState&) override {}
-  void inputApplied(const ap::Input&, const ap::EngineState&) override {}
-  void note(const ap::EngineNote&) override {}
-};
-
 struct Node {
   ap::NodeConfig config = ap::validateParameters({});
-  NullSink sink;
+  engine_fixtures::DiscardingSink sink;
   ap::AttitudeEngine engine{ap::engineConfig(config), sink};
 };
 

@@ -9,9 +9,9 @@ that must notice it.
   mutate.py sync --package REPO SCRATCH   copy the whole package (but .git) to SCRATCH
   mutate.py run BUILD RESULTS [--list NAME ...] [--only ID ...] [--jobs N] [--timeout S]
                 [--bag-timeout S]
-                      the gtest lists (default mutants.txt and mutants_messages.txt; also
-                      mutants_tools.txt) against the plain CMake build of
-                      test/mutants/CMakeLists.txt
+                      the gtest lists (default all three: mutants.txt,
+                      mutants_messages.txt, mutants_tools.txt) against the plain CMake build
+                      of test/mutants/CMakeLists.txt
   mutate.py ros WORKSPACE RESULTS [--only ID ...] [--timeout S]
                       mutants_ros.txt in a scratch catkin workspace (scripts/mutants_ros.sh)
 
@@ -19,7 +19,7 @@ The lists, by the files their mutants live in and the tests that must notice the
   mutants.txt           src/core, src/config   the core suite (test/core)
   mutants_messages.txt  src/messages           the message layer's suite (test/messages)
   mutants_tools.txt     src/tools              the bag tools' suite (test/bag), run on the tools
-                                               rebuilt with the mutant (not in the test command)
+                                               rebuilt with the mutant
   mutants_ros.txt       src/ros                the rostests named by the mutant's `tests:`
 
 In the gtest lists a mutant is never written into a source tree: its mutated file goes to a
@@ -59,8 +59,8 @@ LISTS = {
     "mutants_ros.txt": re.compile(r"^src/ros/[A-Za-z0-9_]+\.cpp$"),
 }
 GTEST_LISTS = ("mutants.txt", "mutants_messages.txt", "mutants_tools.txt")
-# What `run` runs unless told: the lists that fit the test command's time.
-DEFAULT_LISTS = ("mutants.txt", "mutants_messages.txt")
+# What `run` runs unless told: every gtest list (the test command runs them all).
+DEFAULT_LISTS = GTEST_LISTS
 ROS_LIST = "mutants_ros.txt"
 # The bag tools by their main files; every other file of src/tools is linked into both (an
 # object a tool does not use costs nothing). alignment.cpp is also compiled into the bag suite.
@@ -512,7 +512,11 @@ def command_run(args):
 
 def rostest_failures(output):
     """The failing test cases rostest's summary names, or the last lines of its output."""
-    failed = re.findall(r"^\s*\* (?:ERRORS|FAILURES): \d+ \[([^\]]+)\]", output, re.M)
+    output = re.sub(r"\x1b\[[0-9;]*m", "", output)  # the summary's colours
+    # rosunit's junitxml summary heads each failed case "[name][FAILURE]---"; its bare runner's
+    # summary lists them after the count.
+    failed = (re.findall(r"^\[([^\]]+)\]\[(?:FAILURE|ERROR)\]", output, re.M) or
+              re.findall(r"^\s*\* (?:ERRORS|FAILURES): \d+ \[([^\]]+)\]", output, re.M))
     if failed:
         return ", ".join(dict.fromkeys(failed))
     lines = [line for line in output.splitlines() if line.strip()]

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "../core/engine_fixtures.h"
 #include "attitude_propagator/ros/live_parameters.h"
 
 namespace ap = attitude_propagator;
@@ -22,13 +23,6 @@ ap::AttitudePropagatorConfig changedLive() {
   live.integrator = "rk4";
   return live;
 }
-
-class NullSink : public ap::EngineSink {
- public:
-  void publishState(const ap::EngineState&) override {}
-  void inputApplied(const ap::Input&, const ap::EngineState&) override {}
-  void note(const ap::EngineNote&) override {}
-};
 
 }  // namespace
 
@@ -82,7 +76,7 @@ TEST(LiveParameters, EachChangeIsToldApart) {
 
 TEST(LiveParameters, ARefusedChangeKeepsTheConfigurationInForce) {
   ap::NodeConfig config = ap::validateParameters({});
-  NullSink sink;
+  engine_fixtures::DiscardingSink sink;
   ap::AttitudeEngine engine(ap::engineConfig(config), sink);
   ap::Parameters p = config.parameters;
   p.integrator = "no_such_method";
@@ -99,7 +93,7 @@ TEST(LiveParameters, AChangeTheEngineRefusesKeepsTheConfigurationInForce) {
   // The engine runs the dynamic model; the parameters asked for validate to the kinematic one.
   ap::Parameters dynamic;
   dynamic.inertia = {1.0, 2.0, 3.0};
-  NullSink sink;
+  engine_fixtures::DiscardingSink sink;
   ap::AttitudeEngine engine(ap::engineConfig(ap::validateParameters(dynamic)), sink);
   ap::NodeConfig config = ap::validateParameters({});
   ap::Parameters p = config.parameters;
@@ -111,7 +105,7 @@ TEST(LiveParameters, AChangeTheEngineRefusesKeepsTheConfigurationInForce) {
 
 TEST(LiveParameters, AnAcceptedChangeIsInForce) {
   ap::NodeConfig config = ap::validateParameters({});
-  NullSink sink;
+  engine_fixtures::DiscardingSink sink;
   ap::AttitudeEngine engine(ap::engineConfig(config), sink);
   ap::Parameters p = config.parameters;
   p.max_dt = 0.25;

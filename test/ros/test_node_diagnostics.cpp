@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "../core/engine_fixtures.h"
 #include "attitude_propagator/ros/node_diagnostics.h"
 
 namespace ap = attitude_propagator;
@@ -31,13 +32,6 @@ std::string windowProblem(const ap::EngineCounters& c, double seconds = 1.0, dou
   w.closeInputWindow(at(seconds), c, max_dt);
   return w.problem();
 }
-
-class NullSink : public ap::EngineSink {
- public:
-  void publishState(const ap::EngineState&) override {}
-  void inputApplied(const ap::Input&, const ap::EngineState&) override {}
-  void note(const ap::EngineNote&) override {}
-};
 
 std::string value(const diagnostic_updater::DiagnosticStatusWrapper& s, const std::string& key) {
   for (const auto& kv : s.values) {
@@ -162,7 +156,7 @@ TEST_F(Summary, ALagSaysWhichWay) {
 
 TEST(NodeDiagnostics, TheInputRateAndTheWrappersCounts) {
   const ap::NodeConfig config = ap::validateParameters({});
-  NullSink sink;
+  engine_fixtures::DiscardingSink sink;
   ap::AttitudeEngine engine(ap::engineConfig(config), sink);
   ap::FixInput fixes(config);
   ap::TfConflictWatch tf;
