@@ -317,7 +317,9 @@ TEST(DynamicFix, AResetForgetsTheAppliedFixes) {
     engine.clockTick(at(0.0));
     EXPECT_EQ(engine.submitFix(at(0.0), q, R), ap::FixOutcome::Reset);
     engine_fixtures::runClock(engine, 0.0, 3.0, kTick);
-    if (fix_before_the_reset) EXPECT_EQ(engine.submitFix(at(2.8), q_old, R), ap::FixOutcome::Reset);
+    if (fix_before_the_reset) {
+      EXPECT_EQ(engine.submitFix(at(2.8), q_old, R), ap::FixOutcome::Reset);
+    }
     engine_fixtures::runClock(engine, 1.5, 3.0, kTick);  // back by 1.5 s: a reset at 1.5
     EXPECT_EQ(engine.counters().resets, 1u);
     EXPECT_EQ(engine.submitFix(at(2.5), q, R), ap::FixOutcome::Reset);  // before 2.8
