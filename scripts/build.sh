@@ -8,6 +8,7 @@ source_ros
 mkdir -p "${WORKSPACE}/src"
 ln -sfn "$REPO_DIR" "${WORKSPACE}/src/attitude_propagator"
 cd "$WORKSPACE"
-catkin_make -DCMAKE_BUILD_TYPE=Release \
+# shellcheck disable=SC2046
+catkin_make -DCMAKE_BUILD_TYPE=Release $(compiler_launcher) \
   -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
   -j"$(nproc)" "$@"

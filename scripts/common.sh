@@ -8,6 +8,21 @@ WORKSPACE="${AP_WORKSPACE:-${XDG_CACHE_HOME:-$HOME/.cache}/attitude_propagator_w
 # ROS tools and matplotlib live in Debian's /usr/bin/python3, not in a python3 earlier on PATH.
 export PATH="/usr/bin:$PATH"
 
+# A compiler cache outside the checkout, shared by every build of the scripts (catkin, the
+# sanitizer build, the mutants' builds, the node mutants' workspace): a second run, a fresh clone
+# of an unchanged tree, and every mutant already compiled once cost a cache lookup instead of a
+# compile. Paths are hashed relative to the build folder (CCACHE_BASEDIR), so two workspaces or
+# clones of the same sources share entries. CCACHE_DISABLE=1 turns it off.
+export CCACHE_DIR="${CCACHE_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/attitude_propagator_ccache}"
+export CCACHE_BASEDIR="${CCACHE_BASEDIR:-/}"
+export CCACHE_MAXSIZE="${CCACHE_MAXSIZE:-8G}"
+# The CMake arguments that put the cache in front of the compiler, when ccache is installed.
+compiler_launcher() {
+  if command -v ccache >/dev/null; then
+    echo "-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache"
+  fi
+}
+
 # Debian 12 packages by name (Debian's own ROS 1 lives under /usr, no rosdep index). Besides
 # the build, what the README's commands run: roslaunch and roscore (python3-roslaunch), rosrun
 # (rosbash), rosparam (python3-rosparam), rostopic, rosbag, and dynparam (with
@@ -26,7 +41,7 @@ DEBIAN_PACKAGES=(
   libeigen3-dev libboost-dev libboost-math-dev
   librosbag-storage-dev libnav-msgs-dev libyaml-cpp-dev python3-rosbag
   libgtest-dev googletest libbenchmark-dev python3-matplotlib
-  clang libclang-rt-14-dev
+  clang libclang-rt-14-dev ccache
 )
 
 as_root() {
@@ -93,6 +108,7 @@ configure_sanitize_build() {
       rm -rf "$build/CMakeCache.txt" "$build/CMakeFiles"
     fi
   fi
-  cmake -S "$REPO_DIR/test/sanitize" -B "$build" -DCMAKE_CXX_COMPILER="$compiler" \
+  # shellcheck disable=SC2046
+  cmake -S "$REPO_DIR/test/sanitize" -B "$build" -DCMAKE_CXX_COMPILER="$compiler" $(compiler_launcher) \
     >"$build/cmake.log" 2>&1
 }

@@ -87,7 +87,8 @@ start=$SECONDS
 /usr/bin/python3 "$driver" sync "$REPO_DIR" "$scratch" || exit 2
 forget_other_source "$build" "$scratch/test/mutants"
 echo "mutants: building the suites ($(echo $groups)) in $build"
-if ! { cmake -S "$scratch/test/mutants" -B "$build" -G "Unix Makefiles" \
+# shellcheck disable=SC2046
+if ! { cmake -S "$scratch/test/mutants" -B "$build" -G "Unix Makefiles" $(compiler_launcher) \
   -DCMAKE_CXX_COMPILER="${CXX:-g++}" -DMUTANT_SLOTS="$jobs" \
   -DMUTANTS_MESSAGE_INCLUDE="$message_include" >"$build/cmake.log" 2>&1 &&
   cmake --build "$build" -j "$(nproc)" --target "${targets[@]}" >"$build/build.log" 2>&1; }; then

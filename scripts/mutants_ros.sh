@@ -57,7 +57,8 @@ mkdir -p "$package" "$results"
 # workspace rebuilds only what changed since the last run.
 /usr/bin/python3 "$driver" sync --package "$REPO_DIR" "$package" || exit 2
 echo "mutants_ros: building the node in $ws"
-if ! (cd "$ws" && catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 \
+# shellcheck disable=SC2046
+if ! (cd "$ws" && catkin_make -DCMAKE_BUILD_TYPE=Release $(compiler_launcher) -DPYTHON_EXECUTABLE=/usr/bin/python3 \
   -DPython3_EXECUTABLE=/usr/bin/python3 -j"$(nproc)" "${targets[@]}" >"$dir/build.log" 2>&1); then
   echo "mutants_ros: build failed; see $dir/build.log"
   tail -n 30 "$dir/build.log"
