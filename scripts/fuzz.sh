@@ -4,7 +4,10 @@
 #   bash scripts/fuzz.sh [seconds]        build, then fuzz every target at once for `seconds`
 #                                         of wall time (default 60), each from its own seed
 #   bash scripts/fuzz.sh --regressions    build, then run each target over the inputs in
-#                                         test/fuzz/regressions/<target>/ only
+#                                         test/fuzz/regressions/<target>/ only; an input named
+#                                         after an integrator (dopri5_...) must read that
+#                                         method's code (fuzz_support.h), below the number of
+#                                         codes, so that a new method does not change it
 # Options (before the seconds): --junit DIR writes one JUnit XML per run into DIR (one test
 # case per fuzzed target, one per regression input), as scripts/test.sh counts them.
 # Environment: FUZZ_TARGETS (default "kinematic dynamic parameters"), FUZZ_TIMEOUT (seconds
@@ -24,7 +27,7 @@ while [ $# -gt 0 ]; do
   case "$1" in
     --regressions) mode=regressions ;;
     --junit) junit_dir="$2"; shift ;;
-    -h | --help) sed -n '2,17p' "$0"; exit 0 ;;
+    -h | --help) sed -n '2,20p' "$0"; exit 0 ;;
     *) seconds="$1" ;;
   esac
   shift
@@ -77,6 +80,34 @@ finding_summary() {
     "$1" | head -n 6
 }
 
+# The integrator codes (fuzz_support.h's integratorCodes(), in code order).
+mapfile -t codes < <(sed -n '/std::vector<std::string> codes = {/,/};/p' \
+  "$fuzz_dir/fuzz_support.h" | grep -o '"[a-z0-9_]*"' | tr -d '"')
+# The method a regression input's file name starts with (the longest such name), or nothing.
+method_named() {
+  local file="$1" best="" code
+  for code in "${codes[@]}"; do
+    if [[ "$file" == "${code}_"* ]] && [ ${#code} -gt ${#best} ]; then best="$code"; fi
+  done
+  echo "$best"
+}
+# Why an input named after METHOD does not test it, from its FUZZ_TRACE log; nothing if it does.
+# Its code byte must name METHOD and lie below the number of codes, so that the input keeps its
+# meaning when a method is appended to the codes.
+wrong_method() {
+  local log="$1" method="$2" line code offset read i
+  [ -n "$method" ] || return 0
+  line="$(grep -m1 -E '^integrator code [0-9]+ at [0-9]+: ' "$log")"
+  if [ -z "$line" ]; then
+    echo "named after $method, but it reads no integrator (FUZZ_TRACE shows none)"
+    return 0
+  fi
+  read -r code offset read <<<"$(echo "$line" | sed -E 's/^integrator code ([0-9]+) at ([0-9]+): (.*)$/\1 \2 \3/')"
+  for i in "${!codes[@]}"; do [ "${codes[$i]}" = "$method" ] && break; done
+  if [ "$read" != "$method" ] || [ "$code" -ge ${#codes[@]} ]; then
+    echo "named after $method, but its byte $offset is code $code ($read; codes 0-$((${#codes[@]} - 1)) keep their meaning): set byte $offset to $i"
+  fi
+}
 failed=0
 cases=()
 pids=()
@@ -90,9 +121,21 @@ for target in "${targets[@]}"; do
     for input in "${inputs[@]}"; do
       name="$target/regressions/$(basename "$input")"
       start=$SECONDS
-      if "$bin" "${flags[@]}" -seed=1 "$input" >"$log" 2>&1; then
+      method="$(method_named "$(basename "$input")")"
+      if [ -n "$method" ]; then
+        FUZZ_TRACE=1 "$bin" "${flags[@]}" -seed=1 "$input" >"$log" 2>&1
+      else
+        "$bin" "${flags[@]}" -seed=1 "$input" >"$log" 2>&1
+      fi
+      status=$?
+      wrong="$(wrong_method "$log" "$method")"
+      if [ $status -eq 0 ] && [ -z "$wrong" ]; then
         echo "fuzz: $name passed"
         cases+=("$(junit_case "$name" $((SECONDS - start)))")
+      elif [ -n "$wrong" ]; then
+        failed=$((failed + 1))
+        echo "fuzz: $name FAILED: $wrong"
+        cases+=("$(junit_case "$name" $((SECONDS - start)) "$wrong")")
       else
         failed=$((failed + 1))
         summary="$(finding_summary "$log")"

@@ -9,9 +9,12 @@
 #   bash scripts/mutants.sh [--list-file NAME]... [--only ID]... [--jobs N] [--timeout S] [results_dir]
 #   bash scripts/mutants.sh --list [--list-file NAME]... [--only ID]...
 #                                  the mutants of every list, and whether each still applies
-# The sources are copied to a scratch folder and built once with plain CMake
-# (test/mutants/CMakeLists.txt); each mutant then compiles its one file and relinks the programs
-# that hold it (test/mutants/mutate.py). The checkout is never modified. The message layer and
+# The sources are copied to a scratch folder, each file's mutants are written into one schema of
+# it there (every mutant behind a run-time switch, test/mutants/schemata.py), and the copy is
+# built once with plain CMake (test/mutants/CMakeLists.txt): a mutant in a schema is one run of
+# its suite with AP_MUTANT=<its number>; a mutant the compiler refuses in a schema compiles its
+# one file and relinks the programs that hold it (test/mutants/mutate.py). The checkout is never
+# modified. The message layer and
 # the tools need the package's generated message headers: those of the catkin workspace
 # ($AP_WORKSPACE/devel/include), generated first when missing. JUnit XML goes to results_dir
 # (default $MUTANTS_DIR/results), one test case per mutant, a survivor failing.
@@ -87,18 +90,27 @@ start=$SECONDS
 /usr/bin/python3 "$driver" sync "$REPO_DIR" "$scratch" || exit 2
 forget_other_source "$build" "$scratch/test/mutants"
 echo "mutants: building the suites ($(echo $groups)) in $build"
+# The compile commands the driver runs by hand (schemata, slots) get the cache in front too.
+if command -v ccache >/dev/null; then export AP_COMPILER_LAUNCHER=ccache; fi
 # shellcheck disable=SC2046
-if ! { cmake -S "$scratch/test/mutants" -B "$build" -G "Unix Makefiles" $(compiler_launcher) \
+if ! cmake -S "$scratch/test/mutants" -B "$build" -G "Unix Makefiles" $(compiler_launcher) \
   -DCMAKE_CXX_COMPILER="${CXX:-g++}" -DMUTANT_SLOTS="$jobs" \
-  -DMUTANTS_MESSAGE_INCLUDE="$message_include" >"$build/cmake.log" 2>&1 &&
-  cmake --build "$build" -j "$(nproc)" --target "${targets[@]}" >"$build/build.log" 2>&1; }; then
+  -DMUTANTS_MESSAGE_INCLUDE="$message_include" >"$build/cmake.log" 2>&1; then
+  echo "mutants: configuring failed; see $build/cmake.log"
+  tail -n 30 "$build/cmake.log"
+  exit 2
+fi
+# Every file's mutants into one schema each, in the scratch copy (test/mutants/schemata.py).
+/usr/bin/python3 "$driver" schemata "$REPO_DIR" "$scratch" "$build" --jobs "$jobs" \
+  "${selection[@]}" || exit 2
+if ! cmake --build "$build" -j "$(nproc)" --target "${targets[@]}" >"$build/build.log" 2>&1; then
   echo "mutants: build failed; see $build/cmake.log and $build/build.log"
   tail -n 30 "$build/build.log" 2>/dev/null
   exit 2
 fi
 echo "mutants: built in $((SECONDS - start)) s"
 
-/usr/bin/python3 "$driver" run "$build" "$results" --root "$scratch" --jobs "$jobs" \
+/usr/bin/python3 "$driver" run "$build" "$results" --root "$REPO_DIR" --jobs "$jobs" \
   --timeout "${MUTANTS_TIMEOUT:-30}" --bag-timeout "${MUTANTS_BAG_TIMEOUT:-300}" \
   "${options[@]}" "${selection[@]}"
 status=$?

@@ -4,7 +4,8 @@
 # (cfg/AttitudePropagator.cfg), evaluate_bag_core's --integrators default in its help text
 # (src/tools/evaluate_bag_core.cpp, whose default list itself reads the table), evaluate_bag's
 # colours (nodes/evaluate_bag, those of the benchmark charts: bench/plot.py's PALETTE in the
-# sweep's order, kinematic methods first), the fuzz seeds (test/fuzz/make_seeds.py, its corpus
+# sweep's order, kinematic methods first), the fuzz targets' integrator codes (fuzz_support.h, in
+# the order of their codes, not the table's) and seeds (test/fuzz/make_seeds.py, its corpus
 # and fuzz_parameters.cpp's refused names), bench/bag_throughput.sh's loop and
 # docs/bag_tools.md's sentence. The table comes from the core's API through the integrator_table
 # program, so this needs the built workspace (scripts/test.sh builds first).
@@ -97,7 +98,15 @@ if palette is not None:
 sys.path.insert(0, "test/fuzz")
 import make_seeds  # noqa: E402
 
-expect("test/fuzz/make_seeds.py NAMES", make_seeds.NAMES, names)
+# The fuzz targets name a method by its code (fuzz_support.h's integratorCodes(), frozen and
+# appended to): make_seeds.py's NAMES is that list, and it codes every method of the table.
+codes = one_match("test/fuzz/fuzz_support.h",
+                  r"static const std::vector<std::string> codes = \{([^}]*)\}")
+if codes is not None:
+    expect("test/fuzz/make_seeds.py NAMES", make_seeds.NAMES,
+           ast.literal_eval("[" + codes + "]"), "fuzz_support.h's integratorCodes()")
+expect("the methods coded in test/fuzz/make_seeds.py NAMES", sorted(make_seeds.NAMES),
+       sorted(names), "the integrator table")
 expect("test/fuzz/make_seeds.py KINEMATIC", make_seeds.KINEMATIC, kinematic)
 expect("test/fuzz/make_seeds.py DYNAMIC", make_seeds.DYNAMIC, dynamic)
 refused = one_match("test/fuzz/fuzz_parameters.cpp",

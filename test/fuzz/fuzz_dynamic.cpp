@@ -32,7 +32,6 @@ constexpr int kMaxCalls = 64;
 constexpr double kMaxHorizon = 10.0;
 constexpr double kMaxGridSteps = 1000.0;
 
-std::vector<std::string> allIntegratorNames() { return ap::integratorNames(); }
 
 ap::RigidBody makeBody(ByteReader& in) {
   switch (in.choice(4)) {
@@ -113,12 +112,11 @@ void checkOutcome(const ap::DynamicPropagator& p, const char* call, ap::StampOut
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  static const std::vector<std::string> names = allIntegratorNames();
   ByteReader in(data, size);
 
   ap::DynamicConfig config;
   if (!acceptedBy("RigidBody", [&] { config.body = makeBody(in); })) return 0;
-  config.integrator = ap::integratorFromName(names[in.choice(names.size())]);
+  config.integrator = ap::integratorFromName(readIntegratorCode(in, integratorCodes()));
   config.torque_input = in.flag();
   if (in.flag()) config.max_step = stepValue(in);
   if (in.flag()) config.tolerance = in.value();

@@ -24,7 +24,6 @@ namespace {
 // Bounds the work per input (a burst counts every sample).
 constexpr int kMaxCalls = 256;
 
-std::vector<std::string> allIntegratorNames() { return ap::integratorNames(); }
 
 /// A smooth, moderate rate (rad/s), so long runs of ordinary samples reach the cf4 window.
 Eigen::Vector3d smoothRate(double t) {
@@ -65,11 +64,10 @@ ap::StampOutcome addSample(ap::KinematicPropagator& p, double t, const Eigen::Ve
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  static const std::vector<std::string> names = allIntegratorNames();
   ByteReader in(data, size);
 
   ap::KinematicConfig config;
-  config.integrator = ap::integratorFromName(names[in.choice(names.size())]);
+  config.integrator = ap::integratorFromName(readIntegratorCode(in, integratorCodes()));
   if (in.flag()) config.time_policy.max_dt = in.value();
   if (in.flag()) config.time_policy.backward_jump = in.value();
   if (in.flag()) config.initial_q_WB = in.quaternion();

@@ -39,11 +39,11 @@ std::vector<double> vectorOfSize(ByteReader& in, std::size_t n) {
   return v;
 }
 
-/// The integrator values tried: every name the core accepts, in the table's order, then names
-/// it refuses. make_seeds.py's CHOICES["integrator"] encodes an index into this list
+/// The integrator values tried: every name the core accepts, by its code (integratorCodes()),
+/// then names it refuses. make_seeds.py's CHOICES["integrator"] encodes an index into this list
 /// (test/checks/integrator_lists.sh checks the two agree).
 std::vector<std::string> integratorChoices() {
-  std::vector<std::string> names = ap::integratorNames();
+  std::vector<std::string> names = integratorCodes();
   for (const char* refused : {"", "rk5"}) names.emplace_back(refused);
   return names;
 }
@@ -57,7 +57,7 @@ ap::Parameters readParameters(ByteReader& in) {
   if (in.flag()) p.model = pick(in, {"auto", "kinematic", "dynamic", "", "Dynamic"});
   if (in.flag()) {
     static const std::vector<std::string> integrators = integratorChoices();
-    p.integrator = pick(in, integrators);
+    p.integrator = readIntegratorCode(in, integrators);
   }
   if (in.flag()) p.rate_input = pick(in, {"imu", "twist", "none", "IMU"});
   if (in.flag()) p.torque_input = in.flag();

@@ -16,6 +16,7 @@
 #include <stdexcept>
 #include <string>
 #include <typeinfo>
+#include <vector>
 
 #include <cxxabi.h>
 
@@ -78,6 +79,9 @@ class ByteReader {
   ByteReader(const std::uint8_t* data, std::size_t size) : data_(data), size_(size) {}
 
   bool exhausted() const { return pos_ >= size_; }
+
+  /// Where the next byte is read (for the trace of an input's choices).
+  std::size_t position() const { return pos_; }
 
   std::uint8_t byte() { return pos_ < size_ ? data_[pos_++] : 0; }
 
@@ -156,6 +160,21 @@ class ByteReader {
   std::size_t pos_ = 0;
 };
 
+/// The integrators by code: an input names its integrator by one byte, an index into this
+/// list (a byte past its end wraps around). Frozen: a new method is appended at the end, never
+/// inserted, and nothing is reordered or removed, so an input whose byte is below the list's
+/// length means the same method whatever the core's table holds. make_seeds.py's NAMES is this
+/// list and test/checks/integrator_lists.sh checks that it names every method of the table; the
+/// regression inputs named after a method are checked to read that method from such a byte
+/// (scripts/fuzz.sh --regressions, through FUZZ_TRACE's "integrator code" line).
+inline const std::vector<std::string>& integratorCodes() {
+  static const std::vector<std::string> codes = {
+      "auto",  "euler",      "rk4",    "exp",  "exp2", "cf4", "implicit_midpoint",
+      "splitting", "splitting4", "dopri5", "exact",
+  };
+  return codes;
+}
+
 /// With FUZZ_TRACE set in the environment, prints the calls an input decodes to (for reading a
 /// finding: FUZZ_TRACE=1 fuzz_<target> FILE).
 inline bool tracing() {
@@ -170,6 +189,16 @@ inline bool tracing() {
       std::fputc('\n', stderr);          \
     }                                    \
   } while (false)
+
+/// Reads an integrator's code byte (integratorCodes()) and traces it with its position:
+/// "integrator code <byte> at <offset>: <name>".
+inline std::string readIntegratorCode(ByteReader& in, const std::vector<std::string>& names) {
+  const std::size_t at = in.position();
+  const unsigned code = in.byte();
+  const std::string& name = names[code % names.size()];
+  FUZZ_TRACE("integrator code %u at %zu: %s", code, at, name.c_str());
+  return name;
+}
 
 /// Reports a broken invariant and aborts, which libFuzzer records as a crash with the input.
 [[noreturn]] inline void fail(const char* what, const std::string& detail) {

@@ -8,8 +8,8 @@ import pathlib
 import struct
 
 HERE = pathlib.Path(__file__).resolve().parent
-# The integrator table's names (src/core/integrator.cpp), in integratorNames() order: the
-# targets pick a name by its index here. KINEMATIC and DYNAMIC: the methods that drive each
+# The integrators by code (fuzz_support.h's integratorCodes(): frozen, a new method appended at
+# the end): the targets pick a name by its index here. KINEMATIC and DYNAMIC: the methods that drive each
 # model, each seeded once. test/checks/integrator_lists.sh checks all three against the table,
 # and the corpus against seeds().
 NAMES = ["auto", "euler", "rk4", "exp", "exp2", "cf4", "implicit_midpoint", "splitting",

@@ -7,6 +7,10 @@ that must notice it.
                       the mutants of the lists (default: all); each must apply (exit 1 if not)
   mutate.py sync REPO SCRATCH     copy the sources the plain CMake build needs to SCRATCH
   mutate.py sync --package REPO SCRATCH   copy the whole package (but .git) to SCRATCH
+  mutate.py schemata REPO SCRATCH BUILD [--list NAME ...] [--only ID ...] [--jobs N]
+                      write each source file's mutants into one schema (schemata.py) in
+                      SCRATCH, compiled with BUILD's commands; a mutant the compiler refuses
+                      in a schema is built on its own by `run` (BUILD/schemata.json says which)
   mutate.py run BUILD RESULTS [--list NAME ...] [--only ID ...] [--jobs N] [--timeout S]
                 [--bag-timeout S]
                       the gtest lists (default all three: mutants.txt,
@@ -22,7 +26,11 @@ The lists, by the files their mutants live in and the tests that must notice the
                                                rebuilt with the mutant
   mutants_ros.txt       src/ros                the rostests named by the mutant's `tests:`
 
-In the gtest lists a mutant is never written into a source tree: its mutated file goes to a
+In the gtest lists most mutants cost no compile at all: `schemata` writes every mutant of a file
+into one copy of it, each behind a run-time switch (AP_MUTANT=<number>), so one build of the
+scratch copy serves them all, and each such mutant is one run of its suite with its number in
+the environment. A mutant the compiler refuses inside a schema is built on its own: its mutated
+file (the checkout's file with the mutant applied) goes to a
 slot source in the build folder (mutant_slot<N>.cpp, one per parallel worker), which is
 compiled alone and linked ahead of the unchanged archives, so that the linker takes the mutated
 definitions and never pulls the original object. Each mutant thus costs one compile and one
@@ -48,6 +56,8 @@ import sys
 import threading
 import time
 import xml.etree.ElementTree as ET
+
+import schemata
 
 HERE = pathlib.Path(__file__).resolve().parent
 KEYS = ("id", "file", "bug", "original", "mutant", "tests")
@@ -248,6 +258,117 @@ def sync(repo, scratch, package=False):
                 removed += 1
     print(f"mutants: scratch copy in {scratch}: {written} files written, {removed} removed")
 
+# ---- Schemata ---------------------------------------------------------------------------------
+
+def numbered(mutants):
+    """Each mutant's switch number: its place in the run's list."""
+    return {m.id: n for n, m in enumerate(mutants)}
+
+
+def compile_entry(build, source):
+    """The command CMake generated to compile SOURCE (launcher in front), and its folder."""
+    commands = json.loads((build / "compile_commands.json").read_text())
+    entry = next((c for c in commands if pathlib.Path(c["file"]) == source), None)
+    if entry is None:
+        return None
+    command = entry["command"]
+    launcher = os.environ.get("AP_COMPILER_LAUNCHER", "")
+    if launcher and not command.startswith(launcher):
+        command = f"{launcher} {command}"
+    return command, entry["directory"]
+
+
+def refused_lines(output, source):
+    """The lines of SOURCE that the compiler's errors pin on a switch: those the first error
+    names (its own line, the notes that lead to it and follow it; later errors may only follow
+    from it), and each switch in a constant expression (an error of its own line, never a
+    consequence of another)."""
+    pattern = re.compile(re.escape(str(source)) + r":(\d+):")
+    named, errors = [], 0
+    for line in output.splitlines():
+        error = " error: " in line or line.startswith("error:")
+        errors += error
+        if errors <= 1 or (error and "constexpr" in line):
+            named += [int(n) for n in pattern.findall(line)]
+    return set(named)
+
+
+def schema_for_file(repo, scratch, build, file, mutants, numbers):
+    """Writes FILE's schema into SCRATCH and compiles it; the mutants left out (id: why)."""
+    text = (repo / file).read_text()
+    source = scratch / file
+    left_out, wraps = {}, []
+    for m in mutants:
+        planned = schemata.plan(text, numbers[m.id], m.id, m.pairs)
+        if planned is None:
+            left_out[m.id] = "no expression or statement holds the change"
+        elif schemata.overlapping(wraps, planned):
+            left_out[m.id] = "overlaps another mutant's switch"
+        else:
+            wraps += planned
+    entry = compile_entry(build, source)
+    if entry is None:
+        for w in wraps:
+            left_out[w.mutant_id] = f"{build} has no compile command for {file}"
+        source.write_text(text)
+        return left_out
+    for _ in range(len(wraps) + 1):
+        if not wraps:
+            break
+        schema, spans = schemata.build(text, wraps)
+        source.write_text(schema)
+        done = subprocess.run(entry[0], shell=True, cwd=entry[1], stdout=subprocess.PIPE,
+                              stderr=subprocess.STDOUT, text=True, errors="replace")
+        if done.returncode == 0:
+            return left_out
+        named = refused_lines(done.stdout, source)
+        refused = {i for i, ranges in spans.items()
+                   if any(a <= n <= b for n in named for a, b in ranges)}
+        if not refused:  # the error names no switch: build the file's mutants on their own
+            refused = set(spans)
+        for i in refused:
+            left_out[i] = "the compiler refuses it in a schema"
+        wraps = [w for w in wraps if w.mutant_id not in refused]
+    for w in wraps:
+        left_out[w.mutant_id] = "the schema did not compile"
+    source.write_text(text)
+    return left_out
+
+
+def command_schemata(args):
+    repo, scratch = pathlib.Path(args.repo).resolve(), pathlib.Path(args.scratch).resolve()
+    build = pathlib.Path(args.build).resolve()
+    mutants = select(read_lists(repo, args.list or DEFAULT_LISTS), args.only)
+    numbers = numbered(mutants)
+    by_file = {}
+    for m in mutants:
+        if m.group != "ros":
+            by_file.setdefault(m.file, []).append(m)
+    start = time.monotonic()
+    with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
+        futures = {f: pool.submit(schema_for_file, repo, scratch, build, f, ms, numbers)
+                   for f, ms in by_file.items()}
+        left_out = {}
+        for f in by_file:
+            left_out.update(futures[f].result())
+    in_schema = [m.id for m in mutants if m.group != "ros" and m.id not in left_out]
+    (build / "schemata.json").write_text(json.dumps(
+        {"numbers": numbers, "in_schema": in_schema, "on_their_own": left_out}, indent=1))
+    print(f"mutants: {len(in_schema)} of {len(in_schema) + len(left_out)} mutants in the schemata "
+          f"of {len(by_file)} files ({time.monotonic() - start:.0f} s); "
+          f"{len(left_out)} built on their own")
+    for i, why in left_out.items():
+        print(f"  on its own: {i}: {why}")
+    return 0
+
+
+def read_schemata(build):
+    path = build / "schemata.json"
+    if not path.is_file():
+        return {}, set()
+    data = json.loads(path.read_text())
+    return data["numbers"], set(data["in_schema"])
+
 
 # ---- Running ----------------------------------------------------------------------------------
 
@@ -280,12 +401,10 @@ class Slot:
         self.index = index
         self.source = build / f"mutant_slot{index}.cpp"
         self.tools = build / f"slot{index}"  # this slot's propagate_bag and evaluate_bag_core
-        commands = json.loads((build / "compile_commands.json").read_text())
-        entry = next((c for c in commands if pathlib.Path(c["file"]) == self.source), None)
-        if entry is None:
+        self.compile = compile_entry(build, self.source)
+        if self.compile is None:
             raise ListError(f"{build} has no slot {index}: configure it with MUTANT_SLOTS "
                             "at least --jobs (the Unix Makefiles generator)")
-        self.compile = (entry["command"], entry["directory"])
 
     def link_command(self, target):
         link = self.build / "CMakeFiles" / f"{target}.dir" / "link.txt"
@@ -370,6 +489,20 @@ def mutated_text(root, mutant):
         return mutant.apply((root / mutant.file).read_text()), None
     except ListError as error:
         return None, Outcome(mutant, "error", str(error))
+
+
+def switched_on(build, mutant, number, timeouts):
+    """Runs the suite of the schema build with the mutant's switch on."""
+    suites = {"core": build / "core_tests_mutants", "messages": build / "messages_tests_mutants",
+              "tools": build / "bag_tools_tests_mutants"}
+    environment = {"AP_MUTANT": str(number),
+                   "AP_PROPAGATE_BAG": str(build / "tools" / "propagate_bag"),
+                   "AP_EVALUATE_BAG_CORE": str(build / "tools" / "evaluate_bag_core")}
+    passed, why, seconds = run_suite(suites[mutant.group], build, timeouts[mutant.group], True,
+                                     environment)
+    if passed:
+        return Outcome(mutant, "survived", f"the {SUITES[mutant.group]} passes", 0.0, seconds)
+    return Outcome(mutant, "killed", why, 0.0, seconds)
 
 
 def run_mutant(slot, root, mutant, timeouts):
@@ -462,8 +595,14 @@ def command_run(args):
     if any(m.group == "ros" for m in mutants):
         raise ListError(f"{ROS_LIST} runs with `mutate.py ros` (scripts/mutants_ros.sh)")
     timeouts = {"core": args.timeout, "messages": args.timeout, "tools": args.bag_timeout}
+    os.environ.pop("AP_MUTANT", None)  # the unmutated suites run with every switch off
+    numbers, in_schema = read_schemata(build)
+    if in_schema and numbers != numbered(select(read_lists(root, args.list or DEFAULT_LISTS),
+                                                args.only)):
+        raise ListError(f"{build}/schemata.json was written for another selection of mutants")
 
-    # Without a passing suite every mutant would look killed.
+    # Without a passing suite every mutant would look killed (in the schemata: with every
+    # switch off, the schema build must be the unmutated code).
     suites = {"core": build / "core_tests_mutants", "messages": build / "messages_tests_mutants",
               "tools": build / "bag_tools_tests_mutants"}
     for group in dict.fromkeys(m.group for m in mutants):
@@ -478,7 +617,8 @@ def command_run(args):
             write_baseline_failure(xml, f"{SUITES[group]}: {why}")
             return 2
         print(f"mutants: the unmutated {SUITES[group]} passes in {seconds:.1f} s")
-    print(f"mutants: running {len(mutants)} mutants, {args.jobs} at a time (timeout "
+    print(f"mutants: running {len(mutants)} mutants ({sum(m.id in in_schema for m in mutants)} "
+          f"switched on in the schemata, the rest built on their own), {args.jobs} at a time (timeout "
           f"{args.timeout:g} s each, {args.bag_timeout:g} s for the bag tools' suite)")
 
     start = time.monotonic()
@@ -487,6 +627,11 @@ def command_run(args):
     lock = threading.Lock()
 
     def work(mutant):
+        if mutant.id in in_schema:
+            outcome = switched_on(build, mutant, numbers[mutant.id], timeouts)
+            with lock:
+                print(report_line(outcome), flush=True)
+            return outcome
         with lock:
             slot = free.pop()
         try:
@@ -498,8 +643,9 @@ def command_run(args):
             print(report_line(outcome), flush=True)
         return outcome
 
-    # The slowest first (the bag tools' suite), so that the workers finish together.
-    order = sorted(mutants, key=lambda m: m.group != "tools")
+    # The slowest first (built on their own, then the bag tools' suite), so that the workers
+    # finish together.
+    order = sorted(mutants, key=lambda m: (m.id in in_schema, m.group != "tools"))
     with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
         done = {o.mutant.id: o for o in pool.map(work, order)}
     outcomes = [done[m.id] for m in mutants]
@@ -647,6 +793,13 @@ def main():
     copy.add_argument("--package", action="store_true")
     copy.add_argument("repo")
     copy.add_argument("scratch")
+    schema = commands.add_parser("schemata")
+    schema.add_argument("repo")
+    schema.add_argument("scratch")
+    schema.add_argument("build")
+    schema.add_argument("--list", action="append", default=[])
+    schema.add_argument("--only", action="append", default=[])
+    schema.add_argument("--jobs", type=int, default=2)
     run = commands.add_parser("run")
     run.add_argument("build")
     run.add_argument("results")
@@ -674,6 +827,8 @@ def main():
             return 0
         if args.command == "ros":
             return command_ros(args)
+        if args.command == "schemata":
+            return command_schemata(args)
         if args.jobs < 1:
             raise ListError("--jobs: at least 1")
         return command_run(args)
