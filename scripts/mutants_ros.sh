@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
-# Mutation check of the node (src/ros), in the test command after scripts/mutants.sh: plants
-# each plausible bug of test/mutants/mutants_ros.txt, one at a time, in a scratch copy of the
-# package, rebuilds the node in a scratch catkin workspace (one file compiled, the wrapper
-# library and the node relinked) and runs the rostests the mutant names (`tests:`); every mutant must be killed (a
-# rostest fails or runs past the timeout). The checkout is never modified.
+# Mutation check of the node (src/ros), in the robustness tier after scripts/mutants.sh: writes
+# the plausible bugs of test/mutants/mutants_ros.txt into schemata of their files (each behind a
+# run-time switch, test/mutants/schemata.py) in a scratch copy of the package, builds the node
+# once in a scratch catkin workspace, and runs for each mutant the rostests it names (`tests:`)
+# with AP_MUTANT=<its number>; a mutant the compiler refuses in a schema is planted in the copy
+# on its own (one file compiled, the wrapper library and the node relinked) and restored after.
+# Every mutant must be killed (a rostest fails or runs past the timeout). The checkout is never
+# modified.
 #   bash scripts/mutants_ros.sh [--only ID]... [--timeout S] [results_dir]
 #   bash scripts/mutants.sh --list --list-file mutants_ros.txt   the mutants, and whether each applies
 # The scratch workspace ($MUTANTS_ROS_DIR/ws, default $AP_WORKSPACE/mutants_ros) is kept: a
@@ -57,16 +60,22 @@ mkdir -p "$package" "$results"
 # workspace rebuilds only what changed since the last run.
 /usr/bin/python3 "$driver" sync --package "$REPO_DIR" "$package" || exit 2
 echo "mutants_ros: building the node in $ws"
-# shellcheck disable=SC2046
-if ! (cd "$ws" && catkin_make -DCMAKE_BUILD_TYPE=Release $(compiler_launcher) -DPYTHON_EXECUTABLE=/usr/bin/python3 \
-  -DPython3_EXECUTABLE=/usr/bin/python3 -j"$(nproc)" "${targets[@]}" >"$dir/build.log" 2>&1); then
+if command -v ccache >/dev/null; then export AP_COMPILER_LAUNCHER=ccache; fi
+catkin=(catkin_make -DCMAKE_BUILD_TYPE=Release $(compiler_launcher) -DCMAKE_EXPORT_COMPILE_COMMANDS=ON
+  -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 -j"$(nproc)")
+# Configured first (the compile commands), then each file's mutants written into one schema of
+# it in the copy, then one build serves them all.
+if ! { (cd "$ws" && "${catkin[@]}" help >"$dir/build.log" 2>&1) &&
+  /usr/bin/python3 "$driver" schemata "$REPO_DIR" "$package" "$ws/build" --list mutants_ros.txt \
+    "${options[@]}" &&
+  (cd "$ws" && "${catkin[@]}" "${targets[@]}" >>"$dir/build.log" 2>&1); }; then
   echo "mutants_ros: build failed; see $dir/build.log"
   tail -n 30 "$dir/build.log"
   exit 2
 fi
 echo "mutants_ros: built in $((SECONDS - start)) s"
 
-/usr/bin/python3 "$driver" ros "$ws" "$results" --timeout "$timeout" \
+/usr/bin/python3 "$driver" ros "$ws" "$results" --timeout "$timeout" --root "$REPO_DIR" \
   $(printf -- '--target %s ' "${targets[@]}") "${options[@]}"
 status=$?
 echo "mutants_ros: whole check took $((SECONDS - start)) s (exit $status)"

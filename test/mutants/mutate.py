@@ -16,8 +16,11 @@ that must notice it.
                       the gtest lists (default all three: mutants.txt,
                       mutants_messages.txt, mutants_tools.txt) against the plain CMake build
                       of test/mutants/CMakeLists.txt
-  mutate.py ros WORKSPACE RESULTS [--only ID ...] [--timeout S]
-                      mutants_ros.txt in a scratch catkin workspace (scripts/mutants_ros.sh)
+  mutate.py ros WORKSPACE RESULTS [--only ID ...] [--timeout S] [--root REPO]
+                      mutants_ros.txt in a scratch catkin workspace (scripts/mutants_ros.sh):
+                      a mutant in a schema (`schemata --list mutants_ros.txt` on the
+                      workspace's copy) runs its rostests with AP_MUTANT set, which roslaunch
+                      passes on to the node; any other is written in, built and restored
 
 The lists, by the files their mutants live in and the tests that must notice them:
   mutants.txt           src/core, src/config   the core suite (test/core)
@@ -35,7 +38,8 @@ slot source in the build folder (mutant_slot<N>.cpp, one per parallel worker), w
 compiled alone and linked ahead of the unchanged archives, so that the linker takes the mutated
 definitions and never pulls the original object. Each mutant thus costs one compile and one
 link per program that holds its file, and there is nothing to restore. The node's list is
-planted in the scratch catkin workspace's copy of the package and restored after each mutant.
+written into schemata in the scratch catkin workspace's copy of the package the same way; a
+mutant of it the compiler refuses there is planted in the copy and restored after it.
 
 A mutant is killed when its tests fail on it (the first failing test is recorded), crash, or
 run past the timeout; it survives when they pass. A mutant whose original text does not occur
@@ -265,32 +269,41 @@ def numbered(mutants):
     return {m.id: n for n, m in enumerate(mutants)}
 
 
-def compile_entry(build, source):
-    """The command CMake generated to compile SOURCE (launcher in front), and its folder."""
+def compile_entry(build, source, launcher=True):
+    """The command CMake generated to compile SOURCE (AP_COMPILER_LAUNCHER in front unless
+    told), and its folder."""
     commands = json.loads((build / "compile_commands.json").read_text())
     entry = next((c for c in commands if pathlib.Path(c["file"]) == source), None)
     if entry is None:
         return None
     command = entry["command"]
-    launcher = os.environ.get("AP_COMPILER_LAUNCHER", "")
-    if launcher and not command.startswith(launcher):
-        command = f"{launcher} {command}"
+    prefix = os.environ.get("AP_COMPILER_LAUNCHER", "") if launcher else ""
+    if prefix and not command.startswith(prefix):
+        command = f"{prefix} {command}"
     return command, entry["directory"]
+
+
+# Errors a switch causes by itself, never as a consequence of another error: a switch in a
+# constant expression, and one whose two texts differ in type.
+SELF_CONTAINED = ("constexpr", "constant expression", "static assertion failed",
+                  "have different types")
 
 
 def refused_lines(output, source):
     """The lines of SOURCE that the compiler's errors pin on a switch: those the first error
-    names (its own line, the notes that lead to it and follow it; later errors may only follow
-    from it), and each switch in a constant expression (an error of its own line, never a
-    consequence of another)."""
-    pattern = re.compile(re.escape(str(source)) + r":(\d+):")
-    named, errors = [], 0
+    names (its own line and the context before it; later errors may only follow from the
+    first), and those of every error of a self-contained kind."""
+    # By its name alone: with CCACHE_BASEDIR the compiler is given, and names, relative paths.
+    pattern = re.compile(r"(?:^|[\s/])" + re.escape(source.name) + r":(\d+):")
+    named, block, errors = set(), [], 0
     for line in output.splitlines():
-        error = " error: " in line or line.startswith("error:")
-        errors += error
-        if errors <= 1 or (error and "constexpr" in line):
-            named += [int(n) for n in pattern.findall(line)]
-    return set(named)
+        block += [int(n) for n in pattern.findall(line)]
+        if " error: " in line or line.startswith("error:"):
+            errors += 1
+            if errors == 1 or any(kind in line for kind in SELF_CONTAINED):
+                named.update(block)
+            block = []
+    return named
 
 
 def schema_for_file(repo, scratch, build, file, mutants, numbers):
@@ -312,20 +325,31 @@ def schema_for_file(repo, scratch, build, file, mutants, numbers):
             left_out[w.mutant_id] = f"{build} has no compile command for {file}"
         source.write_text(text)
         return left_out
+    (build / f"schemata_{source.stem}.log").unlink(missing_ok=True)
+    # Checked without code generation (what refuses a switch is found before it); the build
+    # compiles the schema that passes.
+    check = re.sub(r" -o \S+", " -fsyntax-only", compile_entry(build, source, False)[0], count=1)
     for _ in range(len(wraps) + 1):
         if not wraps:
             break
         schema, spans = schemata.build(text, wraps)
+        kinds = {w.mutant_id: w.kind for w in wraps}
         source.write_text(schema)
-        done = subprocess.run(entry[0], shell=True, cwd=entry[1], stdout=subprocess.PIPE,
+        done = subprocess.run(check, shell=True, cwd=entry[1], stdout=subprocess.PIPE,
                               stderr=subprocess.STDOUT, text=True, errors="replace")
         if done.returncode == 0:
             return left_out
+        with open(build / f"schemata_{source.stem}.log", "a") as log:  # why, for the reader
+            log.write(done.stdout)
         named = refused_lines(done.stdout, source)
         refused = {i for i, ranges in spans.items()
                    if any(a <= n <= b for n in named for a, b in ranges)}
-        if not refused:  # the error names no switch: build the file's mutants on their own
-            refused = set(spans)
+        if not refused:  # the error names no switch: most likely a statement switch that put
+            # a declaration in a block of its own, so the nearest one before the error goes
+            first = min(named, default=None)
+            before = [(ranges[-1][1], i) for i, ranges in spans.items()
+                      if first is not None and kinds[i] == "statement" and ranges[0][0] < first]
+            refused = {max(before)[1]} if before else set(spans)
         for i in refused:
             left_out[i] = "the compiler refuses it in a schema"
         wraps = [w for w in wraps if w.mutant_id not in refused]
@@ -342,8 +366,7 @@ def command_schemata(args):
     numbers = numbered(mutants)
     by_file = {}
     for m in mutants:
-        if m.group != "ros":
-            by_file.setdefault(m.file, []).append(m)
+        by_file.setdefault(m.file, []).append(m)
     start = time.monotonic()
     with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
         futures = {f: pool.submit(schema_for_file, repo, scratch, build, f, ms, numbers)
@@ -351,7 +374,7 @@ def command_schemata(args):
         left_out = {}
         for f in by_file:
             left_out.update(futures[f].result())
-    in_schema = [m.id for m in mutants if m.group != "ros" and m.id not in left_out]
+    in_schema = [m.id for m in mutants if m.id not in left_out]
     (build / "schemata.json").write_text(json.dumps(
         {"numbers": numbers, "in_schema": in_schema, "on_their_own": left_out}, indent=1))
     print(f"mutants: {len(in_schema)} of {len(in_schema) + len(left_out)} mutants in the schemata "
@@ -669,7 +692,7 @@ def rostest_failures(output):
     return " / ".join(lines[-3:]) if lines else "no output"
 
 
-def run_rostest(workspace, name, timeout):
+def run_rostest(workspace, name, timeout, environment=None):
     """Runs one rostest of the package in the scratch workspace: (passed, why, seconds). Not
     with --text: rostest then cannot read the test's results, and exits 0 whatever they say."""
     setup = workspace / "devel" / "setup.bash"
@@ -677,7 +700,8 @@ def run_rostest(workspace, name, timeout):
                f"rostest attitude_propagator {name}")
     start = time.monotonic()
     process = subprocess.Popen(["/bin/bash", "-c", command], stdout=subprocess.PIPE,
-                               stderr=subprocess.STDOUT, text=True, start_new_session=True)
+                               stderr=subprocess.STDOUT, text=True, start_new_session=True,
+                               env=dict(os.environ, **(environment or {})))
     try:
         output, _ = process.communicate(timeout=timeout)
     except subprocess.TimeoutExpired:
@@ -697,9 +721,15 @@ def command_ros(args):
     results.mkdir(parents=True, exist_ok=True)
     xml = results / "mutants_ros.xml"
     xml.unlink(missing_ok=True)
-    mutants = select(read_lists(package, [ROS_LIST]), args.only)
+    root = pathlib.Path(args.root).resolve()  # the checkout: each mutant applies to its text
+    mutants = select(read_lists(root, [ROS_LIST]), args.only)
+    os.environ.pop("AP_MUTANT", None)  # the unmutated rostests run with every switch off
+    numbers, in_schema = read_schemata(workspace / "build")
+    if in_schema and numbers != numbered(mutants):
+        raise ListError(f"{workspace}/build/schemata.json was written for another selection")
     build = f"catkin_make -j{os.cpu_count() or 2} {' '.join(args.target)}"
-    # Without passing rostests every mutant would look killed: each one named, unmutated, once.
+    # Without passing rostests every mutant would look killed: each one named, unmutated, once
+    # (in the schemata: with every switch off, the node must be the unmutated one).
     for test in dict.fromkeys(t for m in mutants for t in m.tests):
         passed, why, seconds = run_rostest(workspace, test, args.timeout)
         if not passed:
@@ -707,18 +737,36 @@ def command_ros(args):
             write_baseline_failure(xml, why, name="mutants_ros")
             return 2
         print(f"mutants: the unmutated {test} passes in {seconds:.0f} s", flush=True)
-    print(f"mutants: running {len(mutants)} mutants of the node, one at a time (rostests: "
-          f"timeout {args.timeout:g} s each)", flush=True)
+    print(f"mutants: running {len(mutants)} mutants of the node ({sum(m.id in in_schema for m in mutants)} "
+          f"switched on in the schemata), one at a time (rostests: timeout {args.timeout:g} s "
+          "each)", flush=True)
     start = time.monotonic()
     outcomes = []
+
+    def rostests(mutant, environment=None):
+        why, seconds = "", 0.0
+        for test in mutant.tests:
+            passed, why, spent = run_rostest(workspace, test, args.timeout, environment)
+            seconds += spent
+            if not passed:
+                break
+        verdict = "killed" if why else "survived"
+        return verdict, why or f"{' '.join(mutant.tests)} pass", seconds
+
     for mutant in mutants:
-        text, failed = mutated_text(package, mutant)
+        if mutant.id in in_schema:
+            verdict, why, seconds = rostests(mutant, {"AP_MUTANT": str(numbers[mutant.id])})
+            outcome = Outcome(mutant, verdict, why, 0.0, seconds)
+            outcomes.append(outcome)
+            print(report_line(outcome), flush=True)
+            continue
+        text, failed = mutated_text(root, mutant)
         if failed:
             outcomes.append(failed)
             print(report_line(failed), flush=True)
             continue
         path = package / mutant.file
-        original = path.read_text()
+        original = path.read_text()  # the schema, when the file has one
         began = time.monotonic()
         try:
             path.write_text(text)
@@ -727,15 +775,8 @@ def command_ros(args):
             if problem is not None:
                 outcome = Outcome(mutant, "error", f"does not build: {problem}", built)
             else:
-                why, seconds = "", 0.0
-                for test in mutant.tests:
-                    passed, why, spent = run_rostest(workspace, test, args.timeout)
-                    seconds += spent
-                    if not passed:
-                        break
-                verdict = "killed" if why else "survived"
-                outcome = Outcome(mutant, verdict, why or f"{' '.join(mutant.tests)} pass",
-                                  built, seconds)
+                verdict, why, seconds = rostests(mutant)
+                outcome = Outcome(mutant, verdict, why, built, seconds)
         finally:
             path.write_text(original)
         outcomes.append(outcome)
@@ -815,6 +856,7 @@ def main():
     ros.add_argument("--only", action="append", default=[])
     ros.add_argument("--timeout", type=float, default=300.0)
     ros.add_argument("--target", action="append", default=[])
+    ros.add_argument("--root", default=str(HERE.parent.parent))
     args = parser.parse_args()
     try:
         if args.command == "list":

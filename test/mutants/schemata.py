@@ -3,12 +3,13 @@ a run-time switch, so that one build serves all of them (mutate.py `schemata`).
 
 A mutant replaces text; the schema keeps both texts and picks one at run time:
 
-  an expression   (active() == k ? (mutated) : (original)), when the changed text, widened to
+  an expression   (active() == k ? T(mutated) : T(original)), when the changed text, widened to
                   the smallest complete expression around it (bounded by one of ( , = [ { ? :
                   return on the left and ) , ; ] } ? : on the right, brackets balanced, no
-                  top-level comma, semicolon or assignment), has the same type both ways (a
-                  static_assert on the decayed types: a mutant that changes a type cannot hide
-                  behind a conversion);
+                  top-level comma, semicolon or assignment), has the same value type T both
+                  ways (a static_assert on the decayed types, an Eigen expression taken as the
+                  matrix it evaluates to: a mutant that changes a type cannot hide behind a
+                  conversion);
   a statement     if (active() == k) { mutated } else { original }, when the change spans
                   whole statements inside a function.
 
@@ -31,11 +32,23 @@ inline int active() {
   }();
   return n;
 }
+// The value an expression stands for: its own type, or for an Eigen expression the matrix it
+// evaluates to (two expression trees of one matrix type are then one type).
+template <class T, class = void>
+struct Plain {
+  using type = std::decay_t<T>;
+};
+template <class T>
+struct Plain<T, std::void_t<typename std::decay_t<T>::PlainObject>> {
+  using type = typename std::decay_t<T>::PlainObject;
+};
+// A and B as decltype((expression)) gives them: one type, lvalues of it, stay one lvalue (as
+// '?:' keeps them); otherwise the value both stand for.
 template <class A, class B>
 struct Same {
-  static_assert(std::is_same<std::decay_t<A>, std::decay_t<B>>::value,
+  static_assert(std::is_same<typename Plain<A>::type, typename Plain<B>::type>::value,
                 "a schema's mutated expression has another type than the original");
-  static constexpr bool value = true;
+  using type = std::conditional_t<std::is_same<A, B>::value, A, typename Plain<A>::type>;
 };
 }  // namespace ap_mutant_schema
 """
@@ -225,9 +238,12 @@ class Wrap:
         # Written out, not a macro: the compiler then names the switch's own line.
         on = f"(::ap_mutant_schema::active() == {self.number})"
         if self.kind == "expression":
-            return (f"(static_cast<void>(::ap_mutant_schema::Same<decltype({self.original}), "
-                    f"decltype({self.mutated})>::value), {on} ? ({self.mutated}) "
-                    f": ({self.original}))")
+            # Both sides converted to the original's value type (checked equal to the mutated
+            # one's), so that the two sides of '?:' agree and the unswitched value is unchanged.
+            same = (f"::ap_mutant_schema::Same<decltype(({self.original})), "
+                    f"decltype(({self.mutated}))>::type")
+            return (f"({on} ? static_cast<{same}>({self.mutated}) "
+                    f": static_cast<{same}>({self.original}))")
         # Each text on lines of its own: a line comment in one cannot swallow the braces.
         return f"if {on} {{\n{self.mutated}\n}} else {{\n{self.original}\n}}"
 
