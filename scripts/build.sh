@@ -5,8 +5,7 @@ set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 source_ros
 
-mkdir -p "${WORKSPACE}/src"
-ln -sfn "$REPO_DIR" "${WORKSPACE}/src/attitude_propagator"
+stable_source >/dev/null
 cd "$WORKSPACE"
 # shellcheck disable=SC2046
 catkin_make -DCMAKE_BUILD_TYPE=Release $(compiler_launcher) \

@@ -85,6 +85,15 @@ forget_other_source() {
   fi
 }
 
+# The checkout as the catkin workspace links it ($WORKSPACE/src/attitude_propagator): a path
+# that stays the same for every clone, so that builds made through it (catkin, the sanitizer
+# build) share the compiler cache across clones. Prints the path.
+stable_source() {
+  mkdir -p "${WORKSPACE}/src"
+  ln -sfn "$REPO_DIR" "${WORKSPACE}/src/attitude_propagator"
+  echo "${WORKSPACE}/src/attitude_propagator"
+}
+
 source_workspace() {
   set +u
   # shellcheck disable=SC1091
@@ -100,8 +109,10 @@ source_workspace() {
 configure_sanitize_build() {
   local build="$1" compiler cached
   if have_libfuzzer; then compiler=clang++; else compiler="${CXX:-g++}"; fi
+  local source
+  source="$(stable_source)/test/sanitize"
   mkdir -p "$build"
-  forget_other_source "$build" "$REPO_DIR/test/sanitize"
+  forget_other_source "$build" "$source"
   if [ -f "$build/CMakeCache.txt" ]; then
     cached="$(sed -n 's/^CMAKE_CXX_COMPILER:[A-Z]*=//p' "$build/CMakeCache.txt")"
     if [ "$(basename "$cached")" != "$(basename "$(command -v "$compiler" || echo "$compiler")")" ]; then
@@ -109,6 +120,6 @@ configure_sanitize_build() {
     fi
   fi
   # shellcheck disable=SC2046
-  cmake -S "$REPO_DIR/test/sanitize" -B "$build" -DCMAKE_CXX_COMPILER="$compiler" $(compiler_launcher) \
+  cmake -S "$source" -B "$build" -DCMAKE_CXX_COMPILER="$compiler" $(compiler_launcher) \
     >"$build/cmake.log" 2>&1
 }
