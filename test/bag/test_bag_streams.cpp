@@ -637,6 +637,33 @@ TEST(ToolOptions, DryRunWritesNothing) {
   EXPECT_EQ(dir.list(), before);
 }
 
+// rosbag's habits: `--key=value` is `--key value` in both programs; evaluate_bag with no
+// argument is a usage error (exit 2) with its usage, not a success.
+TEST(ToolOptions, KeyEqualsValueIsTheOptionAndItsValue) {
+  TempDir dir;
+  writeMountedImuBag(dir.file("in.bag"), 1.0);
+  const RunResult r = run(kPropagate + " " + dir.file("in.bag") + " --output=" + dir.file("y.bag") +
+                          " --set=integrator=exp2 --dry-run");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find(dir.file("y.bag")), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("integrator exp2"), std::string::npos) << r.output;
+  const RunResult wrong = run(kPropagate + " " + dir.file("in.bag") + " --set=integrator=bogus");
+  EXPECT_EQ(wrong.status, 2) << wrong.output;
+  const RunResult core = run(kEvaluateCore + " " + dir.file("in.bag") + " --max-offset=bogus");
+  EXPECT_EQ(core.status, 2) << core.output;
+  EXPECT_NE(core.output.find("--max-offset: 'bogus' is not a finite number"), std::string::npos)
+      << core.output;
+}
+
+TEST(ToolOptions, EvaluateBagWithNoArgumentIsAUsageError) {
+  const std::string front =
+      "EVALUATE_BAG_CORE=" + quote(kEvaluateCore) + " /usr/bin/python3 " + quote(kEvaluate);
+  const RunResult r = run(front);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("no input bag"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--truth"), std::string::npos) << r.output;  // the usage
+}
+
 TEST(ToolOptions, HelpNamesTheNewOptions) {
   const RunResult r = run(kPropagate + " --help");
   ASSERT_EQ(r.status, 0);
