@@ -664,6 +664,17 @@ TEST(ToolOptions, EvaluateBagWithNoArgumentIsAUsageError) {
   EXPECT_NE(r.output.find("--truth"), std::string::npos) << r.output;  // the usage
 }
 
+// scene_publisher --help prints its help and exits, with no master (before: it waited for one
+// and then published).
+TEST(ToolOptions, ScenePublisherHelpPrintsAndExits) {
+  const std::string scene_publisher =
+      kEvaluate.substr(0, kEvaluate.rfind('/') + 1) + "scene_publisher";
+  const RunResult r = run("ROS_MASTER_URI=http://127.0.0.1:1 timeout 20 /usr/bin/python3 " +
+                          quote(scene_publisher) + " --help");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("~scene:"), std::string::npos) << r.output;
+}
+
 TEST(ToolOptions, HelpNamesTheNewOptions) {
   const RunResult r = run(kPropagate + " --help");
   ASSERT_EQ(r.status, 0);
