@@ -117,6 +117,9 @@ std::string modelName(Model model);
 /// Parses an `integrator` parameter value; throws std::invalid_argument naming the accepted
 /// values.
 Integrator integratorFromName(const std::string& name);
+/// The same for a program of one model (Kinematic or Dynamic): a method that does not drive it
+/// is refused too, and the accepted values named are auto and the model's (integratorsFor).
+Integrator integratorFromName(const std::string& name, Model model);
 std::string integratorName(Integrator integrator);
 
 /// Whether the integrator can drive the given (resolved) model; Auto drives both.

@@ -229,6 +229,18 @@ Integrator integratorFromName(const std::string& name) {
                               "'; accepted: " + joinNames(integratorNames()));
 }
 
+Integrator integratorFromName(const std::string& name, Model model) {
+  // auto drives every model (integratorsFor leaves it out).
+  if (name == integratorName(Integrator::Auto)) return Integrator::Auto;
+  std::vector<std::string> accepted{integratorName(Integrator::Auto)};
+  for (Integrator m : integratorsFor(model)) {
+    if (name == integratorName(m)) return m;
+    accepted.push_back(integratorName(m));
+  }
+  throw std::invalid_argument("integrator: unknown value '" + name + "' for the " +
+                              modelName(model) + " model; accepted: " + joinNames(accepted));
+}
+
 std::string integratorName(Integrator integrator) { return integratorInfo(integrator).name; }
 
 bool supportsKinematic(Integrator integrator) {

@@ -22,7 +22,7 @@ int main(int argc, char** argv) {
   try {
     const ap::ConingMotion cone{0.1, M_PI};  // half-angle 0.1 rad, one cone every 2 s
     ap::KinematicConfig config;
-    config.integrator = ap::integratorFromName(argc > 1 ? argv[1] : "cf4");
+    config.integrator = ap::integratorFromName(argc > 1 ? argv[1] : "cf4", ap::Model::Kinematic);
     config.initial_q_WB = cone.attitude(0.0);
     const double duration = argc > 2 ? std::stod(argv[2]) : 5.0;
     ap::KinematicPropagator propagator(config);

@@ -116,8 +116,17 @@ Decoded<Fix> FixDecoder::compose(const ros::Time& header_stamp, const ros::Time&
     refused.why = Refused::NoTime;
     return refuse(std::move(refused));
   }
-  const std::string& H = header_frame.empty() ? frames_.fixed : header_frame;
-  const std::string& F = fix_frame.empty() ? frames_.body : fix_frame;
+  // The frame id rule (frame_ids.h): a leading '/' removed; a space or line break refused.
+  const auto header_id = frame_ids_.admit(header_frame);
+  const auto fix_id = frame_ids_.admit(fix_frame);
+  if (!header_id || !fix_id) {
+    refused.why = Refused::NoTransform;
+    refused.frame = header_id ? fix_frame : header_frame;
+    refused.detail = kFrameIdRule;
+    return refuse(std::move(refused));
+  }
+  const std::string& H = header_id->empty() ? frames_.fixed : *header_id;
+  const std::string& F = fix_id->empty() ? frames_.body : *fix_id;
   const auto q_WH = lookup(frames_.fixed, H, frames, refused);
   if (!q_WH) return refuse(std::move(refused));
   const auto q_BF = lookup(frames_.body, F, frames, refused);

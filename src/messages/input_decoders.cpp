@@ -79,6 +79,14 @@ Decoded<Reading> reading(Source source, const ros::Time& header, const ros::Time
 
 const std::string kNoFrame;
 
+// A frame id refused by the frame id rule (frame_ids.h), as `why`.
+Refusal badFrame(Refused why, const std::string& frame) {
+  Refusal r = refusal(why);
+  r.frame = frame;
+  r.detail = kFrameIdRule;
+  return r;
+}
+
 }  // namespace
 
 Decoded<Reading> readImu(const sensor_msgs::Imu& msg, const ros::Time& arrival) {
@@ -170,8 +178,10 @@ DecodedInput InputDecoders::torque(const geometry_msgs::WrenchStamped& msg,
 DecodedInput InputDecoders::rate(const Decoded<Reading>& read, FrameSource* frames) {
   if (!read) return refuse(*read.refusal);
   const Reading& r = *read;
+  const auto frame_id = frame_ids_.admit(r.frame_id);
+  if (!frame_id) return refuse(badFrame(Refused::NoTransform, r.frame_id));
   DecodedInput out;
-  const std::string& frame = r.frame_id;
+  const std::string& frame = *frame_id;
   if (!frame.empty() && frame != frames_.body && frame != mount_frame_) {
     // A frame not seen before (or another one than the mount's): the mount looked up once.
     std::string error = "no frame source";
@@ -209,7 +219,9 @@ DecodedInput InputDecoders::torque(const Decoded<Reading>& read, FrameSource* fr
   input.stamp = r.stamp;
   input.value = r.value;
   input.frame = frames_.torque_frame;  // unstamped, or stamped with an empty frame_id
-  const std::string& frame = r.frame_id;
+  const auto frame_id = frame_ids_.admit(r.frame_id);
+  if (!frame_id) return refuse(badFrame(Refused::NoTransform, r.frame_id));
+  const std::string& frame = *frame_id;
   if (frame == frames_.body && !frame.empty()) {
     input.frame = TorqueFrame::Body;
   } else if (frame == frames_.fixed && !frame.empty()) {
@@ -236,8 +248,10 @@ DecodedInput InputDecoders::torque(const Decoded<Reading>& read, FrameSource* fr
 }
 
 Decoded<BiasSample> InputDecoders::bias(const geometry_msgs::Vector3Stamped& msg,
-                                        const ros::Time& now) const {
-  const std::string& frame = msg.header.frame_id;
+                                        const ros::Time& now) {
+  const auto frame_id = frame_ids_.admit(msg.header.frame_id);
+  if (!frame_id) return {std::nullopt, badFrame(Refused::BiasFrame, msg.header.frame_id)};
+  const std::string& frame = *frame_id;
   const bool in_body = frame.empty() || frame == frames_.body;
   const bool in_mount = !mount_frame_.empty() && frame == mount_frame_;
   if (!in_body && !in_mount) {

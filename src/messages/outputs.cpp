@@ -91,4 +91,16 @@ std::vector<geometry_msgs::TransformStamped> OutputEncoder::conventionFrames(
   return frames;
 }
 
+std::optional<std::string> feedbackLoop(const std::vector<NamedTopic>& outputs,
+                                        const std::vector<NamedTopic>& inputs) {
+  for (const NamedTopic& out : outputs) {
+    for (const NamedTopic& in : inputs) {
+      if (out.name != in.name) continue;
+      return "output " + out.role + " and input " + in.role + " are both " + out.name +
+             ": the node would read what it publishes (a feedback loop); remap one of them";
+    }
+  }
+  return std::nullopt;
+}
+
 }  // namespace attitude_propagator

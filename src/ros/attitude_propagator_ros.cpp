@@ -1,12 +1,14 @@
 #include "attitude_propagator/ros/attitude_propagator_ros.h"
 
 #include <exception>
+#include <stdexcept>
 #include <string>
 
 #include <boost/make_shared.hpp>
 
 #include "attitude_propagator/AttitudeState.h"
 #include "attitude_propagator/messages/conversions.h"
+#include "attitude_propagator/messages/outputs.h"
 #include "attitude_propagator/messages/set_state_request.h"
 #include "attitude_propagator/ros/input_text.h"
 #include "attitude_propagator/ros/live_parameters.h"
@@ -35,6 +37,7 @@ AttitudePropagatorRos::AttitudePropagatorRos(ros::NodeHandle nh, ros::NodeHandle
       config_(loadParameters(pnh)),
       updater_(nh, pnh, pnh.getNamespace()),
       diagnostics_(ros::WallTime::now()) {
+  refuseFeedbackLoops();
   engine_ = std::make_unique<AttitudeEngine>(engineConfig(config_), *this);
   decoders_.emplace(DecoderFrames::of(config_));
   fixes_.emplace(config_);
@@ -66,6 +69,20 @@ AttitudePropagatorRos::AttitudePropagatorRos(ros::NodeHandle nh, ros::NodeHandle
 }
 
 AttitudePropagatorRos::~AttitudePropagatorRos() = default;
+
+void AttitudePropagatorRos::refuseFeedbackLoops() const {
+  const std::vector<NamedTopic> outputs{{"imu/data", imu_nh_.resolveName("data")},
+                                        {"attitude_state", nh_.resolveName("attitude_state")}};
+  std::vector<NamedTopic> inputs{{"gyro_bias", nh_.resolveName("gyro_bias")},
+                                 {"orientation_fix", nh_.resolveName("orientation_fix")}};
+  if (config_.rate_input == RateInput::Imu) {
+    inputs.push_back({"imu/data_raw", imu_nh_.resolveName("data_raw")});
+  } else if (config_.rate_input == RateInput::Twist) {
+    inputs.push_back({"body_twist", nh_.resolveName("body_twist")});
+  }
+  if (config_.torque_input) inputs.push_back({"torque", nh_.resolveName("torque")});
+  if (const auto loop = feedbackLoop(outputs, inputs)) throw std::invalid_argument(*loop);
+}
 
 void AttitudePropagatorRos::advertise() {
   // Published as shared pointers so subscribers in the same nodelet manager get them without
@@ -217,6 +234,7 @@ void AttitudePropagatorRos::onGyroBias(const geometry_msgs::Vector3Stamped::Cons
   guarded("gyro_bias", [&] {
     // Unstamped: from now on (ROS time; zero before the first /clock: from the start).
     const Decoded<BiasSample> bias = decoders_->bias(*msg, ros::Time::now());
+    warnFrames();
     if (!bias) return refused(*bias.refusal, "gyro_bias");
     if (!engine_->submitBias(bias->stamp, bias->b_B)) log(biasRejectedText(engine_->counters()));
   });
@@ -238,7 +256,15 @@ void AttitudePropagatorRos::submit(const Input& input) {
   engine_->submit(input);
 }
 
+void AttitudePropagatorRos::warnFrames() {
+  // Once per frame with tf1's leading '/' (frame_ids.h): read without it.
+  for (const auto& w : decoders_->takeFrameWarnings()) {
+    ROS_WARN("%s", logText(w, 4 * kLogTextBytes).c_str());
+  }
+}
+
 bool AttitudePropagatorRos::taken(const DecodedInput& in, const char* topic) {
+  warnFrames();
   if (in.refusal) {
     refused(*in.refusal, topic);
     return false;
@@ -259,7 +285,14 @@ bool AttitudePropagatorRos::taken(const DecodedInput& in, const char* topic) {
 
 void AttitudePropagatorRos::refused(const Refusal& r, const char* topic) {
   countRefusal(*engine_, r.why);
-  log(refusalText(r, topic, engine_->counters(), config_.parameters.body_frame, *decoders_));
+  const auto line =
+      refusalText(r, topic, engine_->counters(), config_.parameters.body_frame, *decoders_);
+  const std::string name = topic;
+  if (line && name != "gyro_bias" && name != "torque") {
+    // Named in the diagnostics while no rate gets through (node_diagnostics.h).
+    diagnostics_.inputRefused(ros::WallTime::now(), line->text);
+  }
+  log(line);
 }
 
 void AttitudePropagatorRos::ensureTfListener() {

@@ -39,6 +39,9 @@ void FixInput::onMessage(const topic_tools::ShapeShifter& msg, const ros::Time& 
                          AttitudeEngine& engine, FrameSource& frames) {
   NotingFrames noting(frames, uses_tf_);
   const Decoded<Fix> fix = decoder_.topic(msg, arrival, &noting);
+  for (const auto& w : decoder_.takeFrameWarnings()) {
+    ROS_WARN("orientation_fix: %s", logText(w, 4 * kLogTextBytes).c_str());
+  }
   if (!fix) return logRefusal(*fix.refusal);
   logOutcome(engine.submitFix(fix->stamp, fix->q_WB, fix->R_B), fix->stamp, engine);
 }

@@ -8,6 +8,10 @@ namespace {
 
 std::string refusalText(const Refusal& r, const char* topic, bool torque, const EngineCounters& c,
                         const std::string& body, const InputDecoders& decoders) {
+  if (r.detail == kFrameIdRule) {
+    return formatted("%s: frame id '%s' refused; %s", topic, logText(r.frame).c_str(),
+                     kFrameIdRule);
+  }
   switch (r.why) {
     case Refused::NoRate:
       return formatted(
@@ -33,11 +37,9 @@ std::string refusalText(const Refusal& r, const char* topic, bool torque, const 
                          logText(r.frame).c_str(), body.c_str(),
                          logText(r.detail, 4 * kLogTextBytes).c_str());
       }
-      return formatted(
-          "rates in frame '%s': waiting for the static transform from '%s'; dropped %lu "
-          "messages so far (%s)",
-          logText(r.frame).c_str(), body.c_str(), c.dropped_no_tf,
-          logText(r.detail, 4 * kLogTextBytes).c_str());
+      return formatted("%s: %s; dropped %lu messages so far (%s)", topic,
+                       noMountText(logText(r.frame), body, "body_frame:=").c_str(), c.dropped_no_tf,
+                       logText(r.detail, 4 * kLogTextBytes).c_str());
     case Refused::NoTime:
       // An unstamped message under sim time before the first /clock: no time to put it at.
       return formatted("%s: unstamped message and no ROS time yet (/clock): dropped", topic);

@@ -57,8 +57,9 @@ void InputWindow::closeInputWindow(const ros::WallTime& now, const EngineCounter
     if (loss.count > worst->count) worst = &loss;
   }
   input_window_problem_.clear();
-  if (received > 0 && 2 * lost > received) {
-    input_window_problem_ = "most rate samples of the last second were lost (" +
+  // Half or more lost: WARN (a stream at half its rate is no longer the one configured).
+  if (received > 0 && 2 * lost >= received) {
+    input_window_problem_ = "half or more of the rate samples of the last second were lost (" +
                             std::to_string(std::min(lost, received)) + " of " +
                             std::to_string(received) + "): " + worst->cause;
   }

@@ -18,8 +18,10 @@ std::optional<double> inputLagBeyondWarning(const AttitudeEngine& engine) {
 
 void summarize(diagnostic_updater::DiagnosticStatusWrapper& status, bool expects_input,
                double silence, const std::string& window_problem, FixInput& fixes,
-               const EngineCounters& c, std::optional<double> lag) {
-  if (expects_input && (silence < 0.0 || silence > 1.0)) {
+               const EngineCounters& c, std::optional<double> lag, const std::string& refused) {
+  if (expects_input && (silence < 0.0 || silence > 1.0) && !refused.empty()) {
+    status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "rate input refused: " + refused);
+  } else if (expects_input && (silence < 0.0 || silence > 1.0)) {
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN, "no rate input in the last second");
   } else if (!window_problem.empty()) {
     status.summary(diagnostic_msgs::DiagnosticStatus::WARN, window_problem);
@@ -47,8 +49,9 @@ void NodeDiagnostics::diagnose(const ros::WallTime& now, const NodeConfig& confi
 
   const bool expects_input = config.rate_input != RateInput::None;
   const double silence = last_input_.isZero() ? -1.0 : (now - last_input_).toSec();
+  const bool refused_lately = !last_refused_.isZero() && (now - last_refused_).toSec() <= 1.0;
   summarize(status, expects_input, silence, window_.problem(), fixes, c,
-            inputLagBeyondWarning(engine));
+            inputLagBeyondWarning(engine), refused_lately ? refused_cause_ : std::string());
   const EngineState state = engine.state();
   status.add("model", engine.modelName());
   status.add("integrator", integratorName(engine.integrator()));

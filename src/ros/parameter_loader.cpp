@@ -8,7 +8,10 @@
 #include <string>
 #include <vector>
 
+#include <ros/console.h>
 #include <xmlrpcpp/XmlRpcValue.h>
+
+#include "attitude_propagator/messages/frame_ids.h"
 
 namespace attitude_propagator {
 
@@ -136,6 +139,8 @@ NodeConfig loadParameters(const ros::NodeHandle& pnh) {
     XmlRpc::XmlRpcValue value;
     if (pnh.getParam(name, value)) read(name, value, field);
   });
+  // tf1's leading '/' in a frame parameter is read without it (frame_ids.h), with a warning.
+  for (const auto& w : tf2FrameParameters(parameters)) ROS_WARN("%s", w.c_str());
   NodeConfig config = validateParameters(parameters);
   // Every parameter in use, defaults included, on the server: `rosparam get` shows what runs.
   forEachParameter(config.parameters, [&pnh](const char* name, const auto& field, const char*,

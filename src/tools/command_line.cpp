@@ -21,6 +21,20 @@ std::string formatStamp(Stamp stamp) {
   return text;
 }
 
+SplitArguments::SplitArguments(int argc, char** argv) {
+  for (int i = 0; i < argc; ++i) {
+    const std::string word = argv[i];
+    const std::size_t equals = word.find('=');
+    if (i > 0 && word.rfind("--", 0) == 0 && equals != std::string::npos && equals > 2) {
+      words_.push_back(word.substr(0, equals));  // --output=y.bag: --output y.bag
+      words_.push_back(word.substr(equals + 1));
+    } else {
+      words_.push_back(word);
+    }
+  }
+  for (std::string& w : words_) pointers_.push_back(&w[0]);
+}
+
 std::string optionValue(int argc, char** argv, int& i) {
   if (i + 1 >= argc) throw UsageError(std::string(argv[i]) + ": needs a value");
   // An empty value would silently mean the default (an output name, a topic).

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "attitude_propagator/source_timeline.h"
 
@@ -10,6 +11,20 @@ namespace tools {
 
 /// A stamp as seconds with nanosecond digits ("1700000000.005000000"), exact.
 std::string formatStamp(Stamp stamp);
+
+/// The command line with each `--key=value` split into `--key value`, as rosbag and most
+/// command lines take both; `argv[0]` and every other word as given. argv() stays valid while
+/// this object lives.
+class SplitArguments {
+ public:
+  SplitArguments(int argc, char** argv);
+  int argc() const { return static_cast<int>(pointers_.size()); }
+  char** argv() { return pointers_.data(); }
+
+ private:
+  std::vector<std::string> words_;
+  std::vector<char*> pointers_;
+};
 
 /// Command-line reading: the value after option `argv[i]`, or UsageError (none, or empty).
 std::string optionValue(int argc, char** argv, int& i);

@@ -251,6 +251,10 @@ Options parseOptions(int argc, char** argv) {
   }
   for (const auto& c : configs) loadConfigFile(c, o.parameters);
   for (const auto& s : sets) applySetting(s, o.parameters);
+  // tf1's leading '/' in a frame parameter is read without it (frame_ids.h), with a warning.
+  for (const auto& w : tf2FrameParameters(o.parameters)) {
+    std::fprintf(stderr, "warning: %s\n", w.c_str());
+  }
   // Each method's parameters refused now (std::invalid_argument: a usage error), not after
   // the bag is opened; a method named twice runs once.
   for (auto* list : {&o.integrators, &o.rate_samples}) {
@@ -1292,7 +1296,8 @@ void Evaluation::writeCsv(const std::string& summary_path, const std::string& se
 
 int run(int argc, char** argv) {
   catchInterrupts();
-  const Options o = parseOptions(argc, argv);
+  SplitArguments words(argc, argv);  // --key=value as --key value
+  const Options o = parseOptions(words.argc(), words.argv());
   BagSet bags(o.inputs);
   PendingFile summary(o.prefix + ".csv"), series(o.prefix + "_series.csv");
   Evaluation evaluation(o);

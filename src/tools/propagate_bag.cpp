@@ -246,6 +246,10 @@ Options parseOptions(int argc, char** argv) {
   }
   for (const auto& c : configs) loadConfigFile(c, o.parameters);
   for (const auto& s : sets) applySetting(s, o.parameters);
+  // tf1's leading '/' in a frame parameter is read without it (frame_ids.h), with a warning.
+  for (const auto& w : tf2FrameParameters(o.parameters)) {
+    std::fprintf(stderr, "warning: %s\n", w.c_str());
+  }
   validateParameters(o.parameters);  // std::invalid_argument: a usage error, before any reading
   if (o.output.empty()) {
     const std::string& first = o.inputs.front();
@@ -447,8 +451,9 @@ class BagPropagator : public EngineSink {
 
   /// Checks the topics and the free space, then runs; writes into `path` (a temporary name).
   void run(const std::string& path);
-  /// Checks the topics and prints what run() would read, with which settings, and write.
-  void dryRun(std::FILE* out);
+  /// Checks the topics and prints what run() would read, with which settings, and write; the
+  /// exit code the run would give (kExitNothingUsable: the rates reach no body).
+  int dryRun(std::FILE* out);
   /// Why the output holds nothing usable (nothing accepted, no state), or nothing.
   std::optional<std::string> nothingUsable() const;
   void summary(std::FILE* out, bool written) const;
@@ -477,6 +482,14 @@ class BagPropagator : public EngineSink {
   void onFix(const rosbag::MessageInstance& m);
   /// The account of the fixes read (the engine's fixes_* counters and the decoder's refusals).
   void fixSummary(std::FILE* out) const;
+  /// Prints the decoders' warnings of frame ids with a leading '/', once per frame.
+  void warnFrames();
+  /// Keeps the first frame whose rates had no transform to the body (the advice at the end).
+  void noteNoMount(const DecodedInput& in);
+  /// The first rate message's frame id as tf2 reads it (empty: none, or no stamped rates).
+  std::string firstRateFrame();
+  /// --dry-run: whether the rates' frame reaches body_frame in the bag; prints the finding.
+  bool mountReachable(std::FILE* out);
   /// Counts a refused input once, or hands a decoded one to submit().
   void take(DecodedInput& in);
   void submit(Input& input);
@@ -521,6 +534,7 @@ class BagPropagator : public EngineSink {
   std::map<std::string, geometry_msgs::TransformStamped> static_edges_;  // by child frame
   std::map<std::string, geometry_msgs::TransformStamped> mounts_used_;   // by child frame
   std::map<std::string, std::uint64_t> read_;                            // messages read per role
+  std::string no_mount_frame_;  // the first rates' frame refused for want of a transform
   std::uint64_t messages_ = 0;
   std::uint64_t states_ = 0;
   std::uint64_t floor_accepted_ = 0;  // --io-floor: inputs passed straight to the outputs
@@ -647,6 +661,7 @@ void BagPropagator::dispatch(const rosbag::MessageInstance& m) {
       onImu(m);
     } else {
       DecodedInput in = decoders_.twistTopic(m, record_, &frames_);
+      noteNoMount(in);
       take(in);
     }
   } else if (!torque_.empty() && sameTopic(topic, torque_)) {
@@ -665,6 +680,7 @@ void BagPropagator::dispatch(const rosbag::MessageInstance& m) {
 void BagPropagator::onImu(const rosbag::MessageInstance& m) {
   decodeInto(m, buffer_, imu_.msg);
   DecodedInput in = decoders_.imu(imu_.msg, record_, &frames_);
+  noteNoMount(in);
   if (!in) return take(in);
   imu_.q_BI = in.q_BS;
   if (engine_->dynamicModel()) {
@@ -679,17 +695,37 @@ void BagPropagator::onImu(const rosbag::MessageInstance& m) {
 void BagPropagator::onBias(const rosbag::MessageInstance& m) {
   decodeInto(m, buffer_, bias_msg_);
   const Decoded<BiasSample> bias = decoders_.bias(bias_msg_, record_);
+  warnFrames();
   if (!bias) return countRefusal(*engine_, bias.refusal->why);
   if (!o_.io_floor && engine_->submitBias(bias->stamp, bias->b_B)) ++bias_used_;
 }
 
 void BagPropagator::onFix(const rosbag::MessageInstance& m) {
   const Decoded<Fix> fix = fix_decoder_.topic(m, record_, &frames_);  // refusals counted there
+  warnFrames();
   if (!fix || o_.io_floor) return;
   engine_->submitFix(fix->stamp, fix->q_WB, fix->R_B);  // counted in the engine's fixes_*
 }
 
+void BagPropagator::warnFrames() {
+  // Once per frame with tf1's leading '/' (frame_ids.h); nothing to do otherwise.
+  for (const auto& w : decoders_.takeFrameWarnings()) {
+    std::fprintf(stderr, "warning: %s\n", w.c_str());
+  }
+  for (const auto& w : fix_decoder_.takeFrameWarnings()) {
+    std::fprintf(stderr, "warning: %s\n", w.c_str());
+  }
+}
+
+void BagPropagator::noteNoMount(const DecodedInput& in) {
+  if (in.refusal && in.refusal->why == Refused::NoTransform && no_mount_frame_.empty() &&
+      in.refusal->detail != kFrameIdRule) {
+    no_mount_frame_ = tf2FrameId(in.refusal->frame);
+  }
+}
+
 void BagPropagator::take(DecodedInput& in) {
+  warnFrames();
   if (!in) return countRefusal(*engine_, in.refusal->why);
   submit(*in.value);
 }
@@ -749,10 +785,13 @@ std::optional<Eigen::Quaterniond> BagPropagator::BagFrames::rotation(const std::
   if (!q) {
     if (!reported_[source]) {
       reported_[source] = true;
+      const bool body = target == run_.config_.parameters.body_frame;
       std::fprintf(stderr,
                    "propagate_bag: no transform %s -> %s in %s (/tf_static, or /tf so far): its "
-                   "messages are dropped until there is one\n",
-                   target.c_str(), source.c_str(), run_.bags_.name().c_str());
+                   "messages are dropped until there is one%s%s\n",
+                   target.c_str(), source.c_str(), run_.bags_.name().c_str(),
+                   body ? "; to take it as the body: --set body_frame=" : "",
+                   body ? source.c_str() : "");
     }
     return std::nullopt;
   }
@@ -794,6 +833,10 @@ void BagPropagator::recordMount(const std::string& target, const std::string& so
 
 std::optional<std::string> BagPropagator::nothingUsable() const {
   const std::uint64_t accepted = o_.io_floor ? floor_accepted_ : engine_->counters().accepted;
+  if (accepted == 0 && !no_mount_frame_.empty()) {
+    return "no input accepted (" +
+           noMountText(no_mount_frame_, config_.parameters.body_frame, "--set body_frame=") + ")";
+  }
   if (accepted == 0) return "no input accepted";
   if (states_ == 0) return "no state published (the clock never reached a grid stamp)";
   return std::nullopt;
@@ -916,7 +959,46 @@ std::string valueText(const std::vector<double>& v) {
   return text + "]";
 }
 
-void BagPropagator::dryRun(std::FILE* out) {
+std::string BagPropagator::firstRateFrame() {
+  rosbag::View view;
+  bags_.addQuery(view, {rates_});
+  for (const rosbag::MessageInstance& m : view) {
+    if (isType<sensor_msgs::Imu>(m)) {
+      decodeInto(m, buffer_, imu_.msg);
+      return tf2FrameId(imu_.msg.header.frame_id);
+    }
+    if (isType<geometry_msgs::TwistStamped>(m)) {
+      geometry_msgs::TwistStamped twist;
+      decodeInto(m, buffer_, twist);
+      return tf2FrameId(twist.header.frame_id);
+    }
+    break;  // a plain Twist: in the body
+  }
+  return {};
+}
+
+bool BagPropagator::mountReachable(std::FILE* out) {
+  const std::string frame = firstRateFrame();
+  const std::string& body = config_.parameters.body_frame;
+  if (frame.empty() || frame == body || frameIdRefused(frame)) return true;
+  readStaticTransforms();
+  if (tf_buffer_->canTransform(body, frame, ros::Time())) {
+    std::fprintf(out, "  mount: rates in '%s', joined to body_frame '%s' by /tf_static\n",
+                 frame.c_str(), body.c_str());
+    return true;
+  }
+  if (!tf_.empty()) {
+    std::fprintf(out,
+                 "  mount: rates in '%s': no static transform to body_frame '%s'; looked up "
+                 "on %s as recorded\n",
+                 frame.c_str(), body.c_str(), tf_.c_str());
+    return true;
+  }
+  std::fprintf(out, "  mount: %s\n", noMountText(frame, body, "--set body_frame=").c_str());
+  return false;
+}
+
+int BagPropagator::dryRun(std::FILE* out) {
   const std::vector<std::string> topics = checkTopics();
   std::fprintf(out, "propagate_bag: dry run, nothing written\n");
   std::map<std::string, std::string> roles{{rates_, "rates"},
@@ -981,15 +1063,16 @@ void BagPropagator::dryRun(std::FILE* out) {
   const double bytes = estimatedBytes();
   std::fprintf(out, "  output: %s, %s; about %.1f MB from %llu messages\n", o_.output.c_str(),
                outputs.c_str(), bytes / 1e6, static_cast<unsigned long long>(messages_total_));
+  return mountReachable(out) ? kExitOk : kExitNothingUsable;
 }
 
 int run(int argc, char** argv) {
   catchInterrupts();
-  const Options o = parseOptions(argc, argv);
+  SplitArguments words(argc, argv);  // --key=value as --key value
+  const Options o = parseOptions(words.argc(), words.argv());
   BagSet bags(o.inputs);
   if (o.dry_run) {
-    BagPropagator(o, bags).dryRun(stdout);
-    return kExitOk;
+    return BagPropagator(o, bags).dryRun(stdout);
   }
   PendingFile output(o.output);  // destroyed last: the writer closes before it is removed
   BagPropagator propagator(o, bags);

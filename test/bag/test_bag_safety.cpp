@@ -374,9 +374,56 @@ TEST(BagSafety, NothingAcceptedExitsThree) {
         std::string::npos)
         << r.output;
     EXPECT_NE(r.output.find("nothing written"), std::string::npos) << r.output;
-    EXPECT_NE(r.output.find("no input accepted; no output written"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("no input accepted (no transform"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("; no output written"), std::string::npos) << r.output;
     EXPECT_EQ(dir.list(), std::vector<std::string>{"in.bag"});
   }
+}
+
+// Rates in a frame with no path to body_frame (an IMU alone, no /tf): the run and --dry-run
+// (before reading the rates) name both frames and the setting that takes the IMU's frame as
+// the body (docs/bag_tools.md); with that setting the same bag runs.
+TEST(BagSafety, NoPathToTheBodyNamesBothFramesAndTheSetting) {
+  TempDir dir;
+  SceneBag scene;
+  scene.motion = coning();
+  scene.duration = 1.0;
+  scene.rate_frame = "imu_link";
+  writeSceneBag(dir.file("in.bag"), scene);
+  const std::string in = kPropagate + " " + dir.file("in.bag") + " -o " + dir.file("out.bag");
+  for (const std::string& options : {std::string(), std::string(" --dry-run")}) {
+    const RunResult r = run(in + options);
+    EXPECT_EQ(r.status, 3) << options << r.output;
+    for (const char* text : {"'imu_link'", "body_frame 'base_link'", "--set body_frame=imu_link"}) {
+      EXPECT_NE(r.output.find(text), std::string::npos) << options << ": " << text << r.output;
+    }
+  }
+  EXPECT_EQ(run(in + " --set body_frame=imu_link").status, 0);
+}
+
+// tf1's leading '/' in the rates' frame and in body_frame: read without it, one warning per
+// frame, and never tf2's error per message ("cannot start with a '/'").
+TEST(BagSafety, LeadingSlashFramesAreReadWithoutIt) {
+  TempDir dir;
+  SceneBag scene;
+  scene.motion = coning();
+  scene.duration = 1.0;
+  scene.rate_frame = "/imu";
+  const Written w = writeSceneBag(dir.file("in.bag"), scene);
+  const RunResult r = run(kPropagate + " " + dir.file("in.bag") + " -o " + dir.file("out.bag") +
+                          " --set body_frame=/imu --set fixed_frame=/odom");
+  EXPECT_EQ(r.status, 0) << r.output;
+  const std::string n = std::to_string(w.rate_stamps.size());
+  EXPECT_NE(r.output.find(n + " accepted"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("cannot start with"), std::string::npos) << r.output;
+  for (const char* name : {"body_frame: frame id '/imu'", "fixed_frame: frame id '/odom'",
+                           "warning: frame id '/imu' has a leading '/'"}) {
+    EXPECT_NE(r.output.find(name), std::string::npos) << name << r.output;
+  }
+  const RunResult spaced = run(kPropagate + " " + dir.file("in.bag") + " -o " +
+                               dir.file("out2.bag") + " --set \"body_frame=base link\"");
+  EXPECT_EQ(spaced.status, 2) << spaced.output;
+  EXPECT_NE(spaced.output.find("spaces"), std::string::npos) << spaced.output;
 }
 
 // --help lists every exit code; a missing input is exit 1; bad options exit 2.

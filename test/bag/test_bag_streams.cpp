@@ -637,6 +637,44 @@ TEST(ToolOptions, DryRunWritesNothing) {
   EXPECT_EQ(dir.list(), before);
 }
 
+// rosbag's habits: `--key=value` is `--key value` in both programs; evaluate_bag with no
+// argument is a usage error (exit 2) with its usage, not a success.
+TEST(ToolOptions, KeyEqualsValueIsTheOptionAndItsValue) {
+  TempDir dir;
+  writeMountedImuBag(dir.file("in.bag"), 1.0);
+  const RunResult r = run(kPropagate + " " + dir.file("in.bag") + " --output=" + dir.file("y.bag") +
+                          " --set=integrator=exp2 --dry-run");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find(dir.file("y.bag")), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("integrator exp2"), std::string::npos) << r.output;
+  const RunResult wrong = run(kPropagate + " " + dir.file("in.bag") + " --set=integrator=bogus");
+  EXPECT_EQ(wrong.status, 2) << wrong.output;
+  const RunResult core = run(kEvaluateCore + " " + dir.file("in.bag") + " --max-offset=bogus");
+  EXPECT_EQ(core.status, 2) << core.output;
+  EXPECT_NE(core.output.find("--max-offset: 'bogus' is not a finite number"), std::string::npos)
+      << core.output;
+}
+
+TEST(ToolOptions, EvaluateBagWithNoArgumentIsAUsageError) {
+  const std::string front =
+      "EVALUATE_BAG_CORE=" + quote(kEvaluateCore) + " /usr/bin/python3 " + quote(kEvaluate);
+  const RunResult r = run(front);
+  EXPECT_EQ(r.status, 2) << r.output;
+  EXPECT_NE(r.output.find("no input bag"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--truth"), std::string::npos) << r.output;  // the usage
+}
+
+// scene_publisher --help prints its help and exits, with no master (before: it waited for one
+// and then published).
+TEST(ToolOptions, ScenePublisherHelpPrintsAndExits) {
+  const std::string scene_publisher =
+      kEvaluate.substr(0, kEvaluate.rfind('/') + 1) + "scene_publisher";
+  const RunResult r = run("ROS_MASTER_URI=http://127.0.0.1:1 timeout 20 /usr/bin/python3 " +
+                          quote(scene_publisher) + " --help");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("~scene:"), std::string::npos) << r.output;
+}
+
 TEST(ToolOptions, HelpNamesTheNewOptions) {
   const RunResult r = run(kPropagate + " --help");
   ASSERT_EQ(r.status, 0);

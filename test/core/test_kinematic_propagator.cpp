@@ -260,6 +260,30 @@ TEST(IntegratorNames, RefuseUnknownNames) {
   }
 }
 
+// A one-model program (kinematic_demo) names only that model's methods: every kinematic one
+// (integratorsFor, the table's rows that drive it), none of the dynamic-only ones.
+TEST(IntegratorNames, OneModelsNamesListOnlyItsMethods) {
+  EXPECT_EQ(ap::integratorFromName("cf4", ap::Model::Kinematic), ap::Integrator::Cf4);
+  EXPECT_EQ(ap::integratorFromName("auto", ap::Model::Kinematic), ap::Integrator::Auto);
+  for (const char* refused : {"bogus", "exact"}) {
+    SCOPED_TRACE(refused);
+    try {
+      ap::integratorFromName(refused, ap::Model::Kinematic);
+      ADD_FAILURE() << "accepted";
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      for (const ap::IntegratorInfo& row : ap::integratorTable()) {
+        const bool kinematic = ap::supportsKinematic(row.id);  // auto too
+        const std::string name = " " + std::string(row.name);
+        const bool last = what.size() >= name.size() &&
+                          what.compare(what.size() - name.size(), name.size(), name) == 0;
+        const bool named = what.find(name + " ") != std::string::npos || last;
+        EXPECT_EQ(named, kinematic) << row.name << ": " << what;
+      }
+    }
+  }
+}
+
 TEST(ModelAndRateSampleNames, MatchTheDocumentedNamesBothWays) {
   const std::pair<ap::Model, const char*> models[] = {{ap::Model::Auto, "auto"},
                                                       {ap::Model::Kinematic, "kinematic"},

@@ -200,3 +200,21 @@ TEST(OutputFrames, NedNamesItsAxesOnTfStaticAndEnuNamesNone) {
   ap::OutputEncoder(configFor("ned"), "k", "i").state(s, msg);
   EXPECT_LT(angleBetween(ap::toEigen(msg.orientation), Eigen::Quaterniond::Identity()), 1e-15);
 }
+
+// The feedback-loop rule: an output resolving to an input's name is named with both roles; the
+// standalone launch's `imu_topic:=/imu/data` is the case (the output imu/data resolves to it).
+TEST(FeedbackLoop, AnOutputNamedAsAnInputIsNamedWithBoth) {
+  const std::vector<ap::NamedTopic> outputs{{"imu/data", "/imu/data"},
+                                            {"attitude_state", "/attitude_state"}};
+  const std::vector<ap::NamedTopic> inputs{{"imu/data_raw", "/imu/data"},
+                                           {"gyro_bias", "/gyro_bias"}};
+  const auto loop = ap::feedbackLoop(outputs, inputs);
+  ASSERT_TRUE(loop);
+  EXPECT_EQ(*loop,
+            "output imu/data and input imu/data_raw are both /imu/data: the node would read what "
+            "it publishes (a feedback loop); remap one of them");
+  const std::vector<ap::NamedTopic> apart{{"imu/data_raw", "/imu/data_raw"},
+                                          {"gyro_bias", "/gyro_bias"}};
+  EXPECT_FALSE(ap::feedbackLoop(outputs, apart));
+  EXPECT_TRUE(ap::feedbackLoop(outputs, {{"orientation_fix", "/attitude_state"}}));
+}

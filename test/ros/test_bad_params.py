@@ -50,6 +50,7 @@ CASES = [
     ("max_dt", "0.5", "max_dt: '0.5' is a string to YAML; write 0.5 without quotes"),
     ("initial_orientation", [0, 0, 0, 0], "initial_orientation: zero quaternion"),
     ("body_frame", "world", "body_frame: equals fixed_frame"),
+    ("body_frame", "base link", "body_frame: frame id 'base link' refused"),
 ]
 
 # A sphere turning at 0.5 rad/s about its z axis from a quarter turn about x: the exact model's
@@ -165,6 +166,29 @@ class BadParametersTest(unittest.TestCase):
                      "the node started with max_dt %g" % minimum)
             self.assertEqual(rospy.get_param("/min_dt/node/max_dt"), minimum)
             self.assertTrue(node.running(), node.output())
+
+    def test_an_output_on_an_input_topic_refuses_to_start(self):
+        """A feedback loop: the rate input remapped onto the imu/data output (what
+        standalone.launch imu_topic:=/imu/data does) stops the node with one FATAL naming
+        both."""
+        result = run([self.node, "__name:=loop_node", "imu/data_raw:=/imu/data"])
+        self.assertNotEqual(result.returncode, 0, result.stderr)
+        errors = [line for line in result.stderr.splitlines()
+                  if "[FATAL]" in line or "[ERROR]" in line]
+        self.assertEqual(len(errors), 1, result.stderr)
+        self.assertIn("output imu/data and input imu/data_raw are both /imu/data", errors[0])
+
+    def test_frames_with_a_leading_slash_are_read_without_it(self):
+        """tf1's `body_frame: /imu`: the node starts with `imu`, written back so, and warns once
+        naming the parameter."""
+        with RunningNode(self.node, "slash", "node",
+                         {"body_frame": "/slash_imu", "fixed_frame": "/slash_world"}) as node:
+            wait_for(lambda: rospy.get_param("/slash/node/resolved_model", None), 20.0,
+                     "the node started")
+            self.assertEqual(rospy.get_param("/slash/node/body_frame"), "slash_imu")
+            self.assertEqual(rospy.get_param("/slash/node/fixed_frame"), "slash_world")
+            self.assertTrue(node.running(), node.output())
+            self.assertIn("body_frame: frame id '/slash_imu' has a leading '/'", node.output())
 
     def test_nodelet_refuses_to_start(self):
         result = run([self.nodelet, "standalone", "attitude_propagator/AttitudePropagatorNodelet",

@@ -73,7 +73,7 @@ class InputWindowTest(unittest.TestCase):
         feed = StragglerFeed(self.imu, stale=3)
         try:
             status = wait_for(lambda: (self.status.get() or (None,))[0] == DiagnosticStatus.WARN
-                              and "most rate samples" in self.status.get()[1]
+                              and "rate samples of the last second were lost" in self.status.get()[1]
                               and self.status.get(), 20.0, "diagnostics WARN")
             self.assertIn("stamps at or before the previous one", status[1])
         finally:

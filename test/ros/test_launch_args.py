@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """Launch arguments (launch_args.test): each <arg> a launch file declares has a doc= text and a
-default (or a fixed value), so `roslaunch --ros-args` explains every one and none is required.
+default (or a fixed value), so `roslaunch --ros-args` explains every one and none is required;
+a file that takes the rate input's topic takes the output topics too.
 The <arg> elements inside an <include> pass values on; they are not declarations."""
 import glob
 import os
@@ -45,6 +46,16 @@ class LaunchArgsTest(unittest.TestCase):
             required = [name for name, attrs in declared_args(path)
                         if "default" not in attrs and "value" not in attrs]
             self.assertEqual(required, [], "args without a default in %s" % path)
+        check_each(self, launch_files(), check)
+
+    def test_an_input_topic_arg_comes_with_the_output_topic_args(self):
+        """A launch file that takes the rate input's topic takes the outputs' too (with doc=),
+        so a user who points the input at /imu/data can move the output off it."""
+        def check(path):
+            names = {name for name, _ in declared_args(path)}
+            if "imu_topic" in names:
+                self.assertTrue({"imu_out_topic", "state_topic"} <= names,
+                                "%s takes imu_topic but not imu_out_topic, state_topic" % path)
         check_each(self, launch_files(), check)
 
     def test_the_frames_default_to_the_parameters_defaults(self):

@@ -191,8 +191,15 @@ TEST(InputText, EachRefusalCountsItsOwnCounter) {
                 "; accepted: symmetric, variances in [0, " +
                 ap::formatted("%g", ap::kMaxRateVariance) + "] rad^2/s^2) (22 so far)");
   EXPECT_EQ(refusalLine(ap::Refused::NoTransform, "imu/data_raw"),
-            "rates in frame 'imu_link': waiting for the static transform from 'base_link'; "
-            "dropped 24 messages so far (geometry_msgs/Pose)");
+            "imu/data_raw: no transform from the rates' frame 'imu_link' to body_frame "
+            "'base_link': publish the mount 'base_link' -> 'imu_link' on /tf_static, or take the "
+            "IMU's own frame as the body: body_frame:=imu_link; dropped 24 messages so far "
+            "(geometry_msgs/Pose)");
+  ap::Refusal spaced = refusalOf(ap::Refused::NoTransform);
+  spaced.frame = "imu link";
+  spaced.detail = ap::kFrameIdRule;
+  EXPECT_EQ(ap::refusalText(spaced, "imu/data_raw", distinctCounters(), "base_link", d)->text,
+            "imu/data_raw: frame id 'imu link' refused; " + std::string(ap::kFrameIdRule));
   EXPECT_EQ(refusalLine(ap::Refused::NoTime, "body_twist"),
             "body_twist: unstamped message and no ROS time yet (/clock): dropped");
   EXPECT_EQ(refusalLine(ap::Refused::BiasFrame, "gyro_bias"),

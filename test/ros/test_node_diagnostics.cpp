@@ -43,11 +43,14 @@ std::string value(const diagnostic_updater::DiagnosticStatusWrapper& s, const st
 
 }  // namespace
 
-TEST(InputWindow, MostSamplesLostIsAProblemHalfIsNot) {
-  EXPECT_EQ(windowProblem(gapsOf(100, 50)), "");
-  EXPECT_EQ(windowProblem(gapsOf(100, 51)),
-            "most rate samples of the last second were lost (51 of 100): gaps longer than max_dt "
-            "1 s (input period 0.01 s): messages lost on the way or stamps far apart");
+TEST(InputWindow, HalfOfTheSamplesLostIsAProblemLessIsNot) {
+  EXPECT_EQ(windowProblem(gapsOf(100, 49)), "");
+  EXPECT_EQ(windowProblem(gapsOf(100, 50)),
+            "half or more of the rate samples of the last second were lost (50 of 100): gaps "
+            "longer than max_dt 1 s (input period 0.01 s): messages lost on the way or stamps "
+            "far apart");
+  EXPECT_EQ(windowProblem(gapsOf(3, 1)), "");  // odd counts: 1 of 3 is less than half
+  EXPECT_NE(windowProblem(gapsOf(3, 2)), "");
   EXPECT_EQ(windowProblem(gapsOf(0, 0)), "");  // nothing received: nothing lost
 }
 
@@ -86,7 +89,7 @@ TEST(InputWindow, TheCommonestCauseIsNamedTheFirstOnATie) {
   c.dropped_no_time = 4;
   // 11 losses counted for 10 received (one input can count twice): never more than received.
   EXPECT_EQ(windowProblem(c),
-            "most rate samples of the last second were lost (10 of 10): "
+            "half or more of the rate samples of the last second were lost (10 of 10): "
             "angular_velocity_covariance[0] == -1 (REP-145: no rate)");
 }
 
@@ -95,8 +98,8 @@ TEST(InputWindow, AMaxDtBelowTheInputPeriodIsNamed) {
   EXPECT_NE(windowProblem(gapsOf(100, 100), 1.0, 0.01).find("gaps longer than max_dt 0.01 s"),
             std::string::npos);
   EXPECT_EQ(windowProblem(gapsOf(100, 100), 1.0, 0.0099),
-            "most rate samples of the last second were lost (100 of 100): max_dt 0.0099 s is "
-            "below the input period 0.01 s");
+            "half or more of the rate samples of the last second were lost (100 of 100): max_dt "
+            "0.0099 s is below the input period 0.01 s");
 }
 
 TEST(InputLag, BeyondHalfASecondEitherWay) {
@@ -130,6 +133,30 @@ TEST_F(Summary, NoRateInputForMoreThanASecond) {
   EXPECT_EQ(summarize(true, 1.0).level, DiagnosticStatus::OK);
   EXPECT_EQ(summarize(true, 1.0 + 1e-9).message, none);
   EXPECT_EQ(summarize(false, -1.0).message, "propagating");  // no rate input expected
+}
+
+TEST_F(Summary, RatesThatArriveRefusedAreNamedNotNoInput) {
+  ap::EngineCounters c;
+  diagnostic_updater::DiagnosticStatusWrapper status;
+  ap::summarize(status, true, -1.0, "", fixes_, c, {}, "no transform from 'imu' to 'base_link'");
+  EXPECT_EQ(status.level, DiagnosticStatus::WARN);
+  EXPECT_EQ(status.message, "rate input refused: no transform from 'imu' to 'base_link'");
+}
+
+TEST(NodeDiagnostics, ARefusalInTheLastSecondIsTheSummary) {
+  const ap::NodeConfig config = ap::validateParameters({});
+  engine_fixtures::DiscardingSink sink;
+  ap::AttitudeEngine engine(ap::engineConfig(config), sink);
+  ap::FixInput fixes(config);
+  ap::TfConflictWatch tf;
+  ap::NodeDiagnostics d(at(0));
+  d.inputRefused(at(0.5), "the cause");
+  diagnostic_updater::DiagnosticStatusWrapper status;
+  d.diagnose(at(1.5), config, engine, fixes, tf, 0, status);
+  EXPECT_EQ(status.message, "rate input refused: the cause");
+  diagnostic_updater::DiagnosticStatusWrapper later;
+  d.diagnose(at(1.5 + 1e-3), config, engine, fixes, tf, 0, later);  // more than 1 s after
+  EXPECT_EQ(later.message, "no rate input in the last second");
 }
 
 TEST_F(Summary, TheFirstRuleThatHoldsIsTheSummary) {

@@ -41,6 +41,7 @@
 #include <Eigen/Geometry>
 
 #include "attitude_propagator/config/parameters.h"
+#include "attitude_propagator/messages/frame_ids.h"
 #include "attitude_propagator/messages/frame_source.h"
 #include "attitude_propagator/messages/input_decoders.h"
 
@@ -109,6 +110,8 @@ class FixDecoder {
   const FixFrames& frames() const { return frames_; }
   const TopicType& type() const { return type_; }
   const FixRefusals& refusals() const { return refusals_; }
+  /// The warnings of frame ids with a leading '/' met since the last call (one per frame).
+  std::vector<std::string> takeFrameWarnings() { return frame_ids_.takeWarnings(); }
 
  private:
   /// Which axes a message's rotation covariance is about.
@@ -131,6 +134,7 @@ class FixDecoder {
                                            FrameSource* frames, Refusal& refused) const;
 
   FixFrames frames_;
+  FrameIds frame_ids_;
   TopicType type_;
   FixRefusals refusals_;
   std::vector<std::uint8_t> buffer_;

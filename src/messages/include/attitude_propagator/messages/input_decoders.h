@@ -17,6 +17,9 @@
 //   without a lookup (it rejects and counts it);
 // - gyro bias: frame empty or body_frame: as it is; the rates' mount frame once known: rotated
 //   by q_BS; any other frame: refused, BiasFrame;
+// - frame ids (frame_ids.h): a leading '/' is removed (tf1's `/imu` is `imu`), warned once per
+//   frame (takeFrameWarnings); a frame id with a space or line break is refused: NoTransform
+//   (rates, torques) or BiasFrame, naming the rule in `detail`;
 // - types: a topic that takes a plain and a stamped type (body_twist, torque) takes the type of
 //   its first message of either; a message of another type is refused, WrongType.
 #pragma once
@@ -41,6 +44,7 @@
 
 #include "attitude_propagator/config/parameters.h"
 #include "attitude_propagator/engine.h"
+#include "attitude_propagator/messages/frame_ids.h"
 #include "attitude_propagator/messages/frame_source.h"
 #include "attitude_propagator/orientation_covariance.h"
 
@@ -185,7 +189,7 @@ class InputDecoders {
                       FrameSource* frames);
   /// `now`: the time an unstamped bias takes effect from (ROS time in the node, zero before
   /// the first /clock: from the start; the record time in a bag).
-  Decoded<BiasSample> bias(const geometry_msgs::Vector3Stamped& msg, const ros::Time& now) const;
+  Decoded<BiasSample> bias(const geometry_msgs::Vector3Stamped& msg, const ros::Time& now);
 
   /// body_twist and torque as they arrive on a topic of either type (ShapeShifter in the node,
   /// rosbag::MessageInstance in a bag): the type rule, then twist() or torque().
@@ -229,6 +233,8 @@ class InputDecoders {
   /// The rates' mount: its frame (empty until one is looked up) and q_BS.
   const std::string& mountFrame() const { return mount_frame_; }
   const Eigen::Quaterniond& mount() const { return q_BS_; }
+  /// The warnings of frame ids with a leading '/' met since the last call (one per frame).
+  std::vector<std::string> takeFrameWarnings() { return frame_ids_.takeWarnings(); }
 
  private:
   static DecodedInput refuse(Refusal refusal);
@@ -238,6 +244,7 @@ class InputDecoders {
   DecodedInput torque(const Decoded<Reading>& read, FrameSource* frames);
 
   DecoderFrames frames_;
+  FrameIds frame_ids_;
   std::string mount_frame_;  // empty: no mount looked up yet
   Eigen::Quaterniond q_BS_ = Eigen::Quaterniond::Identity();
   TopicType twist_type_;

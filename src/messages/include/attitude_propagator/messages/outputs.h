@@ -3,6 +3,7 @@
 // and axes `world_frame` chooses (docs/conventions.md §2.2).
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -58,5 +59,17 @@ class OutputEncoder {
   Eigen::Vector3d gyro_bias_B_;  // the gyro_bias parameter, when there is no engine to ask
   const AttitudeEngine* engine_ = nullptr;
 };
+
+/// A topic by its role (the name a remap or launch argument changes) and its resolved name.
+struct NamedTopic {
+  std::string role;
+  std::string name;
+};
+
+/// The feedback-loop rule: an output that resolves to the name of an input would be read back
+/// as input (`imu_topic:=/imu/data` makes the output imu/data the input). The text naming the
+/// first such output and input, both roles and the name; nothing when every name differs.
+std::optional<std::string> feedbackLoop(const std::vector<NamedTopic>& outputs,
+                                        const std::vector<NamedTopic>& inputs);
 
 }  // namespace attitude_propagator

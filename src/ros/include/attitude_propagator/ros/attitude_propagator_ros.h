@@ -68,6 +68,9 @@ class AttitudePropagatorRos : public EngineSink {
   void note(const EngineNote& note) override;
 
  private:
+  /// Throws (the node refuses to start) when an output resolves to an input's name
+  /// (outputs.h, feedbackLoop).
+  void refuseFeedbackLoops() const;
   void advertise();
   void subscribe();
   /// Subscribes the /tf and /tf_static watch when publish_tf is on and tf_conflict is not
@@ -96,6 +99,8 @@ class AttitudePropagatorRos : public EngineSink {
   void onGyroBias(const geometry_msgs::Vector3Stamped::ConstPtr& msg);
   /// An absolute attitude fix (fix_input.h).
   void onFix(const ros::MessageEvent<const topic_tools::ShapeShifter>& event);
+  /// Logs the decoders' warnings of frame ids with a leading '/', once per frame.
+  void warnFrames();
 
   /// Counts and logs a refused input (false), or logs a newly looked-up mount (true).
   bool taken(const DecodedInput& in, const char* topic);

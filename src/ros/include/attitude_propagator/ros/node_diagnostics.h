@@ -8,6 +8,7 @@
 #include <initializer_list>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include <diagnostic_updater/DiagnosticStatusWrapper.h>
 #include <ros/time.h>
@@ -28,12 +29,14 @@ std::optional<double> lagBeyondWarning(std::initializer_list<std::optional<doubl
 std::optional<double> inputLagBeyondWarning(const AttitudeEngine& engine);
 
 /// The summary, by the first rule that holds: WARN when rate input is expected and none came
-/// in the last second (`silence`: wall seconds since the last input, negative: none yet);
+/// in the last second (`silence`: wall seconds since the last input, negative: none yet),
+/// naming why when rates arrive but are refused (`refused`: the cause of the latest refusal in
+/// that second, empty: none; "no rate input" only when none arrives);
 /// WARN with the input window's problem; WARN with the fixes' warning; WARN when inputs lag
 /// beyond kInputLagWarning (`lag`, from inputLagBeyondWarning); else OK "propagating".
 void summarize(diagnostic_updater::DiagnosticStatusWrapper& status, bool expects_input,
                double silence, const std::string& window_problem, FixInput& fixes,
-               const EngineCounters& c, std::optional<double> lag);
+               const EngineCounters& c, std::optional<double> lag, const std::string& refused = "");
 
 class NodeDiagnostics {
  public:
@@ -42,6 +45,12 @@ class NodeDiagnostics {
 
   /// An input handed to the engine at wall time `now`.
   void inputArrived(const ros::WallTime& now) { last_input_ = now; }
+  /// A rate input refused before the engine at wall time `now`, and why (named in the summary
+  /// while no rate is handed on).
+  void inputRefused(const ros::WallTime& now, std::string cause) {
+    last_refused_ = now;
+    refused_cause_ = std::move(cause);
+  }
   /// Closes the one-second window of input counters when it is due (input_window.h).
   void closeInputWindow(const ros::WallTime& now, const AttitudeEngine& engine, double max_dt) {
     window_.closeInputWindow(now, engine.counters(), max_dt);
@@ -58,6 +67,8 @@ class NodeDiagnostics {
   std::uint64_t accepted_at_last_diagnosis_ = 0;
   ros::WallTime last_diagnosis_;
   ros::WallTime last_input_;
+  ros::WallTime last_refused_;
+  std::string refused_cause_;
   InputWindow window_;
 };
 
