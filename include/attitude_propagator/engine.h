@@ -77,6 +77,7 @@ enum class FixOutcome {
   BadCovariance,  ///< non-finite, asymmetric, a negative variance, a variance above pi^2,
                   ///< a correlation beyond one
   QueueFull,      ///< waiting, and dropped: kMaxPendingFixes were stamped nearer
+  Future,         ///< stamped more than max_future ahead of the clock, as every input
 };
 const char* fixOutcomeName(FixOutcome outcome);
 
@@ -161,8 +162,11 @@ class AttitudeEngine : private PropagatorHost {
   void reject(Rejection why);
 
   /// A gyro bias (rad/s, body frame) in force for rate inputs stamped at or after
-  /// `stamp`; subtracted before integration. False (counted) when non-finite or larger than
-  /// the largest accepted body rate. The `gyro_bias` parameter is the bias before any sample.
+  /// `stamp`; subtracted before integration. False (counted rejected_bias) when non-finite,
+  /// larger than the largest accepted body rate or stamped more than max_future ahead of a
+  /// known clock; false (counted bias_queue_full) when 64 wait and it is stamped furthest
+  /// ahead, else the furthest waiting one is dropped (counted): none takes effect before its
+  /// stamp. The `gyro_bias` parameter is the bias before any sample.
   bool submitBias(Stamp stamp, const Eigen::Vector3d& gyro_bias_B);
   void rejectBias() { ++counters_.rejected_bias; }
   /// The bias subtracted from the latest rate input.
@@ -300,6 +304,8 @@ class AttitudeEngine : private PropagatorHost {
   void countFix(FixOutcome outcome);
   /// The bias prior: estimate zero, covariance gyro_bias_stddev^2 I, no cross terms.
   void resetBiasState();
+  /// Caps each axis' bias variance at kMaxGyroBiasStddev^2, its correlations scaled alike.
+  static void capBiasCovariance(ErrorState& e);
 
   EngineConfig config_;
   EngineSink& sink_;

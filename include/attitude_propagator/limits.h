@@ -53,6 +53,12 @@ constexpr double kMaxFuture = 3600.0;
 /// per sample; 1e3 rad/s is noise no sensor reports, only a unit mistake or an attack.
 constexpr double kMaxRateStddev = 1e3;
 constexpr double kMaxRateVariance = kMaxRateStddev * kMaxRateStddev;
+/// Largest `gyro_bias_stddev` (rad/s), and the ceiling of the bias estimate's standard deviation
+/// per axis (a random walk grows it no further). A step of h adds about h^2 sigma_b^2 to the
+/// attitude's variance: at 10 rad/s a step up to 0.3 s stays below its ceiling pi^2, where the
+/// covariance would be capped and the attitude-bias correlation, which moves the estimate, lost.
+/// A MEMS gyro's bias is below 0.1 rad/s.
+constexpr double kMaxGyroBiasStddev = 10.0;
 
 // ---- Door bounds of the propagators ----------------------------------------------------------
 

@@ -101,12 +101,20 @@ struct EngineCounters {
   std::uint64_t resets = 0;      ///< the state back to the initial one: time went back, reset()
   std::uint64_t jumps_back = 0;  ///< a source's stamps went back, and persisted
   std::uint64_t rejected_future = 0;  ///< stamped more than max_future ahead of the clock
+  /// Jumped ahead of its source and of the clock by more than backward_jump beyond its source's
+  /// usual lead, and not yet
+  /// confirmed by kJumpConfirmation in a row: dropped (SourceTimeline::heldAhead).
+  std::uint64_t held_ahead = 0;
   /// Dynamic: queued inputs a reset dropped (reset(), ROS time jumping back).
   std::uint64_t dropped_on_reset = 0;
   std::uint64_t failed_steps = 0;      ///< the integrator could not complete an interval
   std::uint64_t pending_overflow = 0;  ///< dynamic: queue full, the furthest ahead dropped
   std::uint64_t deferred_ticks = 0;    ///< dynamic: grid stamps left for the next call (budget)
-  std::uint64_t rejected_bias = 0;     ///< gyro bias samples: non-finite, too large or bad frame
+  /// Gyro bias samples refused: non-finite, too large, another frame, or stamped more than
+  /// max_future ahead of the clock.
+  std::uint64_t rejected_bias = 0;
+  std::uint64_t bias_queue_full = 0;  ///< 64 bias samples waiting: the furthest ahead dropped
+  std::uint64_t bias_applied = 0;     ///< bias samples that took effect (a rate reached them)
   // Absolute attitude fixes (AttitudeEngine::submitFix, docs/design.md §6.9).
   std::uint64_t fixes_accepted = 0;  ///< applied (fused, or as a reset)
   std::uint64_t fixes_reset = 0;     ///< of those, applied as a reset (fix_mode reset, or a run)
@@ -115,6 +123,7 @@ struct EngineCounters {
   std::uint64_t fixes_bad_quaternion = 0;  ///< non-finite, or not of unit norm
   std::uint64_t fixes_bad_covariance = 0;  ///< non-finite, asymmetric, negative or above pi^2
   std::uint64_t fixes_queue_full = 0;      ///< ahead of the newest rate, the queue full: dropped
+  std::uint64_t fixes_future = 0;          ///< stamped more than max_future ahead of the clock
 };
 
 /// Something the node should log (throttled per kind).
@@ -130,6 +139,7 @@ struct EngineNote {
     FailedStep,
     PendingFull,
     Deferred,
+    HeldAhead,  ///< an input further ahead of the clock than its source's others: dropped
   };
   Kind kind = Gap;
   std::optional<Source> source;  ///< empty: the clock

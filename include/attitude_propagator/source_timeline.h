@@ -39,6 +39,14 @@ class SourceTimeline {
   /// stamps its samples alike, and the filter gives each its own stamp (docs/numerics.md §3).
   void allowRepeatedStamps(bool allow) { repeats_ = allow; }
 
+  /// Whether an input stamped `stamp`, at `clock`, jumps ahead of its source's newest by more
+  /// than backward_jump and is ahead of the clock by more than backward_jump beyond how far its
+  /// source's inputs arrive ahead (the mean lag): one such is
+  /// a glitch, held (its stamp would make the next on-time inputs look like a jump back); the
+  /// kJumpConfirmation-th in a row, each going on from the one before, is the source's new
+  /// lead, and its lag is measured afresh. False before the lag is known.
+  bool heldAhead(Stamp clock, Stamp stamp, const TimePolicy& policy);
+
   /// Records how far behind `clock` an input stamped `stamp` arrived (negative: ahead).
   void observeLag(Stamp clock, Stamp stamp);
   /// Mean clock - stamp of the inputs seen with a clock, in seconds; empty before the first.
@@ -52,12 +60,16 @@ class SourceTimeline {
     run_last_.reset();
     run_ = 0;
     lag_.reset();
+    ahead_last_.reset();
+    ahead_run_ = 0;
   }
 
  private:
   std::optional<Stamp> newest_;
   std::optional<Stamp> run_last_;  // the last stamp of the run from an earlier time
   int run_ = 0;
+  std::optional<Stamp> ahead_last_;  // the last stamp of a run held ahead of the others
+  int ahead_run_ = 0;
   std::optional<double> lag_;
   bool repeats_ = false;
 };

@@ -9,6 +9,7 @@
 #include <type_traits>
 
 #include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/quoted_text.h"
 
 namespace attitude_propagator {
 
@@ -40,7 +41,7 @@ void requireOneOf(const std::string& name, const std::string& value,
     if (value == a) return;
     list += (list.empty() ? "" : " ") + a;
   }
-  fail(name, "unknown value '" + value + "'; accepted: " + list);
+  fail(name, "unknown value '" + logText(value) + "'; accepted: " + list);
 }
 
 void requireFrameName(const std::string& name, const std::string& frame) {
@@ -88,11 +89,11 @@ Integrator resolveIntegrator(const Parameters& p, Model model) {
   const bool ok =
       model == Model::Dynamic ? supportsDynamic(integrator) : supportsKinematic(integrator);
   if (!ok) {
-    fail("integrator", "'" + p.integrator + "' does not drive the " + modelName(model) +
+    fail("integrator", "'" + logText(p.integrator) + "' does not drive the " + modelName(model) +
                            " model; accepted: " + acceptedIntegrators(model));
   }
   if (model == Model::Dynamic && p.torque_input && !integratorInfo(integrator).takes_torque) {
-    fail("integrator", "'" + p.integrator +
+    fail("integrator", "'" + logText(p.integrator) +
                            "' takes no torque and torque_input is true; accepted: " +
                            acceptedIntegrators(model, true));
   }
@@ -144,8 +145,8 @@ void checkScalars(const Parameters& p) {
     fail("max_step", "invalid value " + formatParameter(p.max_step) + "; accepted: " + step_range);
   }
   requireFinite("max_dt", p.max_dt, kMinMaxDt, true, kMaxMaxDt, "a number in [1e-6, 60] (s)");
-  requireFinite("max_future", p.max_future, 0.0, true, kMaxFuture,
-                "a finite number >= 0 and at most 3600 (s)");
+  requireFinite("max_future", p.max_future, 0.0, false, kMaxFuture,
+                "a number > 0 and at most 3600 (s)");
   requireFinite("rate_delay", p.rate_delay, 0.0, true, p.max_dt,
                 "a finite number >= 0 and at most max_dt (s)");
   requireFinite("tolerance", p.tolerance, kMinTolerance, true, kMaxTolerance,
@@ -166,8 +167,8 @@ void checkScalars(const Parameters& p) {
   requireFinite("fix_stddev", p.fix_stddev, 0.0, false, M_PI, "a number > 0 and at most pi (rad)");
   requireFinite("gyro_bias_random_walk", p.gyro_bias_random_walk, 0.0, true, kMaxRateStddev,
                 "a finite number >= 0 and at most 1000 (rad/s/sqrt(s))");
-  requireFinite("gyro_bias_stddev", p.gyro_bias_stddev, 0.0, true, kMaxRateStddev,
-                "a finite number >= 0 and at most 1000 (rad/s)");
+  requireFinite("gyro_bias_stddev", p.gyro_bias_stddev, 0.0, true, kMaxGyroBiasStddev,
+                "a finite number >= 0 and at most 10 (rad/s)");
   const std::string rate_range = "[x, y, z], finite, |w| <= 1e5 (rad/s)";
   const auto& w = p.initial_angular_velocity;
   requireVector("initial_angular_velocity", w, 3, rate_range);

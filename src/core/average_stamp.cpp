@@ -3,13 +3,15 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "attitude_propagator/quoted_text.h"
+
 namespace attitude_propagator {
 
 AverageStamp averageStampFromName(const std::string& name) {
   if (name == "end") return AverageStamp::End;
   if (name == "mid") return AverageStamp::Mid;
   if (name == "start") return AverageStamp::Start;
-  throw std::invalid_argument("average_stamp: unknown value '" + name +
+  throw std::invalid_argument("average_stamp: unknown value '" + logText(name) +
                               "'; accepted: end mid start");
 }
 

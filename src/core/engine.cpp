@@ -22,9 +22,10 @@ constexpr Stamp kNsPerSecond = 1000000000;
 constexpr double kFarFromOrigin = 1e6;
 
 void checkMaxFuture(double max_future) {
-  if (!(max_future >= 0.0 && max_future <= kMaxFuture)) {
-    throw std::invalid_argument("max_future: accepted: 0 to " + std::to_string(kMaxFuture) +
-                                " s, got " + std::to_string(max_future));
+  if (!(max_future > 0.0 && max_future <= kMaxFuture)) {
+    throw std::invalid_argument("max_future: accepted: more than 0 and at most " +
+                                std::to_string(kMaxFuture) + " s, got " +
+                                std::to_string(max_future));
   }
 }
 
@@ -55,8 +56,8 @@ void checkFixConfig(const FixConfig& f) {
           "gyro_bias_random_walk: accepted: 0 to 1000 rad/s/sqrt(s), got " +
               std::to_string(f.gyro_bias_random_walk));
   require(std::isfinite(f.gyro_bias_stddev) && f.gyro_bias_stddev >= 0.0 &&
-              f.gyro_bias_stddev <= kMaxRateStddev,
-          "gyro_bias_stddev: accepted: 0 to 1000 rad/s, got " + std::to_string(f.gyro_bias_stddev));
+              f.gyro_bias_stddev <= kMaxGyroBiasStddev,
+          "gyro_bias_stddev: accepted: 0 to 10 rad/s, got " + std::to_string(f.gyro_bias_stddev));
 }
 
 /// A fix's covariance: like a rate covariance from a message (finite, symmetric, variances at
@@ -88,6 +89,8 @@ const char* fixOutcomeName(FixOutcome outcome) {
       return "bad_covariance";
     case FixOutcome::QueueFull:
       return "queue_full";
+    case FixOutcome::Future:
+      return "future";
   }
   return "unknown";
 }
@@ -303,6 +306,12 @@ void AttitudeEngine::replayStep(const ModelStep& step) {
 
 bool AttitudeEngine::inOrder(Source source, Stamp stamp) {
   SourceTimeline& line = timeline(source);
+  if (clock_ && line.heldAhead(*clock_, stamp, timePolicyOf(config_))) {
+    // One forward glitch: taken, it would make the on-time inputs after it a jump back.
+    ++counters_.held_ahead;
+    sink_.note({EngineNote::HeldAhead, source, stamp});
+    return false;
+  }
   switch (line.judge(stamp, timePolicyOf(config_))) {
     case SourceTimeline::Verdict::InOrder:
       break;
@@ -336,20 +345,25 @@ std::optional<double> AttitudeEngine::inputLag(Source source) const {
 
 bool AttitudeEngine::submitBias(Stamp stamp, const Eigen::Vector3d& gyro_bias_B) {
   // A bias sample stream should be slow (a calibration): more than this many ahead of the
-  // rates means the stamps are wrong; the oldest then takes effect early.
+  // rates means the stamps are wrong; the one stamped furthest ahead is then dropped, so no
+  // sample ever takes effect before its stamp.
   constexpr std::size_t kMaxPendingBias = 64;
-  if (!gyro_bias_B.allFinite() || !(gyro_bias_B.norm() <= kMaxBodyRate)) {
-    ++counters_.rejected_bias;
+  if (!gyro_bias_B.allFinite() || !(gyro_bias_B.norm() <= kMaxBodyRate) || tooFarAhead(stamp)) {
+    ++counters_.rejected_bias;  // like an input: more than max_future ahead is refused
     return false;
-  }
-  if (pending_gyro_bias_.size() >= kMaxPendingBias) {
-    gyro_bias_B_ = pending_gyro_bias_.front().second;
-    pending_gyro_bias_.erase(pending_gyro_bias_.begin());
   }
   const auto at = std::upper_bound(
       pending_gyro_bias_.begin(), pending_gyro_bias_.end(), stamp,
       [](Stamp s, const std::pair<Stamp, Eigen::Vector3d>& other) { return s < other.first; });
-  pending_gyro_bias_.insert(at, {stamp, gyro_bias_B});
+  if (pending_gyro_bias_.size() >= kMaxPendingBias) {
+    ++counters_.bias_queue_full;
+    if (at == pending_gyro_bias_.end()) return false;  // the newcomer is the furthest ahead
+    pending_gyro_bias_.pop_back();
+  }
+  const auto where = std::upper_bound(
+      pending_gyro_bias_.begin(), pending_gyro_bias_.end(), stamp,
+      [](Stamp s, const std::pair<Stamp, Eigen::Vector3d>& other) { return s < other.first; });
+  pending_gyro_bias_.insert(where, {stamp, gyro_bias_B});
   return true;
 }
 
@@ -357,6 +371,7 @@ const Eigen::Vector3d& AttitudeEngine::biasAt(Stamp stamp) {
   std::size_t n = 0;
   while (n < pending_gyro_bias_.size() && pending_gyro_bias_[n].first <= stamp)
     gyro_bias_B_ = pending_gyro_bias_[n++].second;
+  counters_.bias_applied += n;
   pending_gyro_bias_.erase(pending_gyro_bias_.begin(), pending_gyro_bias_.begin() + n);
   return gyro_bias_B_;
 }
@@ -467,9 +482,24 @@ void AttitudeEngine::propagateCovariance(double h, const Eigen::Vector3d& w_step
   e.P_Bb = PhiP_Bb - GP_bb;
   const double q = config_.fixes.gyro_bias_random_walk;
   e.P_bb += q * q * h * Eigen::Matrix3d::Identity();
+  capBiasCovariance(e);
   const Eigen::Matrix3d symmetric = 0.5 * (P_B + P_B.transpose());
   e.P_B = clampOrientationCovariance(P_B);
   if (e.P_B != symmetric) e.P_Bb.setZero();  // clamped: the correlations are lost with it
+}
+
+void AttitudeEngine::capBiasCovariance(ErrorState& e) {
+  // Each axis' bias variance at most kMaxGyroBiasStddev^2: P_bb -> D P_bb D, P_Bb -> P_Bb D with
+  // D = diag(min(1, sigma_max / sigma_i)), a congruence that keeps the joint covariance
+  // semi-definite and the correlations that move the estimate.
+  const double ceiling = kMaxGyroBiasStddev * kMaxGyroBiasStddev;
+  if (!(e.P_bb.diagonal().maxCoeff() > ceiling)) return;
+  Eigen::Vector3d d;
+  for (int i = 0; i < 3; ++i)
+    d(i) = e.P_bb(i, i) > ceiling ? std::sqrt(ceiling / e.P_bb(i, i)) : 1.0;
+  e.P_bb = d.asDiagonal() * e.P_bb * d.asDiagonal();
+  e.P_bb.diagonal() = e.P_bb.diagonal().cwiseMin(ceiling);  // exactly, past the rounding
+  e.P_Bb = e.P_Bb * d.asDiagonal();
 }
 
 void AttitudeEngine::resetState(bool forget_time) {
@@ -570,6 +600,9 @@ void AttitudeEngine::countFix(FixOutcome outcome) {
     case FixOutcome::QueueFull:
       ++counters_.fixes_queue_full;
       break;
+    case FixOutcome::Future:
+      ++counters_.fixes_future;
+      break;
   }
 }
 
@@ -580,6 +613,8 @@ FixOutcome AttitudeEngine::submitFix(Stamp stamp, const Eigen::Quaterniond& q_WB
     outcome = FixOutcome::BadQuaternion;
   } else if (!validFixCovariance(covariance_B)) {
     outcome = FixOutcome::BadCovariance;
+  } else if (tooFarAhead(stamp)) {
+    outcome = FixOutcome::Future;  // it would wait for rates that may never come
   }
   if (outcome != FixOutcome::Waiting) {
     countFix(outcome);

@@ -4,6 +4,7 @@
 
 #include "attitude_propagator/dynamic_step.h"
 #include "attitude_propagator/kinematic_step.h"
+#include "attitude_propagator/quoted_text.h"
 
 namespace attitude_propagator {
 
@@ -205,7 +206,7 @@ Model modelFromName(const std::string& name) {
   if (name == "auto") return Model::Auto;
   if (name == "kinematic") return Model::Kinematic;
   if (name == "dynamic") return Model::Dynamic;
-  throw std::invalid_argument("model: unknown value '" + name +
+  throw std::invalid_argument("model: unknown value '" + logText(name) +
                               "'; accepted: auto kinematic dynamic");
 }
 
@@ -225,7 +226,7 @@ Integrator integratorFromName(const std::string& name) {
   for (const auto& row : kIntegrators) {
     if (name == row.name) return row.id;
   }
-  throw std::invalid_argument("integrator: unknown value '" + name +
+  throw std::invalid_argument("integrator: unknown value '" + logText(name) +
                               "'; accepted: " + joinNames(integratorNames()));
 }
 

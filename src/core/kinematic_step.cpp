@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/quoted_text.h"
 
 namespace attitude_propagator {
 
@@ -172,7 +173,7 @@ double intervalLength(const RateWindow& window, std::size_t i) {
 RateSamples rateSamplesFromName(const std::string& name) {
   if (name == "instantaneous") return RateSamples::Instantaneous;
   if (name == "interval_average") return RateSamples::IntervalAverage;
-  throw std::invalid_argument("rate_samples: unknown value '" + name +
+  throw std::invalid_argument("rate_samples: unknown value '" + logText(name) +
                               "'; accepted: instantaneous interval_average");
 }
 

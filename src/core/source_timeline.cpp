@@ -29,6 +29,27 @@ SourceTimeline::Verdict SourceTimeline::judge(Stamp stamp, const TimePolicy& pol
   return Verdict::JumpedBack;
 }
 
+bool SourceTimeline::heldAhead(Stamp clock, Stamp stamp, const TimePolicy& policy) {
+  // A jump ahead of its own source (by more than backward_jump after the newest) that its
+  // usual lead does not explain: lead - usual lead = (stamp - clock) - (-lag). A stream that
+  // goes on ahead of a clock that stands still jumps nowhere.
+  const bool jumps = newest_ && seconds(stamp - *newest_) > policy.backward_jump;
+  if (!jumps || !lag_ || seconds(stamp - clock) + *lag_ <= policy.backward_jump) {
+    ahead_run_ = 0;  // an input where the others are interrupts a run
+    ahead_last_.reset();
+    return false;
+  }
+  const bool goes_on =
+      ahead_last_ && stamp > *ahead_last_ && seconds(stamp - *ahead_last_) <= policy.max_dt;
+  ahead_run_ = goes_on ? ahead_run_ + 1 : 1;
+  ahead_last_ = stamp;
+  if (ahead_run_ < kJumpConfirmation) return true;
+  ahead_run_ = 0;
+  ahead_last_.reset();
+  lag_.reset();  // the new lead, from this input on
+  return false;
+}
+
 void SourceTimeline::observeLag(Stamp clock, Stamp stamp) {
   const double lag = seconds(clock - stamp);
   lag_ = lag_ ? *lag_ + kLagWeight * (lag - *lag_) : lag;

@@ -5,6 +5,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "attitude_propagator/quoted_text.h"
+
 namespace attitude_propagator {
 
 namespace {
@@ -20,7 +22,7 @@ constexpr double kMaxSkip = 1e6;
 StampFilter stampFilterFromName(const std::string& name) {
   if (name == "none") return StampFilter::None;
   if (name == "sensor_clock") return StampFilter::SensorClock;
-  throw std::invalid_argument("stamp_filter: unknown value '" + name +
+  throw std::invalid_argument("stamp_filter: unknown value '" + logText(name) +
                               "'; accepted: none sensor_clock");
 }
 

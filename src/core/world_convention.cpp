@@ -3,13 +3,16 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "attitude_propagator/quoted_text.h"
+
 namespace attitude_propagator {
 
 WorldConvention worldConventionFromName(const std::string& name) {
   if (name == "enu") return WorldConvention::Enu;
   if (name == "nwu") return WorldConvention::Nwu;
   if (name == "ned") return WorldConvention::Ned;
-  throw std::invalid_argument("world_frame: unknown value '" + name + "'; accepted: enu nwu ned");
+  throw std::invalid_argument("world_frame: unknown value '" + logText(name) +
+                              "'; accepted: enu nwu ned");
 }
 
 std::string worldConventionName(WorldConvention convention) {

@@ -22,6 +22,8 @@ const char* fixRefusedCounter(Refused why) {
       return "fixes_refused_no_time";
     case Refused::NoOrientation:
       return "fixes_refused_no_orientation";
+    case Refused::FixBodyFrame:
+      return "fixes_refused_body_frame";
     default:
       return "?";  // not a fix's refusal
   }
@@ -50,6 +52,9 @@ Decoded<Fix> FixDecoder::refuse(Refusal refusal) {
       break;
     case Refused::NoOrientation:
       ++refusals_.no_orientation;
+      break;
+    case Refused::FixBodyFrame:
+      ++refusals_.body_frame;
       break;
     default:
       break;  // the decoder makes no other
@@ -127,6 +132,13 @@ Decoded<Fix> FixDecoder::compose(const ros::Time& header_stamp, const ros::Time&
   }
   const std::string& H = header_id->empty() ? frames_.fixed : *header_id;
   const std::string& F = fix_id->empty() ? frames_.body : *fix_id;
+  if (H == frames_.body) {
+    // q_WH would be the node's own output (fixed -> body on tf): the fix would correct the
+    // state by the state itself.
+    refused.why = Refused::FixBodyFrame;
+    refused.frame = H;
+    return refuse(std::move(refused));
+  }
   const auto q_WH = lookup(frames_.fixed, H, frames, refused);
   if (!q_WH) return refuse(std::move(refused));
   const auto q_BF = lookup(frames_.body, F, frames, refused);

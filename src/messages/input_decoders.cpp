@@ -24,6 +24,8 @@ const char* refusedCounter(Refused why) {
       return "rejected_bias";
     case Refused::NoOrientation:
       return "fixes_refused_no_orientation";
+    case Refused::FixBodyFrame:
+      return "fixes_refused_body_frame";
   }
   return "?";
 }
@@ -43,6 +45,7 @@ void countRefusal(AttitudeEngine& engine, Refused why) {
     case Refused::BiasFrame:
       return engine.rejectBias();
     case Refused::NoOrientation:
+    case Refused::FixBodyFrame:
       return;  // a fix: FixDecoder counts it (fix_decoder.h)
   }
 }

@@ -5,9 +5,19 @@
 #include <ros/ros.h>
 
 #include "attitude_propagator/ros/attitude_propagator_ros.h"
+#include "attitude_propagator/ros/log_text.h"
 
 int main(int argc, char** argv) {
-  ros::init(argc, argv, "attitude_propagator");
+  try {
+    ros::init(argc, argv, "attitude_propagator");
+  } catch (const ros::InvalidNameException& e) {
+    // __name:=, __ns: or a remapping that is no ROS name (a space, a leading digit).
+    ROS_FATAL(
+        "attitude_propagator: refusing to start: invalid node name, namespace or "
+        "remapping on the command line: %s",
+        attitude_propagator::logText(e.what(), 4 * attitude_propagator::kLogTextBytes).c_str());
+    return 1;
+  }
   // Held here, not as temporaries: destroying the last NodeHandle shuts ROS down, and with it
   // the console the error below must reach.
   ros::NodeHandle nh;

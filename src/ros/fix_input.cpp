@@ -48,7 +48,7 @@ void FixInput::onMessage(const topic_tools::ShapeShifter& msg, const ros::Time& 
 
 std::uint64_t FixInput::notApplied(const EngineCounters& c) const {
   return c.fixes_rejected_gate + c.fixes_too_old + c.fixes_bad_quaternion + c.fixes_bad_covariance +
-         c.fixes_queue_full + decoder_.refusals().total();
+         c.fixes_queue_full + c.fixes_future + decoder_.refusals().total();
 }
 
 std::uint64_t FixInput::notAppliedInARow(const EngineCounters& c) {
@@ -78,11 +78,13 @@ void FixInput::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status,
   status.add("fixes_bad_quaternion", c.fixes_bad_quaternion);
   status.add("fixes_bad_covariance", c.fixes_bad_covariance);
   status.add("fixes_queue_full", c.fixes_queue_full);
+  status.add("fixes_future", c.fixes_future);
   status.add("fixes_refused", r.total());
   status.add(fixRefusedCounter(Refused::NoTransform), r.no_tf);
   status.add(fixRefusedCounter(Refused::WrongType), r.type);
   status.add(fixRefusedCounter(Refused::NoTime), r.no_time);
   status.add(fixRefusedCounter(Refused::NoOrientation), r.no_orientation);
+  status.add(fixRefusedCounter(Refused::FixBodyFrame), r.body_frame);
   status.add("fixes_pending", engine.pendingFixes());
   if (config_.estimate_gyro_bias) {
     const Eigen::Vector3d& b = engine.gyroBiasEstimate();
@@ -120,6 +122,14 @@ void FixInput::logRefusal(const Refusal& r) {
                         "(no orientation, REP-145): refused (%lu so far)",
                         decoder_.refusals().no_orientation);
       break;
+    case Refused::FixBodyFrame:
+      ROS_WARN_THROTTLE(kFixWarnPeriod,
+                        "orientation_fix: header frame '%s' is body_frame: a fix must be given "
+                        "in a frame joined to '%s' without passing through '%s': refused (%lu so "
+                        "far)",
+                        logText(r.frame).c_str(), f.fixed.c_str(), f.body.c_str(),
+                        decoder_.refusals().body_frame);
+      break;
     default:
       break;  // the fix decoder makes no other
   }
@@ -150,6 +160,9 @@ void FixInput::logOutcome(FixOutcome outcome, Stamp stamp, const AttitudeEngine&
       break;
     case FixOutcome::QueueFull:
       why = "stamped ahead of the rates, and too many wait already";
+      break;
+    case FixOutcome::Future:
+      why = "stamped more than max_future ahead of ROS time";
       break;
   }
   last_reason_ = fixOutcomeName(outcome);

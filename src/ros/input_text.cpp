@@ -49,7 +49,8 @@ std::string refusalText(const Refusal& r, const char* topic, bool torque, const 
           "once known, or empty (%lu rejected so far)",
           logText(r.frame).c_str(), body.c_str(), c.rejected_bias);
     case Refused::NoOrientation:
-      break;
+    case Refused::FixBodyFrame:
+      break;  // fixes only: fix_input.cpp
   }
   return {};
 }
@@ -59,7 +60,9 @@ std::string refusalText(const Refusal& r, const char* topic, bool torque, const 
 std::optional<LogLine> refusalText(const Refusal& r, const std::string& topic,
                                    const EngineCounters& c, const std::string& body,
                                    const InputDecoders& decoders) {
-  if (r.why == Refused::NoOrientation) return std::nullopt;  // fixes only: fix_input.cpp
+  if (r.why == Refused::NoOrientation || r.why == Refused::FixBodyFrame) {
+    return std::nullopt;  // fixes only: fix_input.cpp
+  }
   const bool torque = topic == "torque";
   // One throttle per kind, and the torque's missing transform apart from the rates'.
   const std::string kind = "refused " + std::to_string(static_cast<int>(r.why)) +

@@ -41,6 +41,7 @@ void InputWindow::closeInputWindow(const ros::WallTime& now, const EngineCounter
        "loops)"},
       {c.rejected_future - s.rejected_future,
        "stamps more than max_future ahead of ROS time (clocks not synchronised?)"},
+      {c.held_ahead - s.held_ahead, "stamps further ahead of ROS time than their stream's"},
       {c.rejected_non_finite - s.rejected_non_finite, "NaN or infinite rates or stamps"},
       {c.rejected_out_of_range - s.rejected_out_of_range, "rates out of the accepted range"},
       {c.rejected_no_rate - s.rejected_no_rate,

@@ -72,6 +72,7 @@ void NodeDiagnostics::diagnose(const ros::WallTime& now, const NodeConfig& confi
   status.add("resets", c.resets);
   status.add("jumps_back", c.jumps_back);
   status.add("rejected_future", c.rejected_future);
+  status.add("held_ahead", c.held_ahead);
   status.add("dropped_on_reset", c.dropped_on_reset);
   // Mean ROS time minus stamp on arrival: a constant skew between the sensor's clock and
   // this machine's shows here (WARN above kInputLagWarning).
@@ -85,6 +86,8 @@ void NodeDiagnostics::diagnose(const ros::WallTime& now, const NodeConfig& confi
   status.add("deferred_ticks", c.deferred_ticks);
   status.add("callback_errors", callback_errors);
   status.add("rejected_bias", c.rejected_bias);
+  status.add("bias_queue_full", c.bias_queue_full);
+  status.add("bias_applied", c.bias_applied);
   status.add("tf_conflicts", tf.conflicts());
   status.add("tf_stopped", tf.stopped());
   status.add("tf_resumes", tf.resumes());

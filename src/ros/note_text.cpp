@@ -52,6 +52,11 @@ std::string noteText(const EngineNote& note, const EngineCounters& c, const Para
           "%s: more inputs stamped ahead of ROS time than the queue holds: the one stamped "
           "furthest ahead dropped (%lu so far)",
           what, c.pending_overflow);
+    case EngineNote::HeldAhead:
+      return formatted(
+          "%s: stamp %.6f further ahead of ROS time than its stream by more than %g s: dropped "
+          "until %d in a row confirm it (%lu so far)",
+          what, t, TimePolicy{}.backward_jump, kJumpConfirmation, c.held_ahead);
     case EngineNote::Deferred:
       return formatted(
           "publishing fell behind ROS time at %.3f s: the rest of the grid follows on the next "

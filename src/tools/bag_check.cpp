@@ -15,6 +15,7 @@
 
 #include <roslz4/lz4s.h>
 
+#include "attitude_propagator/quoted_text.h"
 #include "bag_format.h"
 #include "tool_error.h"
 
@@ -255,6 +256,24 @@ void checkChunk(FileBytes& file, const ChunkInfo& info, const std::set<std::uint
   messages += in_chunk;
 }
 
+/// A bag of another format version (#ROSBAG V1.2, a ROS 1 bag older than 2010): refused by its
+/// version, not as damaged. Its first line is "#ROSBAG V<version>\n".
+void refuseOtherVersion(const std::string& path, FileBytes& file) {
+  const std::string magic = "#ROSBAG V";
+  std::string line(static_cast<std::size_t>(std::min<std::uint64_t>(file.size(), 32)), '\0');
+  try {
+    file.copy(0, line.size(), &line[0]);
+  } catch (const Fault&) {
+    return;
+  }
+  if (line.compare(0, magic.size(), magic) != 0) return;
+  const std::string version = line.substr(magic.size(), line.find('\n') - magic.size());
+  throw ToolError(path + ": a bag of format version " + logText(version) +
+                  "; accepted: version 2.0 (the Python rosbag reads the old format: `rosbag "
+                  "filter " +
+                  path + " new.bag True` writes it as 2.0)");
+}
+
 }  // namespace
 
 void checkBagStructure(const std::string& path) {
@@ -266,7 +285,10 @@ void checkBagStructure(const std::string& path) {
   } catch (const Fault&) {
     return;
   }
-  if (std::memcmp(version, kVersionLine, kVersionLength) != 0) return;
+  if (std::memcmp(version, kVersionLine, kVersionLength) != 0) {
+    refuseOtherVersion(path, file);
+    return;  // not a bag at all: rosbag says so
+  }
 
   std::uint64_t messages = 0;
   std::size_t chunk_number = 0;

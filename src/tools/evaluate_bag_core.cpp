@@ -1248,15 +1248,16 @@ void Evaluation::reportFixes(std::FILE* out) const {
   std::fprintf(out,
                "  fixes %s (%s): %llu, refused before the engines %llu (no_tf %llu: only "
                "fixed_frame and body_frame, the rates' frame, are known here; type %llu, "
-               "no_time %llu, no_orientation %llu); per method accepted/rejected_gate/too_old/"
+               "no_time %llu, no_orientation %llu, body_frame %llu); per method "
+               "accepted/rejected_gate/too_old/"
                "other/pending:",
                fixes_topic_.c_str(), fixes_type_.c_str(), u(fix_count_), u(r.total()), u(r.no_tf),
-               u(r.type), u(r.no_time), u(r.no_orientation));
+               u(r.type), u(r.no_time), u(r.no_orientation), u(r.body_frame));
   for (const auto& m : methods_) {
     if (!m->started()) continue;
     const EngineCounters& c = m->counters();
     const std::uint64_t other =
-        c.fixes_bad_quaternion + c.fixes_bad_covariance + c.fixes_queue_full;
+        c.fixes_bad_quaternion + c.fixes_bad_covariance + c.fixes_queue_full + c.fixes_future;
     std::fprintf(out, " %s %llu/%llu/%llu/%llu/%llu", m->name().c_str(), u(c.fixes_accepted),
                  u(c.fixes_rejected_gate), u(c.fixes_too_old), u(other), u(m->pendingFixes()));
   }

@@ -44,6 +44,7 @@
 #include "attitude_propagator/messages/frame_source.h"
 #include "attitude_propagator/messages/input_decoders.h"
 #include "attitude_propagator/messages/outputs.h"
+#include "attitude_propagator/quoted_text.h"
 #include "bag_input.h"
 #include "bag_writer.h"
 #include "command_line.h"
@@ -538,7 +539,6 @@ class BagPropagator : public EngineSink {
   std::uint64_t messages_ = 0;
   std::uint64_t states_ = 0;
   std::uint64_t floor_accepted_ = 0;  // --io-floor: inputs passed straight to the outputs
-  std::uint64_t bias_used_ = 0;
   std::uint64_t messages_total_ = 0;  // in the view, before reading
   double wall_ = 0.0;
   double bag_seconds_ = 0.0;
@@ -697,7 +697,7 @@ void BagPropagator::onBias(const rosbag::MessageInstance& m) {
   const Decoded<BiasSample> bias = decoders_.bias(bias_msg_, record_);
   warnFrames();
   if (!bias) return countRefusal(*engine_, bias.refusal->why);
-  if (!o_.io_floor && engine_->submitBias(bias->stamp, bias->b_B)) ++bias_used_;
+  if (!o_.io_floor) engine_->submitBias(bias->stamp, bias->b_B);  // counted by the engine
 }
 
 void BagPropagator::onFix(const rosbag::MessageInstance& m) {
@@ -789,9 +789,9 @@ std::optional<Eigen::Quaterniond> BagPropagator::BagFrames::rotation(const std::
       std::fprintf(stderr,
                    "propagate_bag: no transform %s -> %s in %s (/tf_static, or /tf so far): its "
                    "messages are dropped until there is one%s%s\n",
-                   target.c_str(), source.c_str(), run_.bags_.name().c_str(),
+                   logText(target).c_str(), logText(source).c_str(), run_.bags_.name().c_str(),
                    body ? "; to take it as the body: --set body_frame=" : "",
-                   body ? source.c_str() : "");
+                   body ? logText(source).c_str() : "");
     }
     return std::nullopt;
   }
@@ -859,6 +859,7 @@ void BagPropagator::summary(std::FILE* out, bool written) const {
   // `received` (each rate or torque message read is submitted or rejected exactly once).
   add("stale", c.dropped_stale);
   add("future", c.rejected_future);
+  add("ahead", c.held_ahead);
   add("reset", c.dropped_on_reset);
   add("queue-full", c.pending_overflow);
   add("non-finite", c.rejected_non_finite);
@@ -903,9 +904,11 @@ void BagPropagator::summary(std::FILE* out, bool written) const {
   }
   if (!bias_.empty()) {
     std::fprintf(out,
-                 "  gyro bias: %llu used, %llu refused (non-finite, too large, another frame)\n",
-                 static_cast<unsigned long long>(bias_used_),
-                 static_cast<unsigned long long>(c.rejected_bias));
+                 "  gyro bias: %llu used, %llu refused (non-finite, too large, another frame, "
+                 "beyond max_future), %llu dropped (queue full)\n",
+                 static_cast<unsigned long long>(c.bias_applied),
+                 static_cast<unsigned long long>(c.rejected_bias),
+                 static_cast<unsigned long long>(c.bias_queue_full));
   }
   if (!fixes_.empty()) fixSummary(out);
 }
@@ -920,17 +923,17 @@ void BagPropagator::fixSummary(std::FILE* out) const {
   const std::uint64_t pending = engine_->pendingFixes();
   const std::uint64_t accounted = c.fixes_accepted + c.fixes_rejected_gate + c.fixes_too_old +
                                   c.fixes_bad_quaternion + c.fixes_bad_covariance +
-                                  c.fixes_queue_full + pending + r.total();
+                                  c.fixes_queue_full + c.fixes_future + pending + r.total();
   auto u = [](std::uint64_t x) { return static_cast<unsigned long long>(x); };
   std::fprintf(out,
                "  fixes: %llu = %llu accepted (%llu as resets) + %llu rejected_gate + %llu "
                "too_old + %llu bad_quaternion + %llu bad_covariance + %llu queue_full + %llu "
-               "pending at the end + %llu refused (no_tf %llu, type %llu, "
-               "no_time %llu, no_orientation %llu)",
+               "future + %llu pending at the end + %llu refused (no_tf %llu, type %llu, "
+               "no_time %llu, no_orientation %llu, body_frame %llu)",
                u(n), u(c.fixes_accepted), u(c.fixes_reset), u(c.fixes_rejected_gate),
                u(c.fixes_too_old), u(c.fixes_bad_quaternion), u(c.fixes_bad_covariance),
-               u(c.fixes_queue_full), u(pending), u(r.total()), u(r.no_tf), u(r.type), u(r.no_time),
-               u(r.no_orientation));
+               u(c.fixes_queue_full), u(c.fixes_future), u(pending), u(r.total()), u(r.no_tf),
+               u(r.type), u(r.no_time), u(r.no_orientation), u(r.body_frame));
   if (accounted != n) {
     std::fprintf(out, " (%lld not accounted for)",
                  static_cast<long long>(n) - static_cast<long long>(accounted));

@@ -24,6 +24,7 @@
 
 #include <geometry_msgs/WrenchStamped.h>
 #include <rosbag/bag.h>
+#include <sensor_msgs/Imu.h>
 
 #include "scene_bags.h"
 
@@ -274,6 +275,39 @@ TEST(BagSafety, DamagedChunkIsNamed) {
     }
     EXPECT_EQ(dir.list(), std::vector<std::string>{"in.bag"});
   }
+}
+
+// A bag of format version 1.2 (ROS before 2010) is refused naming its version and the one
+// accepted, in one line, not as a damaged bag.
+TEST(BagSafety, OtherFormatVersionIsNamed) {
+  TempDir dir;
+  const std::string in = dir.file("old.bag");
+  writeText(in, std::string("#ROSBAG V1.2\n") + std::string(4096, '\0'));
+  const RunResult r = run(kPropagate + " " + in + " -o " + dir.file("out.bag"));
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find(in + ": a bag of format version 1.2; accepted: version 2.0"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(lines(r.output), 1) << r.output;
+}
+
+// A frame id of 10 MB from the bag is logged as the node logs it (logText): its first 64 bytes
+// and its length, so the line stays short.
+TEST(BagSafety, HugeFrameIdIsCappedInTheLog) {
+  TempDir dir;
+  const std::string in = dir.file("in.bag");
+  {
+    rosbag::Bag bag(in, rosbag::bagmode::Write);
+    for (int k = 0; k < 3; ++k) {
+      sensor_msgs::Imu m;
+      m.header.stamp = rosTime(stampAt(0.01 * k));
+      m.header.frame_id = std::string(10 * 1000 * 1000, 'f');
+      bag.write("/imu/data_raw", m.header.stamp, m);
+    }
+  }
+  const RunResult r = run(kPropagate + " " + in + " -o " + dir.file("out.bag") + " --no-progress");
+  EXPECT_NE(r.output.find("...(10000000 bytes)"), std::string::npos) << r.output.size();
+  EXPECT_LT(r.output.size(), 4000u);
 }
 
 // Damage anywhere: 16 bytes overwritten at 33 places spread over the file (headers, chunk data,

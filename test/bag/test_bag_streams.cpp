@@ -404,6 +404,35 @@ TEST(Frames, BiasInAnotherFrameRefusedOnce) {
   EXPECT_NE(r.output.find("gyro bias: 0 used, 1 refused"), std::string::npos) << r.output;
 }
 
+// 65 bias samples stamped an hour ahead of the rates: none takes effect before its stamp (the
+// 65th finds the queue of 64 full and is dropped, counted), so the body stays at rest and the
+// summary counts no bias as used.
+TEST(Frames, BiasAheadOfTheRatesNeverTakesEffectEarly) {
+  TempDir dir;
+  {
+    rosbag::Bag bag(dir.file("in.bag"), rosbag::bagmode::Write);
+    geometry_msgs::Vector3Stamped bias;
+    bias.header.stamp = rosTime(stampAt(3600.0));
+    bias.header.frame_id = "base_link";
+    bias.vector.z = 1.0;
+    for (int k = 0; k < 65; ++k) bag.write("/gyro_bias", rosTime(stampAt(0.0)), bias);
+    for (int k = 0; k <= 100; ++k) {
+      sensor_msgs::Imu m;  // at rest
+      m.header.stamp = rosTime(stampAt(0.01 * k));
+      m.header.frame_id = "base_link";
+      bag.write("/imu/data_raw", m.header.stamp, m);
+    }
+  }
+  const RunResult r =
+      run(kPropagate + " " + dir.file("in.bag") + " -o " + dir.file("out.bag") + " --no-progress");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("gyro bias: 0 used, 0 refused"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("1 dropped (queue full)"), std::string::npos) << r.output;
+  const std::vector<Eigen::Quaterniond> q = states(dir.file("out.bag"));
+  ASSERT_FALSE(q.empty());
+  EXPECT_LT(ap::rotationAngle(q.back(), Eigen::Quaterniond::Identity()), 1e-12);
+}
+
 /// The numbers of the summary's "inputs: N = A accepted + D dropped + P pending" line, and
 /// the named drops of its first line.
 struct Account {

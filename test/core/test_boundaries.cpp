@@ -96,10 +96,11 @@ TEST(Boundaries, EveryScalarParameterRangeOnBothSides) {
        [](ap::Parameters& p, double v) { p.torque_timeout = v; },
        {0.0, ap::kMaxTorqueTimeout},
        {-tiny, up(ap::kMaxTorqueTimeout)}},
+      // A time: non-positive is refused (parameters.md).
       {"max_future",
        [](ap::Parameters& p, double v) { p.max_future = v; },
-       {0.0, ap::kMaxFuture},
-       {-tiny, up(ap::kMaxFuture)}},
+       {tiny, ap::kMaxFuture},
+       {0.0, -tiny, up(ap::kMaxFuture)}},
       {"angular_velocity_stddev",
        [](ap::Parameters& p, double v) { p.angular_velocity_stddev = v; },
        {0.0, ap::kMaxRateStddev},
@@ -125,10 +126,11 @@ TEST(Boundaries, EveryScalarParameterRangeOnBothSides) {
        [](ap::Parameters& p, double v) { p.gyro_bias_random_walk = v; },
        {0.0, ap::kMaxRateStddev},
        {-tiny, up(ap::kMaxRateStddev)}},
+      // Where the estimate moves (limits.h): 300 rad/s and above turned it off.
       {"gyro_bias_stddev",
        [](ap::Parameters& p, double v) { p.gyro_bias_stddev = v; },
-       {0.0, ap::kMaxRateStddev},
-       {-tiny, up(ap::kMaxRateStddev)}},
+       {0.0, ap::kMaxGyroBiasStddev},
+       {-tiny, up(ap::kMaxGyroBiasStddev), 300.0, ap::kMaxRateStddev}},
       // |w| at most kMaxBodyRate: the norm of (w, 0, 0) is w exactly.
       {"initial_angular_velocity",
        [](ap::Parameters& p, double v) {
@@ -314,7 +316,11 @@ TEST(Boundaries, EngineFixAndFutureSettingsOnBothSides) {
   EXPECT_TRUE(accepted(with([](auto& c) { c.fixes.stddev = M_PI; })));
   EXPECT_FALSE(accepted(with([](auto& c) { c.fixes.stddev = up(M_PI); })));
   EXPECT_FALSE(accepted(with([](auto& c) { c.fixes.gate = 0.0; })));
-  EXPECT_TRUE(accepted(with([](auto& c) { c.max_future = 0.0; })));
+  EXPECT_FALSE(accepted(with([](auto& c) { c.max_future = 0.0; })));
+  EXPECT_TRUE(accepted(with([](auto& c) { c.max_future = 1e-9; })));
+  EXPECT_TRUE(accepted(with([](auto& c) { c.fixes.gyro_bias_stddev = ap::kMaxGyroBiasStddev; })));
+  EXPECT_FALSE(
+      accepted(with([](auto& c) { c.fixes.gyro_bias_stddev = up(ap::kMaxGyroBiasStddev); })));
   EXPECT_TRUE(accepted(with([](auto& c) { c.max_future = ap::kMaxFuture; })));
   EXPECT_FALSE(accepted(with([](auto& c) { c.max_future = up(ap::kMaxFuture); })));
 }

@@ -221,6 +221,27 @@ TEST(LateFix, TheWaitingQueueIsBounded) {
   EXPECT_EQ(engine.pendingFixes(), ap::kMaxPendingFixes);
 }
 
+// The rule of every input (design.md §6.5): a fix stamped more than max_future ahead of a known
+// clock is refused and counted, never left waiting for rates that may not come.
+TEST(LateFix, AFixBeyondMaxFutureIsRefusedNotQueued) {
+  Recorder sink;
+  ap::EngineConfig config = fixConfig(ap::Integrator::Exp, ap::FixMode::Fuse, false);
+  config.max_future = 1.0;
+  ap::AttitudeEngine engine(config, sink);
+  engine.submit(rate(0.0, Eigen::Vector3d::Zero()));
+  engine.poll(at(0.0));
+  const Eigen::Matrix3d R = 1e-4 * Eigen::Matrix3d::Identity();
+  EXPECT_EQ(engine.submitFix(at(3600.0), Eigen::Quaterniond::Identity(), R),
+            ap::FixOutcome::Future);
+  EXPECT_EQ(engine.submitFix(at(1.0 + 1e-9), Eigen::Quaterniond::Identity(), R),
+            ap::FixOutcome::Future);
+  EXPECT_EQ(engine.counters().fixes_future, 2u);
+  EXPECT_EQ(engine.pendingFixes(), 0u);
+  EXPECT_EQ(engine.submitFix(at(1.0), Eigen::Quaterniond::Identity(), R),
+            ap::FixOutcome::Waiting);  // at the bound
+  EXPECT_STREQ(ap::fixOutcomeName(ap::FixOutcome::Future), "future");
+}
+
 // ---- the update itself against its closed form -----------------------------------------------
 
 // P = p I and R = rho I: K = p / (p + rho) I, the estimate moves that fraction of the
@@ -322,6 +343,39 @@ TEST(GyroWithFixes, FuseWithBiasEstimateMeetsTheTargets) {
   EXPECT_EQ(run.counters.fixes_too_old, 1u);
   EXPECT_EQ(run.counters.fixes_reset, 0u);
   EXPECT_GE(run.counters.fixes_accepted, 2990u);
+}
+
+// Over the accepted range of gyro_bias_stddev and gyro_bias_random_walk the estimate moves to
+// the bias: a constant rate w plus a bias b at 100 Hz, fixes of the truth Exp(w t) at 10 Hz; the
+// standard deviation it reports never exceeds the parameter's maximum (limits.h), with fixes or
+// without (a random walk of 1000 rad/s/sqrt(s) for 10 s would reach 3162 rad/s).
+TEST(GyroWithFixes, TheBiasEstimateMovesOverTheAcceptedRange) {
+  const Eigen::Vector3d w(0.3, -0.2, 0.5), b(0.02, -0.01, 0.03);
+  struct Case {
+    double stddev, random_walk;
+    bool fixes;
+  };
+  for (const Case c :
+       {Case{ap::kMaxGyroBiasStddev, 0.0, true}, Case{1e-3, ap::kMaxRateStddev, true},
+        Case{ap::kMaxGyroBiasStddev, ap::kMaxRateStddev, false}}) {
+    SCOPED_TRACE(testing::Message() << c.stddev << " " << c.random_walk << " " << c.fixes);
+    ap::EngineConfig config = fixConfig(ap::Integrator::Exp, ap::FixMode::Fuse, true);
+    config.fixes.gyro_bias_stddev = c.stddev;
+    config.fixes.gyro_bias_random_walk = c.random_walk;
+    Recorder sink;
+    ap::AttitudeEngine engine(config, sink);
+    const Eigen::Matrix3d R = 1e-10 * Eigen::Matrix3d::Identity();
+    for (int k = 0; k <= 1000; ++k) {
+      const double t = 0.01 * k;
+      engine.submit(rate(t, w + b));
+      if (c.fixes && k % 10 == 0) engine.submitFix(at(t), ap::expMap(w * t), R);
+      ASSERT_LE(engine.gyroBiasStddev().maxCoeff(), ap::kMaxGyroBiasStddev) << t;
+    }
+    if (c.fixes) {
+      EXPECT_LE((engine.gyroBiasEstimate() - b).norm(), 0.05 * b.norm());
+      EXPECT_GE(engine.counters().fixes_accepted, 95u);
+    }
+  }
 }
 
 // Without fixes the attitude drifts as the bias integrated along the true attitude says:

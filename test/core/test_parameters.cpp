@@ -223,6 +223,27 @@ TEST(Parameters, DocumentedRangesAreInclusive) {
                 "initial_angular_velocity");
 }
 
+// A parameter's value in its error is capped as a message's text is (quoted_text.h): a 1 MB
+// integrator name gives a line of its first 64 bytes and its length, not a 1 MB one.
+TEST(Parameters, AHugeValueIsCappedInItsError) {
+  for (const std::string name : {"integrator", "model", "rate_input"}) {
+    ap::Parameters p;
+    const std::string huge(1000 * 1000, 'x');
+    if (name == "integrator") p.integrator = huge;
+    if (name == "model") p.model = huge;
+    if (name == "rate_input") p.rate_input = huge;
+    try {
+      ap::validateParameters(p);
+      ADD_FAILURE() << name;
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind(name + ": ", 0), 0u) << what.substr(0, 100);
+      EXPECT_NE(what.find("...(1000000 bytes)"), std::string::npos) << what.size();
+      EXPECT_LT(what.size(), 1000u);
+    }
+  }
+}
+
 TEST(Parameters, InitialOrientationIsNormalised) {
   ap::Parameters p;
   p.initial_orientation = {0.0, 0.0, 2.0, 2.0};

@@ -182,25 +182,48 @@ TEST(Queues, WorkBudgetStopsACallAtItsUnits) {
 
 // ---- The pending gyro bias samples (§7.6) ----------------------------------------------------
 
-TEST(Queues, BiasQueueOf64TheOldestTakesEffectEarly) {
+TEST(Queues, BiasQueueOf64NoneTakesEffectBeforeItsStamp) {
+  // Full, the sample stamped furthest ahead is dropped (bias_queue_full): the newcomer when it
+  // is, else the furthest waiting one. None is applied before a rate reaches its stamp.
   Recorder sink;
   ap::AttitudeEngine engine(engine_fixtures::kinematicConfig(), sink);
   engine.submit(rateAt(at(1.0)));
   for (int k = 1; k <= 64; ++k) {
     ASSERT_TRUE(engine.submitBias(at(10.0 + k), Eigen::Vector3d(1e-3 * k, 0.0, 0.0)));
   }
-  EXPECT_EQ(engine.gyroBias(), Eigen::Vector3d::Zero());  // none due yet
-  ASSERT_TRUE(engine.submitBias(at(100.0), Eigen::Vector3d(0.0, 0.5, 0.0)));
-  EXPECT_EQ(engine.gyroBias(), Eigen::Vector3d(1e-3, 0.0, 0.0));  // the oldest, early
-  ASSERT_TRUE(engine.submitBias(at(101.0), Eigen::Vector3d(0.0, 0.6, 0.0)));
-  EXPECT_EQ(engine.gyroBias(), Eigen::Vector3d(2e-3, 0.0, 0.0));
-  // The rest in stamp order: at 12.5 s the next (13 s) is not due yet; a rate stamped 13 s
-  // puts it in force (at or before the rate's stamp).
-  engine.submit(rateAt(at(12.5)));
-  EXPECT_EQ(engine.gyroBias(), Eigen::Vector3d(2e-3, 0.0, 0.0));
-  engine.submit(rateAt(at(13.0)));
-  EXPECT_EQ(engine.gyroBias(), Eigen::Vector3d(3e-3, 0.0, 0.0));
+  EXPECT_FALSE(engine.submitBias(at(100.0), Eigen::Vector3d(0.0, 0.5, 0.0)));  // furthest
+  EXPECT_EQ(engine.counters().bias_queue_full, 1u);
+  EXPECT_EQ(engine.gyroBias(), Eigen::Vector3d::Zero());                     // none due yet
+  ASSERT_TRUE(engine.submitBias(at(10.5), Eigen::Vector3d(0.0, 0.6, 0.0)));  // 74 s dropped
+  EXPECT_EQ(engine.counters().bias_queue_full, 2u);
+  EXPECT_EQ(engine.gyroBias(), Eigen::Vector3d::Zero());
+  engine.submit(rateAt(at(10.9)));
+  EXPECT_EQ(engine.gyroBias(), Eigen::Vector3d(0.0, 0.6, 0.0));
+  engine.submit(rateAt(at(11.0)));
+  EXPECT_EQ(engine.gyroBias(), Eigen::Vector3d(1e-3, 0.0, 0.0));
+  engine.submit(rateAt(at(80.0)));  // the rest, up to 73 s: the one at 74 s was dropped
+  EXPECT_EQ(engine.gyroBias(), Eigen::Vector3d(63e-3, 0.0, 0.0));
+  EXPECT_EQ(engine.counters().bias_applied, 64u);
   EXPECT_EQ(engine.counters().rejected_bias, 0u);
+}
+
+TEST(Queues, BiasAheadOfTheClockByMoreThanMaxFutureIsRefused) {
+  // The rule of every input (§6.5): more than max_future ahead of a known clock is refused,
+  // counted; 65 of them change nothing.
+  Recorder sink;
+  ap::EngineConfig c = engine_fixtures::kinematicConfig();
+  c.max_future = 1.0;
+  ap::AttitudeEngine engine(c, sink);
+  engine.poll(at(10.0));
+  for (int k = 0; k < 65; ++k) {
+    EXPECT_FALSE(engine.submitBias(at(10.0 + 3600.0), Eigen::Vector3d(0.0, 0.0, 1.0)));
+  }
+  EXPECT_EQ(engine.counters().rejected_bias, 65u);
+  EXPECT_EQ(engine.counters().bias_queue_full, 0u);
+  EXPECT_TRUE(engine.submitBias(at(11.0), Eigen::Vector3d(0.0, 0.0, 0.5)));  // at the bound
+  engine.submit(rateAt(at(10.0)));
+  EXPECT_EQ(engine.gyroBias(), Eigen::Vector3d::Zero());
+  EXPECT_EQ(engine.counters().bias_applied, 0u);
 }
 
 // ---- Late fixes (§6.9) -----------------------------------------------------------------------

@@ -344,6 +344,27 @@ TEST(FixDecoder, ImuWithoutOrientationIsRefused) {
   EXPECT_EQ(decoder.refusals().total(), 1u);
 }
 
+// A header frame that is body_frame would be joined to fixed_frame by the node's own output
+// (node.md: it must not pass through body_frame): refused and counted, even when tf holds the
+// body's attitude; an Imu in the body's frame is the body's orientation, not a header frame.
+TEST(FixDecoder, HeaderFrameThatIsTheBodyIsRefused) {
+  tf2::BufferCore buffer;
+  addFrames(buffer);
+  buffer.setTransform(transform("world", "base_link", kTruth), "the node", false);
+  ap::BufferCoreFrames frames(buffer);
+  ap::FixDecoder decoder(fixFrames());
+  for (const auto& q : {kTruth, Eigen::Quaterniond::Identity()}) {
+    const auto fix = decoder.fix(poseFix("base_link", q, someCovariance()), kArrival, &frames);
+    ASSERT_FALSE(fix);
+    EXPECT_EQ(fix.refusal->why, ap::Refused::FixBodyFrame);
+    EXPECT_EQ(fix.refusal->frame, "base_link");
+  }
+  EXPECT_EQ(decoder.refusals().body_frame, 2u);
+  EXPECT_EQ(decoder.refusals().total(), 2u);
+  EXPECT_STREQ(ap::fixRefusedCounter(ap::Refused::FixBodyFrame), "fixes_refused_body_frame");
+  EXPECT_TRUE(decoder.fix(imuFix("base_link", kTruth, Eigen::Matrix3d::Zero()), kArrival, &frames));
+}
+
 // Each type through the topic gives what the direct call gives; the first fixes the type,
 // another accepted one later and one not accepted are WrongType, counted once each.
 TEST(FixDecoder, TopicTakesItsFirstTypeOnly) {

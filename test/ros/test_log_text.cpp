@@ -66,6 +66,7 @@ ap::EngineCounters distinctCounters() {
   c.rejected_type = 23;
   c.dropped_no_tf = 24;
   c.rejected_bias = 25;
+  c.held_ahead = 26;
   return c;
 }
 
@@ -89,7 +90,8 @@ constexpr ap::EngineNote::Kind kAllNotes[] = {
     ap::EngineNote::Future,      ap::EngineNote::ClockJumpedBack,
     ap::EngineNote::Stale,       ap::EngineNote::NonFinite,
     ap::EngineNote::OutOfRange,  ap::EngineNote::FailedStep,
-    ap::EngineNote::PendingFull, ap::EngineNote::Deferred};
+    ap::EngineNote::PendingFull, ap::EngineNote::Deferred,
+    ap::EngineNote::HeldAhead};
 
 }  // namespace
 
@@ -129,6 +131,10 @@ TEST(NoteText, EachKindCountsItsOwnCounter) {
   EXPECT_EQ(noteLine(ap::EngineNote::Deferred),
             "publishing fell behind ROS time at 1500000000.250 s: the rest of the grid follows "
             "on the next tick (20 so far)");
+  EXPECT_EQ(noteLine(ap::EngineNote::HeldAhead),
+            imu +
+                ": stamp 1500000000.250000 further ahead of ROS time than its stream by more "
+                "than 1 s: dropped until 3 in a row confirm it (26 so far)");
 }
 
 TEST(NoteText, AJumpOfStampsSaysWhatTheModelDid) {

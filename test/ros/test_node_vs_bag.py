@@ -66,7 +66,7 @@ LISTENER_SETTLE = 2.0
 
 # propagate_bag's names for its drops (the summary) and the node's diagnostic keys.
 DROP_KEYS = {
-    "stale": "dropped_stale", "future": "rejected_future", "reset": "dropped_on_reset",
+    "stale": "dropped_stale", "future": "rejected_future", "ahead": "held_ahead", "reset": "dropped_on_reset",
     "queue-full": "pending_overflow", "non-finite": "rejected_non_finite",
     "out-of-range": "rejected_out_of_range", "no-rate": "rejected_no_rate",
     "type": "rejected_type", "covariance": "rejected_covariance", "no-tf": "dropped_no_tf",

@@ -112,8 +112,8 @@ void forEachParameter(P& p, F&& f) {
     "0: 1/publish_rate");
   f("max_dt", p.max_dt, "s", "largest gap between stamps integrated across, in [1e-6, 60]");
   f("max_future", p.max_future, "s",
-    "an input or `~set_state` stamped further ahead of ROS time is refused (counted); at most "
-    "3600");
+    "an input, bias sample, fix or `~set_state` stamped further ahead of ROS time is refused "
+    "(counted); more than 0, at most 3600");
   f("rate_delay", p.rate_delay, "s",
     "how much older the rate is than its stamp (an on-chip filter's group delay, a fixed "
     "latency): stamps are moved back by it first; in [0, max_dt]");
@@ -153,7 +153,9 @@ void forEachParameter(P& p, F&& f) {
   f("gyro_bias_random_walk", p.gyro_bias_random_walk, "rad/s/√s",
     "`estimate_gyro_bias`: random walk of the bias; in [0, 1000]");
   f("gyro_bias_stddev", p.gyro_bias_stddev, "rad/s",
-    "`estimate_gyro_bias`: prior standard deviation of the bias per axis (5 °/h); in [0, 1000]");
+    "`estimate_gyro_bias`: prior standard deviation of the bias per axis (5 °/h), and the ceiling "
+    "of its estimate's; "
+    "in [0, 10]");
 }
 
 /// All parameter names, for rejecting unknown ones.

@@ -68,10 +68,11 @@ struct FixRefusals {
   std::uint64_t type = 0;            ///< fixes_refused_type: not the topic's type
   std::uint64_t no_time = 0;         ///< fixes_refused_no_time: no stamp and no ROS time
   std::uint64_t no_orientation = 0;  ///< fixes_refused_no_orientation: REP-145 Imu
-  std::uint64_t total() const { return no_tf + type + no_time + no_orientation; }
+  std::uint64_t body_frame = 0;      ///< fixes_refused_body_frame: header frame is body_frame
+  std::uint64_t total() const { return no_tf + type + no_time + no_orientation + body_frame; }
 };
 /// The counter a fix's refusal is counted in: fixes_refused_no_tf, _type, _no_time,
-/// _no_orientation.
+/// _no_orientation, _body_frame.
 const char* fixRefusedCounter(Refused why);
 
 /// The orientation block of a 6x6 pose covariance (row-major; x, y, z, then the rotations

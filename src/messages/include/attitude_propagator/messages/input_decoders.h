@@ -60,9 +60,11 @@ enum class Refused {
   NoTime,
   BiasFrame,
   NoOrientation,  ///< an Imu fix without orientation (orientation_covariance[0] == -1)
+  FixBodyFrame,   ///< a fix whose header frame is body_frame: it would correct the state by itself
 };
 /// The counter a refusal is counted in: rejected_no_rate, rejected_covariance, rejected_type,
-/// dropped_no_tf, dropped_no_time, rejected_bias; NoOrientation: fixes_refused_no_orientation.
+/// dropped_no_tf, dropped_no_time, rejected_bias; NoOrientation: fixes_refused_no_orientation;
+/// FixBodyFrame: fixes_refused_body_frame.
 const char* refusedCounter(Refused why);
 /// Counts a refusal in the engine's counters, once.
 void countRefusal(AttitudeEngine& engine, Refused why);

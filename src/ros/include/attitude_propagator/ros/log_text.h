@@ -1,7 +1,5 @@
-// Text taken from a message (a frame id, a type name, a publisher's name) on its way into a
-// log line. Such text is the sender's choice: a 10 MB frame id would otherwise be written in
-// full to every console, /rosout and log file, once per warning, and a newline in it could
-// fake a log line of its own.
+// Log lines of the ROS layer: composed without ROS, logged by the wrapper. Text from a message
+// goes through logText (attitude_propagator/quoted_text.h, the core's one capping rule).
 #pragma once
 
 #include <cstddef>
@@ -9,18 +7,9 @@
 
 #include <ros/console_backend.h>
 
+#include "attitude_propagator/quoted_text.h"  // logText: the capping rule
+
 namespace attitude_propagator {
-
-/// Longest text from a message that is logged as it is (bytes). A tf frame id or a message
-/// type name is a few tens of bytes; 64 keeps every real one whole.
-constexpr std::size_t kLogTextBytes = 64;
-
-/// `text` for a log line: control characters (below 0x20, and DEL) replaced by '?', and
-/// when longer than max_bytes, its first max_bytes (shortened to the last whole UTF-8
-/// character) followed by "...(N bytes)", N the length of the whole text. The marker is
-/// ASCII: rosconsole under the C locale turns every byte above 0x7F into '?'. max_bytes is
-/// raised for text that quotes message strings inside a longer explanation (tf's errors).
-std::string logText(const std::string& text, std::size_t max_bytes = kLogTextBytes);
 
 /// printf into a string (the log lines are composed before the wrapper logs them).
 std::string formatted(const char* format, ...) __attribute__((format(printf, 1, 2)));
