@@ -63,9 +63,11 @@ echo "mutants_ros: building the node in $ws"
 if command -v ccache >/dev/null; then export AP_COMPILER_LAUNCHER=ccache; fi
 catkin=(catkin_make -DCMAKE_BUILD_TYPE=Release $(compiler_launcher) -DCMAKE_EXPORT_COMPILE_COMMANDS=ON
   -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 -j"$(nproc)")
-# Configured first (the compile commands), then each file's mutants written into one schema of
-# it in the copy, then one build serves them all.
-if ! { (cd "$ws" && "${catkin[@]}" help >"$dir/build.log" 2>&1) &&
+# Configured and the generated headers made first (the compile commands, and what the node's
+# files include), then each file's mutants written into one schema of it in the copy, then one
+# build serves them all.
+if ! { (cd "$ws" && "${catkin[@]}" attitude_propagator_generate_messages \
+  attitude_propagator_gencfg >"$dir/build.log" 2>&1) &&
   /usr/bin/python3 "$driver" schemata "$REPO_DIR" "$package" "$ws/build" --list mutants_ros.txt \
     "${options[@]}" &&
   (cd "$ws" && "${catkin[@]}" "${targets[@]}" >>"$dir/build.log" 2>&1); }; then

@@ -40,8 +40,8 @@ class SourceTimeline {
   void allowRepeatedStamps(bool allow) { repeats_ = allow; }
 
   /// Whether an input stamped `stamp`, at `clock`, jumps ahead of its source's newest by more
-  /// than backward_jump and is ahead of the clock by more than backward_jump beyond how far its
-  /// source's inputs arrive ahead (the mean lag): one such is
+  /// than backward_jump, is stamped after the clock, and is ahead of the clock by more than
+  /// backward_jump beyond how far its source's inputs arrive ahead (the mean lag): one such is
   /// a glitch, held (its stamp would make the next on-time inputs look like a jump back); the
   /// kJumpConfirmation-th in a row, each going on from the one before, is the source's new
   /// lead, and its lag is measured afresh. False before the lag is known.

@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include "attitude_propagator/quoted_text.h"
+
 namespace attitude_propagator {
 
 const char* const kFrameIdRule =
@@ -18,22 +20,9 @@ bool frameIdRefused(const std::string& frame) {
 
 namespace {
 
-// A frame id quoted for a log line: a refused one may hold line breaks, shown escaped.
-std::string quoted(const std::string& frame) {
-  std::string out = "'";
-  for (const char c : frame) {
-    if (c == '\n') {
-      out += "\\n";
-    } else if (c == '\r') {
-      out += "\\r";
-    } else if (c == '\t') {
-      out += "\\t";
-    } else {
-      out += c;
-    }
-  }
-  return out + "'";
-}
+// A frame id quoted for a log line, by the one rule for text from outside (quoted_text.h):
+// control characters shown as '?', a huge one cut.
+std::string quoted(const std::string& frame) { return "'" + logText(frame) + "'"; }
 
 }  // namespace
 
@@ -76,7 +65,7 @@ std::string noMountText(const std::string& frame, const std::string& body,
                         const std::string& setting) {
   return "no transform from the rates' frame " + quoted(frame) + " to body_frame " + quoted(body) +
          ": publish the mount " + quoted(body) + " -> " + quoted(frame) +
-         " on /tf_static, or take the IMU's own frame as the body: " + setting + frame;
+         " on /tf_static, or take the IMU's own frame as the body: " + setting + logText(frame);
 }
 
 std::vector<std::string> tf2FrameParameters(Parameters& p) {

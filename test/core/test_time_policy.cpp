@@ -403,6 +403,28 @@ TEST(TimePolicy, OneForwardGlitchWithinMaxFutureCostsNothing) {
   }
 }
 
+// A stream far behind the clock (a replayed base, a sensor clock of its own) that resumes
+// later after a pause, or on a new base after a reset, but still behind the clock, is a gap,
+// not a glitch: nothing is held, and the first input after it is taken (design.md §6 table).
+TEST(TimePolicy, AStreamResumingLaterButBehindTheClockIsAGapNotAGlitch) {
+  Watcher sink;
+  ap::EngineConfig config = kinematicConfig();
+  config.max_future = 2.0;
+  ap::AttitudeEngine engine(config, sink);
+  const double behind = 5000.0;  // the clock runs this far ahead of the stamps
+  for (int k = 0; k <= 100; ++k) {
+    engine.poll(at(behind + 0.01 * k));
+    engine.submit(rate(at(0.01 * k), kSpin));
+  }
+  // 900 s later on the stream's own time, 1 s later on the clock: still 4100 s behind it.
+  for (int k = 0; k <= 100; ++k) {
+    engine.poll(at(behind + 2.0 + 0.01 * k));
+    engine.submit(rate(at(900.0 + 0.01 * k), kSpin));
+  }
+  EXPECT_EQ(engine.counters().held_ahead, 0u);
+  EXPECT_EQ(engine.counters().accepted, 202u);
+}
+
 // A source whose stamps move ahead of the clock for good (a sensor clock stepped forward) is
 // followed once kJumpConfirmation inputs in a row go on from there; until then each is held.
 TEST(TimePolicy, ALeadThatPersistsIsTheSourcesNewLead) {

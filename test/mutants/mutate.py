@@ -344,6 +344,8 @@ def schema_for_file(repo, scratch, build, file, mutants, numbers):
         named = refused_lines(done.stdout, source)
         refused = {i for i, ranges in spans.items()
                    if any(a <= n <= b for n in named for a, b in ranges)}
+        if "fatal error" in done.stdout:  # a header missing: nothing here can be judged
+            refused = set(spans)
         if not refused:  # the error names no switch: most likely a statement switch that put
             # a declaration in a block of its own, so the nearest one before the error goes
             first = min(named, default=None)
