@@ -755,7 +755,9 @@ def command_ros(args):
         verdict = "killed" if why else "survived"
         return verdict, why or f"{' '.join(mutant.tests)} pass", seconds
 
-    for mutant in mutants:
+    # Those in the schemata first: a mutant built on its own leaves the node built from its
+    # file without the schema until the rebuild at the end.
+    for mutant in sorted(mutants, key=lambda m: m.id not in in_schema):
         if mutant.id in in_schema:
             verdict, why, seconds = rostests(mutant, {"AP_MUTANT": str(numbers[mutant.id])})
             outcome = Outcome(mutant, verdict, why, 0.0, seconds)
