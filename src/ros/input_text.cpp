@@ -38,7 +38,7 @@ std::string refusalText(const Refusal& r, const char* topic, bool torque, const 
                          logText(r.detail, 4 * kLogTextBytes).c_str());
       }
       return formatted("%s: %s; dropped %lu messages so far (%s)", topic,
-                       noMountText(logText(r.frame), body, "body_frame:=").c_str(), c.dropped_no_tf,
+                       noMountText(r.frame, body, "body_frame:=").c_str(), c.dropped_no_tf,
                        logText(r.detail, 4 * kLogTextBytes).c_str());
     case Refused::NoTime:
       // An unstamped message under sim time before the first /clock: no time to put it at.

@@ -45,7 +45,9 @@ class FrameIds {
 /// Why rates in `frame` reach no body and what to change, naming both frames: publish the
 /// mount body_frame -> frame, or take the sensor's own frame as the body (what a user with only
 /// an IMU wants); `setting` is how the caller's user sets body_frame, up to the value
-/// (`--set body_frame=` in the bag tools, `body_frame:=` for the node's launch files).
+/// (`--set body_frame=` in the bag tools, `body_frame:=` for the node's launch files). Both
+/// frames are quoted by the one rule for text from outside (quoted_text.h): pass them as they
+/// came, not already cut.
 std::string noMountText(const std::string& frame, const std::string& body,
                         const std::string& setting);
 
