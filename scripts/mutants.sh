@@ -79,8 +79,14 @@ for group in $groups; do
   if [ "$group" != core ]; then message_include="$WORKSPACE/devel/include"; fi
 done
 if [ -n "$message_include" ] && [ ! -f "$message_include/attitude_propagator/AttitudeState.h" ]; then
-  echo "mutants: generating the message headers in $WORKSPACE"
-  bash "$REPO_DIR/scripts/build.sh" attitude_propagator_generate_messages_cpp >/dev/null || exit 2
+  echo "mutants: generating the messages in $WORKSPACE"
+  bash "$REPO_DIR/scripts/build.sh" attitude_propagator_generate_messages >/dev/null || exit 2
+fi
+# The bag suite also runs the package's Python programs (scene_publisher imports its messages):
+# the workspace's environment, as catkin's run_tests gives it.
+if [ -n "$message_include" ]; then
+  source_ros
+  source_workspace
 fi
 results="${results:-$dir/results}"
 mkdir -p "$build" "$results"
