@@ -9,10 +9,10 @@ WORKSPACE="${AP_WORKSPACE:-${XDG_CACHE_HOME:-$HOME/.cache}/attitude_propagator_w
 export PATH="/usr/bin:$PATH"
 
 # A compiler cache outside the checkout, shared by every build of the scripts (catkin, the
-# sanitizer build, the mutants' builds, the node mutants' workspace): a second run, a fresh clone
-# of an unchanged tree, and every mutant already compiled once cost a cache lookup instead of a
-# compile. Paths are hashed relative to the build folder (CCACHE_BASEDIR), so two workspaces or
-# clones of the same sources share entries. CCACHE_DISABLE=1 turns it off.
+# sanitizer build, the mutants' builds, the node mutants' workspace): a second run and every
+# mutant schema already compiled once cost a cache lookup instead of a compile. Paths are hashed relative to the build folder (CCACHE_BASEDIR), so builds of copies
+# at the same place share entries (catkin compiles a clone by its real path: a clone elsewhere
+# misses). CCACHE_DISABLE=1 turns it off.
 export CCACHE_DIR="${CCACHE_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/attitude_propagator_ccache}"
 export CCACHE_BASEDIR="${CCACHE_BASEDIR:-/}"
 export CCACHE_MAXSIZE="${CCACHE_MAXSIZE:-8G}"
@@ -85,9 +85,8 @@ forget_other_source() {
   fi
 }
 
-# The checkout as the catkin workspace links it ($WORKSPACE/src/attitude_propagator): a path
-# that stays the same for every clone, so that builds made through it (catkin, the sanitizer
-# build) share the compiler cache across clones. Prints the path.
+# The checkout as the catkin workspace links it ($WORKSPACE/src/attitude_propagator), the one
+# place every build of the scripts finds the sources. Prints the path.
 stable_source() {
   mkdir -p "${WORKSPACE}/src"
   ln -sfn "$REPO_DIR" "${WORKSPACE}/src/attitude_propagator"
