@@ -36,8 +36,7 @@ bool SourceTimeline::heldAhead(Stamp clock, Stamp stamp, const TimePolicy& polic
   // Only a stamp ahead of the clock is held: a stream that resumes later but still behind the
   // clock (after a gap, a reset, a new base) is a gap, not a glitch.
   const bool jumps = newest_ && seconds(stamp - *newest_) > policy.backward_jump;
-  if (!jumps || !lag_ || stamp <= clock ||
-      seconds(stamp - clock) + *lag_ <= policy.backward_jump) {
+  if (!jumps || !lag_ || stamp <= clock || seconds(stamp - clock) + *lag_ <= policy.backward_jump) {
     ahead_run_ = 0;  // an input where the others are interrupts a run
     ahead_last_.reset();
     return false;

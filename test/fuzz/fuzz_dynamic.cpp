@@ -32,7 +32,6 @@ constexpr int kMaxCalls = 64;
 constexpr double kMaxHorizon = 10.0;
 constexpr double kMaxGridSteps = 1000.0;
 
-
 ap::RigidBody makeBody(ByteReader& in) {
   switch (in.choice(4)) {
     case 0: {  // ordinary bodies: sphere, triaxial, symmetric top, a tensor with products

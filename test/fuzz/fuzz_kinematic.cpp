@@ -24,7 +24,6 @@ namespace {
 // Bounds the work per input (a burst counts every sample).
 constexpr int kMaxCalls = 256;
 
-
 /// A smooth, moderate rate (rad/s), so long runs of ordinary samples reach the cf4 window.
 Eigen::Vector3d smoothRate(double t) {
   return {0.3 * std::sin(2.0 * t), 0.7 * std::cos(3.0 * t), -0.2};

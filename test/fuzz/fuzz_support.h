@@ -169,7 +169,7 @@ class ByteReader {
 /// (scripts/fuzz.sh --regressions, through FUZZ_TRACE's "integrator code" line).
 inline const std::vector<std::string>& integratorCodes() {
   static const std::vector<std::string> codes = {
-      "auto",  "euler",      "rk4",    "exp",  "exp2", "cf4", "implicit_midpoint",
+      "auto",      "euler",      "rk4",    "exp",   "exp2", "cf4", "implicit_midpoint",
       "splitting", "splitting4", "dopri5", "exact",
   };
   return codes;
