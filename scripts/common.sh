@@ -1,20 +1,26 @@
 # Shared by the scripts in this folder: paths, the environment and the package lists.
 # Sourced, not run.
 
-REPO_DIR="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-# The catkin workspace lives outside the source tree; the package is linked into its src/.
-WORKSPACE="${AP_WORKSPACE:-${XDG_CACHE_HOME:-$HOME/.cache}/attitude_propagator_ws}"
+REPO_DIR="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)"
+# The catkin workspace and every build of the scripts live in the checkout's .workspace/
+# (ignored by git; the package is linked into its src/), so a build finds its sources at the
+# same relative path in every clone and the compiler cache below serves a clone anywhere.
+# AP_WORKSPACE puts them elsewhere.
+WORKSPACE="${AP_WORKSPACE:-$REPO_DIR/.workspace}"
 
 # ROS tools and matplotlib live in Debian's /usr/bin/python3, not in a python3 earlier on PATH.
 export PATH="/usr/bin:$PATH"
 
 # A compiler cache outside the checkout, shared by every build of the scripts (catkin, the
 # sanitizer build, the mutants' builds, the node mutants' workspace): a second run and every
-# mutant schema already compiled once cost a cache lookup instead of a compile. Paths are hashed relative to the build folder (CCACHE_BASEDIR), so builds of copies
-# at the same place share entries (catkin compiles a clone by its real path: a clone elsewhere
-# misses). CCACHE_DISABLE=1 turns it off.
+# mutant schema already compiled once cost a cache lookup instead of a compile. ccache hashes
+# the paths under the checkout (CCACHE_BASEDIR) relative to the compiler's folder, and not that
+# folder itself (CCACHE_NOHASHDIR, for the -g builds): with the workspace inside the checkout,
+# a fresh clone at any path hits what another clone compiled. (A cached object's debug
+# information then names the folder it was compiled in.) CCACHE_DISABLE=1 turns it off.
 export CCACHE_DIR="${CCACHE_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/attitude_propagator_ccache}"
-export CCACHE_BASEDIR="${CCACHE_BASEDIR:-/}"
+export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$REPO_DIR}"
+export CCACHE_NOHASHDIR="${CCACHE_NOHASHDIR:-1}"
 export CCACHE_MAXSIZE="${CCACHE_MAXSIZE:-8G}"
 # The CMake arguments that put the cache in front of the compiler, when ccache is installed.
 compiler_launcher() {

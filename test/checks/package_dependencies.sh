@@ -43,7 +43,8 @@ for element in package:
                        "build_export_depend", "test_depend"):
         test_declared.add(element.text.strip())
 
-local_modules = {p.stem for p in pathlib.Path(".").rglob("*.py")}
+local_modules = {p.stem for root in ("src", "nodes", "test", "scripts", "bench")
+                 for p in pathlib.Path(root).rglob("*.py")}
 stdlib = set(sys.stdlib_module_names)
 problems = []
 

@@ -17,8 +17,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// The package root, from this file's path (test/core/test_parameters.cpp).
-fs::path packageRoot() { return fs::path(__FILE__).parent_path().parent_path().parent_path(); }
+// The package root, as the build gives it (AP_PACKAGE_ROOT: __FILE__ may be relative to the
+// folder the compiler ran in, as the compiler cache makes it).
+fs::path packageRoot() { return fs::path(AP_PACKAGE_ROOT); }
 
 std::string readFile(const fs::path& path) {
   std::ifstream in(path);

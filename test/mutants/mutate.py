@@ -225,13 +225,15 @@ def select(mutants, only):
 # ---- The scratch copy -------------------------------------------------------------------------
 
 def sync(repo, scratch, package=False):
-    """Makes SCRATCH hold exactly the files the build reads (package: every file but .git's),
+    """Makes SCRATCH hold exactly the files the build reads (package: every file outside the
+    hidden folders, .git and the scripts' .workspace),
     writing only those whose content differs (unchanged files keep their times, so the build
     stays incremental)."""
     wanted = {}
     folders = SYNCED
     if package:
-        folders = sorted(p.name for p in repo.iterdir() if p.is_dir() and p.name != ".git")
+        folders = sorted(p.name for p in repo.iterdir()
+                         if p.is_dir() and not p.name.startswith("."))
         for path in repo.iterdir():
             if path.is_file():
                 wanted[path.relative_to(repo)] = path
