@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Builds the package in a catkin workspace outside the source tree (AP_WORKSPACE, default
-# ~/.cache/attitude_propagator_ws). Extra arguments go to catkin_make (e.g. a target).
+# Builds the package in a catkin workspace (AP_WORKSPACE, default .workspace/ in the checkout,
+# ignored by git). Extra arguments go to catkin_make (e.g. a target).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 source_ros

@@ -50,6 +50,7 @@ survivor or an error fails).
 import argparse
 import concurrent.futures
 import dataclasses
+import hashlib
 import json
 import os
 import pathlib
@@ -308,8 +309,41 @@ def refused_lines(output, source):
     return named
 
 
+# The compiler's verdicts on schemata, kept between runs like the compiler cache (beside it,
+# outside the checkout): checking a file's schema costs compiles, the verdict is a function of
+# the inputs below, and a fresh clone of the same sources would otherwise pay them again.
+VERDICTS = pathlib.Path(os.environ.get("AP_SCHEMATA_CACHE") or pathlib.Path(
+    os.environ.get("XDG_CACHE_HOME") or pathlib.Path.home() / ".cache") /
+    "attitude_propagator_schemata")
+
+
+def verdict_key(repo, scratch, build, file, wraps, check):
+    """What decides which switches the compiler refuses: the file, its switches, the headers of
+    the checkout, the compile command (with the folders written as names) and the compiler."""
+    digest = hashlib.sha256()
+    digest.update(file.encode())
+    digest.update((repo / file).read_bytes())
+    for w in wraps:
+        digest.update(f"{w.mutant_id} {w.start} {w.end} {w.text()}".encode())
+    digest.update((HERE / "schemata.py").read_bytes())  # the schema's prelude
+    for header in sorted(p for folder in ("include", "src", "test", "msg", "srv", "cfg")
+                         for p in (repo / folder).rglob("*")
+                         if p.is_file() and p.suffix in (".h", ".msg", ".srv", ".cfg")):
+        digest.update(str(header.relative_to(repo)).encode())
+        digest.update(header.read_bytes())
+    for folder, name in ((scratch, "SCRATCH"), (build, "BUILD"), (repo, "REPO")):
+        check = check.replace(str(folder), name)
+    digest.update(check.encode())
+    compiler = check.split()[0]
+    version = subprocess.run([compiler, "--version"], stdout=subprocess.PIPE,
+                             stderr=subprocess.DEVNULL, text=True).stdout
+    digest.update(version.encode())
+    return digest.hexdigest()
+
+
 def schema_for_file(repo, scratch, build, file, mutants, numbers):
-    """Writes FILE's schema into SCRATCH and compiles it; the mutants left out (id: why)."""
+    """Writes FILE's schema into SCRATCH and compiles it, or takes the compiler's verdict on it
+    from an earlier run (VERDICTS); the mutants left out (id: why)."""
     text = (repo / file).read_text()
     source = scratch / file
     left_out, wraps = {}, []
@@ -331,6 +365,29 @@ def schema_for_file(repo, scratch, build, file, mutants, numbers):
     # Checked without code generation (what refuses a switch is found before it); the build
     # compiles the schema that passes.
     check = re.sub(r" -o \S+", " -fsyntax-only", compile_entry(build, source, False)[0], count=1)
+    key = verdict_key(repo, scratch, build, file, wraps, check)
+    known = VERDICTS / f"{key}.json"
+    if known.is_file():
+        refused = json.loads(known.read_text())
+        left_out.update(refused)
+        kept = [w for w in wraps if w.mutant_id not in refused]
+        source.write_text(schemata.build(text, kept)[0] if kept else text)
+        return left_out
+    verdict, lasting = compile_schema(text, source, build, entry, check, wraps)
+    if lasting:
+        VERDICTS.mkdir(parents=True, exist_ok=True)
+        partial = known.with_suffix(f".{os.getpid()}.partial")
+        partial.write_text(json.dumps(verdict))
+        partial.replace(known)
+    left_out.update(verdict)
+    return left_out
+
+
+def compile_schema(text, source, build, entry, check, wraps):
+    """Compiles FILE's schema, leaving out each switch the compiler refuses, until it compiles;
+    writes the schema that compiles (or the original text) to SOURCE. The switches left out
+    (id: why), and whether that verdict lasts (not when a header was missing)."""
+    left_out, lasting = {}, True
     for _ in range(len(wraps) + 1):
         if not wraps:
             break
@@ -340,14 +397,14 @@ def schema_for_file(repo, scratch, build, file, mutants, numbers):
         done = subprocess.run(check, shell=True, cwd=entry[1], stdout=subprocess.PIPE,
                               stderr=subprocess.STDOUT, text=True, errors="replace")
         if done.returncode == 0:
-            return left_out
+            return left_out, lasting
         with open(build / f"schemata_{source.stem}.log", "a") as log:  # why, for the reader
             log.write(done.stdout)
         named = refused_lines(done.stdout, source)
         refused = {i for i, ranges in spans.items()
                    if any(a <= n <= b for n in named for a, b in ranges)}
         if "fatal error" in done.stdout:  # a header missing: nothing here can be judged
-            refused = set(spans)
+            refused, lasting = set(spans), False
         if not refused:  # the error names no switch: most likely a statement switch that put
             # a declaration in a block of its own, so the nearest one before the error goes
             first = min(named, default=None)
@@ -360,7 +417,7 @@ def schema_for_file(repo, scratch, build, file, mutants, numbers):
     for w in wraps:
         left_out[w.mutant_id] = "the schema did not compile"
     source.write_text(text)
-    return left_out
+    return left_out, lasting
 
 
 def command_schemata(args):
