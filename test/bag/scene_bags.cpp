@@ -243,7 +243,8 @@ Written writeSceneBag(const std::string& path, const SceneBag& s) {
       w.y() = std::nan("");
     }
     const double delay = k > 0 && s.jitter > 0.0 ? s.jitter * normalRandom(random) : 0.0;
-    const bool lost = k > 3 && s.drop > 0.0 && uniformRandom(random) < s.drop;
+    const bool lost = (k > 3 && s.drop > 0.0 && uniformRandom(random) < s.drop) ||
+                      std::find(s.lost.begin(), s.lost.end(), k) != s.lost.end();
     if (lost) continue;
     const Stamp stamp = stampAt(t + delay);
     writeRate(bag, s, stamp, w);

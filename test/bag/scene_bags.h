@@ -72,6 +72,7 @@ struct SceneBag {
   Eigen::Quaterniond fixed = Eigen::Quaterniond::Identity();  ///< A = q_VW
   Eigen::Quaterniond mount = Eigen::Quaterniond::Identity();  ///< q_ST
   std::vector<long> non_finite;  ///< indices of rate samples written with a NaN component
+  std::vector<long> lost;        ///< indices of rate samples not written (lost)
   Eigen::Vector3d bias = Eigen::Vector3d::Zero();  ///< rad/s, added to every rate sample
   /// When set: the truth's attitude q_WS(t) (a truth with errors of its own, or none at all),
   /// in place of the motion's
