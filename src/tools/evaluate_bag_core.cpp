@@ -58,13 +58,16 @@ const char* const kUsage =
 Runs every kinematic integrator with each rate_samples choice over the rate topic, compares
 each with the truth attitude at the truth's stamps (the method's states interpolated to them)
 and reports, per method: largest and RMS attitude error, error drift rate, relative rotation
-error over 1 s and 10 s, cost per sample, the rate_delay it ran with, and a recommendation.
+error over 1 s, 10 s and the ranking window, cost per sample, the rate_delay it ran with, and a
+recommendation.
 Several bags (the parts of `rosbag record --split`) are read as one stream merged by record
 time, in whatever order they are given.
 
   --rates TOPIC        sensor_msgs/Imu, geometry_msgs/Twist or TwistStamped (default /imu/data_raw)
-  --truth TOPIC        geometry_msgs/PoseStamped, PoseWithCovarianceStamped, TransformStamped
-                       or nav_msgs/Odometry
+  --truth TOPIC        geometry_msgs/PoseStamped, PoseWithCovarianceStamped, TransformStamped,
+                       sensor_msgs/Imu (its orientation; REP-145's "none" refused; may be the
+                       rates' own topic: an IMU's AHRS) or nav_msgs/Odometry (with a warning:
+                       odometry yaw is rarely a truth)
   --truth-tf P C       the transform P -> C from tf2_msgs/TFMessage on --tf-topic (default /tf)
   --fixes TOPIC        absolute attitude fixes (the node's orientation_fix types), given to every
                        method between the rates they were recorded between; the truth must be
@@ -72,13 +75,14 @@ time, in whatever order they are given.
   --mount X Y Z W      q_ST, the truth body's orientation in the rate sensor's frame
                        (default: estimated from the data)
   --truth-clock same|separate
-                       same (default): the truth is stamped at its instants on the rates'
-                       clock, so the offset found is the rates' lag (an on-chip filter's group
-                       delay): estimated, recommended as rate_delay, every method run with it
-                       and compared at offset 0. separate: the offset is the clocks' and holds
-                       any rate delay, which the data cannot tell apart (none is estimated).
-                       With `same`, a truth found later than the rates (no delay can explain
-                       it) is compared as `separate`, and the report says so
+                       separate (default): the truth's clock is unknown; the offset found is
+                       the clocks' and holds any rate delay, which the data cannot tell apart
+                       (none is estimated or recommended). same: your statement that the truth
+                       is stamped at its instants on the rates' clock, so the offset found is
+                       the rates' lag (an on-chip filter's group delay): estimated, recommended
+                       as rate_delay, every method run with it and compared at offset 0. When
+                       the data contradict it (a truth found later than the rates, or a lag
+                       beyond max_dt), the run is compared as `separate`, says so, and exits 5
   --offset S           truth stamp minus rate stamp of the same instant, s (default:
                        estimated); every method compared at it, with the configured rate_delay
   --max-offset S       offsets searched, +-S (default 0.5)
@@ -99,11 +103,17 @@ of ROS time. The offset search tries only offsets at which rates and truth overl
 about 5e7 / (calibration samples) points. Rate samples with a non-finite component, and truth
 samples that are no rotation, are skipped and counted.
 
+The truth is refused (exit 4) when it has no orientation, when more than 1 % of its quaternions
+are not unit, or when it turns more than twice as far as the rates, or less than half as far.
+
 A method is scored when at least half of the truth samples its states meet, and at least 100,
 are compared with states integrated one from the other (not across a gap longer than max_dt or
-a reset); only scored methods are recommended: among those within 10 % of the lowest RMS error
-(or of the smallest error the truth resolves), the cheapest, costs within the timing noise
-counting as equal, ties in the integrator table's order, instantaneous first.
+a reset; with --fixes, from the first state after the first applied fix); only scored methods
+are recommended, ranked by their RMS relative error over the ranking window (from 10 periods of
+the slower stream, doubling to 10 s: the shortest at which the smallest error is above what the
+truth resolves): among those within 10 % of the lowest (or of the smallest error the truth
+resolves), the cheapest, costs within the timing noise counting as equal, ties in the
+integrator table's order, instantaneous first.
 
 Exit codes:
   0    the table and both CSVs are complete, with a recommendation
@@ -111,6 +121,10 @@ Exit codes:
   2    usage: bad options or parameters, an output that is an input, an input given twice
   3    the bag was read, but no method was scored (the report says why): no recommendation,
        no CSV written
+  4    the truth cannot be one (no orientation, non-unit quaternions, a rotation the rates do
+       not make; the message says which): no CSV written
+  5    the table and both CSVs are complete, but --truth-clock same was contradicted by the
+       data: compared as with the truth's clock unknown
   128+N  stopped by signal N (130: Ctrl-C); nothing written
 )";
 

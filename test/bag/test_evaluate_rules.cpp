@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <functional>
 #include <map>
@@ -336,5 +338,41 @@ TEST(EvaluateRules, NonFiniteSampleIsBridgedAsALostOne) {
             << method << " " << column << (averaged ? " averaged" : " point samples");
       }
     }
+  }
+}
+
+// The public recordings (not shipped; AP_REAL_BAGS names their folder, the test skips without
+// it): with their IMUs' own AHRS orientation as truth, the recommendation's error over 1 s is
+// within 1.2 times the best method's; an IMU without orientation is refused (exit 4).
+TEST(EvaluateRules, RealRecordings) {
+  const char* folder = std::getenv("AP_REAL_BAGS");
+  if (!folder || !std::ifstream(std::string(folder) + "/test1.bag").good()) {
+    GTEST_SKIP() << "AP_REAL_BAGS: no folder with the real recordings";
+  }
+  const std::vector<std::pair<std::string, std::string>> bags{{"test1.bag", "/imu/data"},
+                                                              {"ardrone_imu.bag", "/ardrone/imu"}};
+  for (const auto& [bag, topic] : bags) {
+    TempDir dir;
+    const RunResult r =
+        run(kEvaluateCore + " " + quote(std::string(folder) + "/" + bag) + " --rates " + topic +
+            " --truth " + topic + " --no-progress --csv " + dir.file("eval"));
+    ASSERT_EQ(r.status, 0) << bag << "\n" << r.output;
+    const auto rows = readRows(dir);
+    const std::string pick = recommendedOf(rows);
+    ASSERT_FALSE(pick.empty()) << r.output;
+    const double best = smallest(rows, "rpe_1s_rms_rad");
+    std::printf("[ real     ] %s: %s, 1 s error %.3g rad, best %.3g (%.3f times)\n", bag.c_str(),
+                pick.c_str(), number(rows.at(pick), "rpe_1s_rms_rad"), best,
+                number(rows.at(pick), "rpe_1s_rms_rad") / best);
+    EXPECT_LE(number(rows.at(pick), "rpe_1s_rms_rad"), 1.2 * best) << bag << "\n" << r.output;
+  }
+  const std::string phidgets = std::string(folder) + "/phidgets_imu_upside_down.bag";
+  if (std::ifstream(phidgets).good()) {
+    TempDir dir;
+    const RunResult r =
+        run(kEvaluateCore + " " + quote(phidgets) +
+            " --rates /imu/data_raw --truth /imu/data_raw --no-progress --csv " + dir.file("eval"));
+    EXPECT_EQ(r.status, 4) << r.output;
+    EXPECT_TRUE(contains(r.output, "has no orientation")) << r.output;
   }
 }
