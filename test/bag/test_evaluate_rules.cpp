@@ -188,7 +188,7 @@ TEST(EvaluateRules, RankingMeasuresTheIntegratorNotTheTruthsDrift) {
 // The truth's clock unknown (the default): a truth stamped 25 ms late is compared at the offset
 // found, and no rate_delay is recommended. Stated the same (--truth-clock same), the data
 // contradict it (the rates would lag by -25 ms): the report says so, the comparison falls back
-// to the offset found, the CSVs are written, and the exit code is 5.
+// to the offset found, the CSVs (and the front end's chart) are written, and the exit code is 5.
 TEST(EvaluateRules, TruthClockUnknownUnlessStated) {
   TempDir dir;
   SceneBag scene;
@@ -213,6 +213,13 @@ TEST(EvaluateRules, TruthClockUnknownUnlessStated) {
   EXPECT_NEAR(number(fallback.at("cf4/instantaneous"), "offset_s"), 0.025, 1e-4);
   EXPECT_LT(number(fallback.at("cf4/instantaneous"), "rms_error_rad"), 1e-6);
   EXPECT_TRUE(contains(same.output, "# rate_delay: not recommended")) << same.output;
+  // The front end draws the chart all the same, and passes the exit code on.
+  const RunResult front =
+      run("EVALUATE_BAG_CORE=" + quote(kEvaluateCore) + " /usr/bin/python3 " + quote(kEvaluate) +
+          " " + dir.file("in.bag") + " --csv " + dir.file("front") +
+          " --no-progress --truth /truth --mount 0 0 0 1" + " --truth-clock same");
+  EXPECT_EQ(front.status, 5) << front.output;
+  EXPECT_TRUE(std::ifstream(dir.file("front.png")).good()) << front.output;
 }
 
 // Truths that cannot be one are refused (exit 4, nothing written), each naming what is wrong:
