@@ -778,6 +778,13 @@ class Evaluation {
   std::size_t recommended() const;
   /// The RMS relative error of `m` over ranking window `w` (NaN: fewer than kMinWindows).
   double rankingError(const Method& m, std::size_t w) const;
+  /// True when a scored method's error over the ranking window was measured (at least
+  /// kMinWindows windows); otherwise the methods are ranked by their whole-run RMS error.
+  bool rankedByWindow() const {
+    return std::any_of(methods_.begin(), methods_.end(), [this](const auto& m) {
+      return m->scored() && !std::isnan(rankingError(*m, rank_window_));
+    });
+  }
   /// The ranking window, s (0 before the calibration).
   double rankingWindow() const {
     return ranking_windows_.empty() ? 0.0 : ranking_windows_[rank_window_];
@@ -1296,9 +1303,7 @@ std::size_t Evaluation::recommended() const {
   // not, so the order, not the clock, decides between methods the clock cannot tell apart.
   // The error ranked: the relative error over the ranking window (the integrator's own, not
   // the drift of the bias and of the truth), or the whole-run RMS where no window was measured.
-  const bool windowed = std::any_of(methods_.begin(), methods_.end(), [this](const auto& m) {
-    return m->scored() && !std::isnan(rankingError(*m, rank_window_));
-  });
+  const bool windowed = rankedByWindow();
   auto error = [this, windowed](const Method& m) {
     const double e = windowed ? rankingError(m, rank_window_) : m.rms();
     return std::isnan(e) ? std::numeric_limits<double>::infinity() : e;
@@ -1421,6 +1426,12 @@ void Evaluation::report(std::FILE* out) const {
                "what the truth resolves; the drift of the gyro's bias and of the truth grows "
                "with the window and hides the integrator's own error\n",
                rankingWindow(), windows.c_str(), kRankingWindowSamples, kLongestRankingWindow);
+  if (!rankedByWindow()) {
+    std::fprintf(out,
+                 "  warning: fewer than %llu windows measured at any of them: ranked by the "
+                 "whole-run RMS error\n",
+                 static_cast<unsigned long long>(kMinWindows));
+  }
   if (fix_decoder_) {
     std::fprintf(out,
                  "  with fixes: scored from the first state after the first applied fix "
@@ -1459,12 +1470,17 @@ void Evaluation::report(std::FILE* out) const {
     return;
   }
   const Method& r = *methods_[pick];
+  char ranked_error[64];
+  if (rankedByWindow()) {
+    std::snprintf(ranked_error, sizeof ranked_error, "relative error over %.3g s", rankingWindow());
+  } else {
+    std::snprintf(ranked_error, sizeof ranked_error, "whole-run RMS error");
+  }
   std::fprintf(
       out,
       "\n  recommendation: integrator %s, rate_samples %s (the cheapest within 10 %% of the "
-      "lowest relative error over %.3g s, costs within %.0f %% equal, ties in the "
-      "integrator table's order)\n",
-      r.integrator().c_str(), r.samples().c_str(), rankingWindow(), 100.0 * costTolerance());
+      "lowest %s, costs within %.0f %% equal, ties in the integrator table's order)\n",
+      r.integrator().c_str(), r.samples().c_str(), ranked_error, 100.0 * costTolerance());
   // rate_delay only when the clocks are known to be one: otherwise the offset holds it.
   std::fprintf(out, "  settings:\n    integrator: %s\n    rate_samples: %s\n",
                r.integrator().c_str(), r.samples().c_str());
