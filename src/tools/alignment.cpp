@@ -304,5 +304,40 @@ Eigen::Matrix3d estimateMount(const std::vector<TimedRate>& gyro, const RateTrac
   return wahba(p.gyro, p.truth, second_singular_ratio);
 }
 
+std::vector<double> rankingWindows(double truth_period, double rate_period) {
+  const double shortest = kRankingWindowSamples * std::max(truth_period, rate_period);
+  std::vector<double> windows{shortest};
+  while (windows.back() * 2.0 <= kLongestRankingWindow) windows.push_back(windows.back() * 2.0);
+  return windows;
+}
+
+std::size_t chooseRankingWindow(const std::vector<std::vector<double>>& rpe, double floor) {
+  std::optional<std::size_t> measured;
+  for (std::size_t w = 0; w < rpe.size(); ++w) {
+    double lo = std::numeric_limits<double>::infinity();
+    for (const double e : rpe[w]) {
+      if (!std::isnan(e)) lo = std::min(lo, e);
+    }
+    if (!std::isfinite(lo)) continue;
+    if (lo > floor) return w;
+    measured = w;
+  }
+  return measured.value_or(0);
+}
+
+std::optional<std::string> turnMismatch(double truth_turn, double rates_turn) {
+  if (!(std::max(truth_turn, rates_turn) >= kMinJudgedTurn)) return std::nullopt;
+  if (truth_turn <= kTurnRatioLimit * rates_turn && rates_turn <= kTurnRatioLimit * truth_turn) {
+    return std::nullopt;
+  }
+  char text[256];
+  std::snprintf(text, sizeof text,
+                "the truth turns through %.3g rad where the rates turn through %.3g rad (%.2g "
+                "times as far; no setting explains more than %.3g times either way)",
+                truth_turn, rates_turn, rates_turn > 0.0 ? truth_turn / rates_turn : INFINITY,
+                kTurnRatioLimit);
+  return std::string(text);
+}
+
 }  // namespace tools
 }  // namespace attitude_propagator

@@ -7,6 +7,8 @@
 // w_S = q_ST w_T) and A = q_VW a fixed rotation, q_VT(t + offset) = A q_WS(t) q_ST.
 #pragma once
 
+#include <cmath>
+#include <cstdint>
 #include <functional>
 #include <optional>
 #include <string>
@@ -103,6 +105,58 @@ constexpr double kMaxOffsetPairings = 5e7;
 /// The mount R_ST fitted by wahba() to w_S(t_i) and w_T(t_i + offset).
 Eigen::Matrix3d estimateMount(const std::vector<TimedRate>& gyro, const RateTrack& truth,
                               double offset, double* second_singular_ratio);
+
+// ---------------------------------------------------------------------------------------------
+// The evaluation's decision rules (evaluate_bag_core applies them; docs/bag_tools.md)
+// ---------------------------------------------------------------------------------------------
+
+/// The longest window over which the relative error is measured for the ranking, s.
+constexpr double kLongestRankingWindow = 10.0;
+/// Samples of the slower stream a ranking window spans at least: fewer, and the error over it
+/// is the truth's noise at its two ends rather than the integration between them.
+constexpr double kRankingWindowSamples = 10.0;
+
+/// The windows the relative error is measured over for the ranking: from kRankingWindowSamples
+/// periods of the slower stream, doubling, up to kLongestRankingWindow (the first alone when
+/// it is longer).
+std::vector<double> rankingWindows(double truth_period, double rate_period);
+
+/// The window the methods are ranked over: the shortest at which the smallest of their
+/// relative errors is above `floor` (what the truth resolves: at shorter windows its white
+/// noise at the two ends hides the methods' differences), or the longest measured when none
+/// is. The drift of the gyro's bias and of the truth itself grows with the window, so the
+/// shortest resolved window is where it hides the integrator's own error least. rpe[w][m]:
+/// the RMS relative error of method m over window w, windows from the shortest (NaN: not
+/// measured). Returns the index of the window (0 when none is measured).
+std::size_t chooseRankingWindow(const std::vector<std::vector<double>>& rpe, double floor);
+
+/// A truth turns through about the angle the rates integrate to: a gyro's scale error is a few
+/// percent and no setting changes it, so a ratio of the two turned angles beyond this factor
+/// (either way) is no truth of these rates (e.g. a wheeled robot's odometry yaw).
+constexpr double kTurnRatioLimit = 2.0;
+/// Turns smaller than this (rad, the larger of the two) are not judged: a still recording's
+/// angles are noise.
+constexpr double kMinJudgedTurn = 0.5;
+/// Why a truth that turns through `truth_turn` cannot be the truth of rates that turn through
+/// `rates_turn` (rad, each summed over the same steps), or nothing.
+std::optional<std::string> turnMismatch(double truth_turn, double rates_turn);
+
+/// A truth quaternion is a rotation when its norm is 1 within this (messages carry it in
+/// doubles; a float32 source gives about 1e-7).
+constexpr double kUnitTolerance = 1e-3;
+
+/// Intervals between consecutive samples: their mean and standard deviation (the jitter).
+struct IntervalStats {
+  std::uint64_t n = 0;
+  double mean = 0.0, m2 = 0.0;  // Welford
+  void add(double dt) {
+    ++n;
+    const double d = dt - mean;
+    mean += d / double(n);
+    m2 += d * (dt - mean);
+  }
+  double sd() const { return n > 1 ? std::sqrt(m2 / double(n - 1)) : 0.0; }
+};
 
 }  // namespace tools
 }  // namespace attitude_propagator

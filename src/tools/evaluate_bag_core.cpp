@@ -58,13 +58,16 @@ const char* const kUsage =
 Runs every kinematic integrator with each rate_samples choice over the rate topic, compares
 each with the truth attitude at the truth's stamps (the method's states interpolated to them)
 and reports, per method: largest and RMS attitude error, error drift rate, relative rotation
-error over 1 s and 10 s, cost per sample, the rate_delay it ran with, and a recommendation.
+error over 1 s, 10 s and the ranking window, cost per sample, the rate_delay it ran with, and a
+recommendation.
 Several bags (the parts of `rosbag record --split`) are read as one stream merged by record
 time, in whatever order they are given.
 
   --rates TOPIC        sensor_msgs/Imu, geometry_msgs/Twist or TwistStamped (default /imu/data_raw)
-  --truth TOPIC        geometry_msgs/PoseStamped, PoseWithCovarianceStamped, TransformStamped
-                       or nav_msgs/Odometry
+  --truth TOPIC        geometry_msgs/PoseStamped, PoseWithCovarianceStamped, TransformStamped,
+                       sensor_msgs/Imu (its orientation; REP-145's "none" refused; may be the
+                       rates' own topic: an IMU's AHRS) or nav_msgs/Odometry (with a warning:
+                       odometry yaw is rarely a truth)
   --truth-tf P C       the transform P -> C from tf2_msgs/TFMessage on --tf-topic (default /tf)
   --fixes TOPIC        absolute attitude fixes (the node's orientation_fix types), given to every
                        method between the rates they were recorded between; the truth must be
@@ -72,13 +75,14 @@ time, in whatever order they are given.
   --mount X Y Z W      q_ST, the truth body's orientation in the rate sensor's frame
                        (default: estimated from the data)
   --truth-clock same|separate
-                       same (default): the truth is stamped at its instants on the rates'
-                       clock, so the offset found is the rates' lag (an on-chip filter's group
-                       delay): estimated, recommended as rate_delay, every method run with it
-                       and compared at offset 0. separate: the offset is the clocks' and holds
-                       any rate delay, which the data cannot tell apart (none is estimated).
-                       With `same`, a truth found later than the rates (no delay can explain
-                       it) is compared as `separate`, and the report says so
+                       separate (default): the truth's clock is unknown; the offset found is
+                       the clocks' and holds any rate delay, which the data cannot tell apart
+                       (none is estimated or recommended). same: your statement that the truth
+                       is stamped at its instants on the rates' clock, so the offset found is
+                       the rates' lag (an on-chip filter's group delay): estimated, recommended
+                       as rate_delay, every method run with it and compared at offset 0. When
+                       the data contradict it (a truth found later than the rates, or a lag
+                       beyond max_dt), the run is compared as `separate`, says so, and exits 5
   --offset S           truth stamp minus rate stamp of the same instant, s (default:
                        estimated); every method compared at it, with the configured rate_delay
   --max-offset S       offsets searched, +-S (default 0.5)
@@ -99,11 +103,17 @@ of ROS time. The offset search tries only offsets at which rates and truth overl
 about 5e7 / (calibration samples) points. Rate samples with a non-finite component, and truth
 samples that are no rotation, are skipped and counted.
 
+The truth is refused (exit 4) when it has no orientation, when more than 1 % of its quaternions
+are not unit, or when it turns more than twice as far as the rates, or less than half as far.
+
 A method is scored when at least half of the truth samples its states meet, and at least 100,
 are compared with states integrated one from the other (not across a gap longer than max_dt or
-a reset); only scored methods are recommended: among those within 10 % of the lowest RMS error
-(or of the smallest error the truth resolves), the cheapest, costs within the timing noise
-counting as equal, ties in the integrator table's order, instantaneous first.
+a reset; with --fixes, from the first state after the first applied fix); only scored methods
+are recommended, ranked by their RMS relative error over the ranking window (from 10 periods of
+the slower stream, doubling to 10 s: the shortest at which the smallest error is above what the
+truth resolves): among those within 10 % of the lowest (or of the smallest error the truth
+resolves), the cheapest, costs within the timing noise counting as equal, ties in the
+integrator table's order, instantaneous first.
 
 Exit codes:
   0    the table and both CSVs are complete, with a recommendation
@@ -111,6 +121,10 @@ Exit codes:
   2    usage: bad options or parameters, an output that is an input, an input given twice
   3    the bag was read, but no method was scored (the report says why): no recommendation,
        no CSV written
+  4    the truth cannot be one (no orientation, non-unit quaternions, a rotation the rates do
+       not make; the message says which): no CSV written
+  5    the table and both CSVs are complete, but --truth-clock same was contradicted by the
+       data: compared as with the truth's clock unknown
   128+N  stopped by signal N (130: Ctrl-C); nothing written
 )";
 
@@ -118,7 +132,9 @@ constexpr double kNs = 1e-9;
 constexpr std::size_t kBatch = 512;
 constexpr std::size_t kTimedChunk = 32;      // samples per timing of an engine
 constexpr std::size_t kSeriesPoints = 2048;  // per method, before bins merge
-const double kWindows[2] = {1.0, 10.0};      // relative rotation error windows, s
+// Relative rotation error windows shown in every report, s; the ranking's windows follow them
+// (rankingWindows(): chosen from the data).
+const double kShownWindows[2] = {1.0, 10.0};
 constexpr std::uint64_t kWindowStride = 4;
 // Times given on the command line: at most the range of ROS time, so that a stamp plus an
 // offset stays within a 64-bit count of nanoseconds (2 * 2^32 s < 9.2e9 s).
@@ -133,6 +149,11 @@ constexpr std::uint64_t kMinScored = 100;
 // a ratio between two methods does not sit at the boundary. The kinematic methods cost within
 // 1.3x of each other (the engine's per-sample work dominates): their order decides.
 constexpr double kCostNoise = 0.5;
+// A ranking window counts when at least this many windows were measured.
+constexpr std::uint64_t kMinWindows = 10;
+// Truth quaternions that are not unit: skipped and counted up to this share of the truth,
+// refused beyond (a stray corrupt sample is not a wrong topic).
+constexpr double kMaxNonUnitShare = 0.01;
 
 struct Options {
   std::vector<std::string> inputs;
@@ -144,7 +165,7 @@ struct Options {
   std::string tf_parent, tf_child;
   std::optional<Eigen::Quaterniond> mount;
   std::optional<double> offset;
-  bool truth_clock_same = true;
+  bool truth_clock_same = false;  // the truth's clock unknown unless the user states it
   double max_offset = 0.5;
   double calibration = 60.0;
   std::optional<double> truth_gap;
@@ -459,6 +480,10 @@ class Method : public EngineSink {
       ++segment_;
     }
     states_.push_back({s.stamp, s.q_WB, segment_});
+    // With fixes the scores start at the first state published after a fix was applied.
+    if (with_fixes && !score_from_ && engine_ && engine_->counters().fixes_accepted > 0) {
+      score_from_ = s.stamp;
+    }
   }
   void inputApplied(const Input&, const EngineState&) override {}
   void note(const EngineNote& n) override {
@@ -511,7 +536,24 @@ class Method : public EngineSink {
   double whiteResidual() const {
     return d2_count_ >= 10 ? std::sqrt(d2_sum_ / double(d2_count_) / 6.0) : std::nan("");
   }
-  const WindowStats& window(int i) const { return windows_[i]; }
+  /// The relative error windows: first kShownWindows, then the ranking's (s); the truth's
+  /// period (a window's start may be off its length by about half of it); the step the turned
+  /// angles are summed over (s).
+  void setWindows(std::vector<double> windows, double truth_period, double turn_step) {
+    turn_step_ = turn_step;
+    window_lengths_ = std::move(windows);
+    windows_.assign(window_lengths_.size(), WindowStats{});
+    cursor_.assign(window_lengths_.size(), 0);
+    truth_period_ = truth_period;
+  }
+  const WindowStats& window(std::size_t i) const { return windows_[i]; }
+  /// rad: the angles the truth and this method's states (mapped onto the truth) turn through,
+  /// summed over steps of about turn_step between compared instants (not across gaps): the
+  /// paths they turn along, seen at the shortest ranking window.
+  double truth_turn = 0.0, estimate_turn = 0.0;
+  /// With fixes: truth samples before the states the first applied fix corrected (not scored).
+  std::uint64_t before_fix = 0;
+  bool with_fixes = false;
   BinnedSeries series;
   const EngineCounters& counters() const { return engine_->counters(); }
   bool started() const { return engine_ != nullptr; }
@@ -543,9 +585,14 @@ class Method : public EngineSink {
   std::optional<Eigen::Quaterniond> align_;  // A = q_VW
   std::optional<Stamp> t0_;
   double sum_sq_ = 0.0, st_ = 0.0, se_ = 0.0, stt_ = 0.0, ste_ = 0.0;
-  std::deque<Compared> recent_;  // the last 10 s, for the relative errors
-  std::size_t cursor_[2] = {0, 0};
-  WindowStats windows_[2];
+  std::deque<Compared> recent_;  // the longest window, for the relative errors
+  std::vector<double> window_lengths_;
+  std::vector<std::size_t> cursor_;
+  std::vector<WindowStats> windows_;
+  double truth_period_ = 0.0;
+  double turn_step_ = 1.0;
+  std::optional<Compared> turn_anchor_;
+  std::optional<Stamp> score_from_;  // with fixes: the first state after the first applied fix
   // Residual rotation vectors of the last two consecutive compared truth samples.
   std::vector<Eigen::Vector3d> residuals_;
   double d2_sum_ = 0.0;
@@ -594,12 +641,19 @@ void Method::compare(const std::deque<TruthSample>& truth, bool at_end) {
     const Found found = stateAt(it->stamp - shift, at_end, q_WS);
     if (found == Found::Wait) return;
     next_truth_ = it->stamp + 1;
+    if (found == Found::Ok && with_fixes && (!score_from_ || it->stamp - shift < *score_from_)) {
+      ++before_fix;  // the start-up, before any fix was applied: not the fused output
+      residuals_.clear();
+      turn_anchor_.reset();
+      continue;
+    }
     if (found == Found::Ok) {
       record(it->stamp, q_WS, it->q);
       continue;
     }
     ++(found == Found::Gap ? in_gap : outside);
     residuals_.clear();  // the next residual does not follow on from the last
+    turn_anchor_.reset();
   }
 }
 
@@ -624,6 +678,13 @@ void Method::record(Stamp stamp, const Eigen::Quaterniond& q_WS, const Eigen::Qu
     ++d2_count_;
     residuals_.erase(residuals_.begin());
   }
+  if (!turn_anchor_) {
+    turn_anchor_ = c;
+  } else if (double(stamp - turn_anchor_->stamp) * kNs >= turn_step_) {
+    truth_turn += rotationAngle(turn_anchor_->truth, c.truth);
+    estimate_turn += rotationAngle(turn_anchor_->estimate, c.estimate);
+    turn_anchor_ = c;
+  }
   relativeErrors(c);
   trimRecent(c);
 }
@@ -633,13 +694,16 @@ void Method::relativeErrors(const Compared& c) {
   // Windows end at every kWindowStride-th compared instant: thousands of windows still, at a
   // fraction of the cost.
   if (compared % kWindowStride != 0) return;
-  for (int i = 0; i < 2; ++i) {
-    // The compared instant closest to Delta before this one, from at or before it.
-    const Stamp target = c.stamp - static_cast<Stamp>(kWindows[i] / kNs);
+  for (std::size_t i = 0; i < window_lengths_.size(); ++i) {
+    // The compared instant closest to Delta before this one, from at or before it: within
+    // 5 % of Delta, or of half a truth period more than that (short windows of a slow truth).
+    const double length = window_lengths_[i];
+    const Stamp target = c.stamp - static_cast<Stamp>(length / kNs);
     std::size_t& k = cursor_[i];
     while (k + 1 < recent_.size() && recent_[k + 1].stamp <= target) ++k;
     const Compared& a = recent_[k];
-    if (a.stamp > target || double(target - a.stamp) * kNs > 0.05 * kWindows[i]) continue;
+    const double tolerance = std::max(0.05 * length, 0.55 * truth_period_);
+    if (a.stamp > target || double(target - a.stamp) * kNs > tolerance) continue;
     const Eigen::Quaterniond d_truth = a.truth.conjugate() * c.truth;
     const Eigen::Quaterniond d_estimate = a.estimate.conjugate() * c.estimate;
     windows_[i].add(rotationAngle(d_truth, d_estimate));
@@ -648,7 +712,8 @@ void Method::relativeErrors(const Compared& c) {
 
 void Method::trimRecent(const Compared& c) {
   // Keep one instant at or before the longest window's start.
-  const Stamp oldest = c.stamp - static_cast<Stamp>(kWindows[1] / kNs);
+  const double longest = *std::max_element(window_lengths_.begin(), window_lengths_.end());
+  const Stamp oldest = c.stamp - static_cast<Stamp>(longest / kNs);
   while (recent_.size() > 1 && recent_[1].stamp <= oldest) {
     recent_.pop_front();
     for (auto& k : cursor_) k = k > 0 ? k - 1 : 0;
@@ -671,7 +736,10 @@ class Evaluation {
     if (!o.fixes_topic.empty()) {
       // The frames are the methods' (they differ in integrator and rate_samples only).
       fix_decoder_.emplace(FixFrames::of(validateParameters(methods_.front()->parameters())));
-      for (auto& m : methods_) m->align_world = false;
+      for (auto& m : methods_) {
+        m->align_world = false;
+        m->with_fixes = true;
+      }
     }
   }
 
@@ -680,6 +748,8 @@ class Evaluation {
   void writeCsv(const std::string& summary_path, const std::string& series_path);
   /// Why no method can be recommended, or nothing.
   std::optional<std::string> noRecommendation() const;
+  /// --truth-clock same was given and the data contradict it (compared as separate clocks).
+  bool clockContradicted() const { return clock_contradicted_; }
 
  private:
   void checkTopics(BagSet& bag);
@@ -692,6 +762,13 @@ class Evaluation {
   /// The fixes' line of the report.
   void reportFixes(std::FILE* out) const;
   void addTruth(const TruthSample& s);
+  void handleRate(const rosbag::MessageInstance& m);
+  void keepForCalibration(const RateSample& s);
+  void handleTruth(const rosbag::MessageInstance& m);
+  /// Refuses a truth that cannot be one (ToolError, kExitTruthRefused): no sample a rotation,
+  /// non-unit quaternions, REP-145's "no orientation", or a turn the rates do not make.
+  void checkTruthSamples() const;
+  void checkTruthTurn() const;
   void calibrate();
   void push(const RateSample& s);
   void flush(bool at_end);
@@ -699,6 +776,19 @@ class Evaluation {
   void applyDelayModel();
   /// The recommended method (among the scored ones; see noRecommendation()).
   std::size_t recommended() const;
+  /// The RMS relative error of `m` over ranking window `w` (NaN: fewer than kMinWindows).
+  double rankingError(const Method& m, std::size_t w) const;
+  /// True when a scored method's error over the ranking window was measured (at least
+  /// kMinWindows windows); otherwise the methods are ranked by their whole-run RMS error.
+  bool rankedByWindow() const {
+    return std::any_of(methods_.begin(), methods_.end(), [this](const auto& m) {
+      return m->scored() && !std::isnan(rankingError(*m, rank_window_));
+    });
+  }
+  /// The ranking window, s (0 before the calibration).
+  double rankingWindow() const {
+    return ranking_windows_.empty() ? 0.0 : ranking_windows_[rank_window_];
+  }
   /// The smallest RMS error the truth resolves: twice the white part of the residuals (the
   /// smallest among the scored methods: the truth's noise), and never below the round-off
   /// floor 10 eps sqrt(N). Errors below it cannot be told apart.
@@ -742,7 +832,12 @@ class Evaluation {
   std::string mount_note_;
   Eigen::Quaterniond mount_ = Eigen::Quaterniond::Identity();
   std::uint64_t rate_count_ = 0, truth_count_ = 0, truth_unordered_ = 0, before_truth_ = 0;
-  std::uint64_t rate_non_finite_ = 0, truth_unusable_ = 0;
+  std::uint64_t rate_non_finite_ = 0, truth_unusable_ = 0, truth_non_unit_ = 0;
+  std::uint64_t truth_no_orientation_ = 0;
+  IntervalStats intervals_;  // between consecutive usable rate samples
+  std::vector<double> ranking_windows_;
+  std::size_t rank_window_ = 0;      // in ranking_windows_, chosen after the run
+  bool clock_contradicted_ = false;  // --truth-clock same, and the data say otherwise
   Stamp first_rate_ = 0, last_rate_ = 0;
   double wall_ = 0.0;
 };
@@ -756,13 +851,24 @@ void Evaluation::checkTopics(BagSet& bag) {
     truth_type_ = requireTopic(
         bag, o_.truth_topic, "truth",
         {typeOf<geometry_msgs::PoseStamped>(), typeOf<geometry_msgs::PoseWithCovarianceStamped>(),
-         typeOf<geometry_msgs::TransformStamped>(), typeOf<nav_msgs::Odometry>()});
+         typeOf<geometry_msgs::TransformStamped>(), typeOf<nav_msgs::Odometry>(),
+         typeOf<sensor_msgs::Imu>()});
     truth_topic_ = o_.truth_topic;
+    if (truth_type_ == typeOf<nav_msgs::Odometry>().first) {
+      std::fprintf(stderr,
+                   "evaluate_bag: warning: the truth %s is odometry: its orientation is rarely a "
+                   "truth (a wheeled robot's yaw from its wheels slips and skids); it is checked "
+                   "against the rates before use\n",
+                   truth_topic_.c_str());
+    }
   } else {
     truth_type_ = requireTopic(bag, o_.tf_topic, "tf", {typeOf<tf2_msgs::TFMessage>()});
     truth_topic_ = o_.tf_topic;
   }
-  if (sameTopic(truth_topic_, rates_topic_))
+  // One Imu topic may carry both: the gyro's rates and the orientation of the IMU's own
+  // estimator (an AHRS), the one absolute reference most recordings have.
+  if (sameTopic(truth_topic_, rates_topic_) &&
+      !(truth_type_ == typeOf<sensor_msgs::Imu>().first && rates_type_ == truth_type_))
     throw UsageError("the rate and truth topics are the same");
   if (!o_.fixes_topic.empty()) {
     fixes_type_ = requireTopic(
@@ -795,37 +901,111 @@ void Evaluation::run(BagSet& bag) {
   flush(true);
   progress.finish();
   wall_ = progress.elapsed();
+  checkTruthSamples();
   if (truth_count_ == 0) {
     throw ToolError("no truth: no transform " + o_.tf_parent + " -> " + o_.tf_child + " on " +
                     truth_topic_);
+  }
+  checkTruthTurn();
+  // The ranking's window: where the scored methods' relative errors differ most.
+  std::vector<std::vector<double>> rpe(ranking_windows_.size());
+  for (std::size_t w = 0; w < ranking_windows_.size(); ++w) {
+    for (const auto& m : methods_) {
+      if (m->scored()) rpe[w].push_back(rankingError(*m, w));
+    }
+  }
+  rank_window_ = chooseRankingWindow(rpe, resolutionFloor());
+}
+
+double Evaluation::rankingError(const Method& m, std::size_t w) const {
+  const WindowStats& s = m.window(std::size(kShownWindows) + w);
+  // Too few windows to say anything: not measured.
+  return s.n >= kMinWindows ? s.rms() : std::nan("");
+}
+
+void Evaluation::checkTruthSamples() const {
+  const std::uint64_t seen =
+      truth_count_ + truth_unordered_ + truth_unusable_ + truth_non_unit_ + truth_no_orientation_;
+  char text[512];
+  const char* what = truth_topic_.c_str();
+  if (truth_count_ == 0 && truth_no_orientation_ > 0 && truth_unusable_ + truth_non_unit_ == 0) {
+    std::snprintf(text, sizeof text,
+                  "the truth %s has no orientation: its %llu messages say so (REP-145: "
+                  "orientation_covariance[0] = -1)",
+                  what, static_cast<unsigned long long>(truth_no_orientation_));
+    throw ToolError(text, kExitTruthRefused);
+  }
+  if (truth_count_ == 0 && truth_unusable_ > 0 && truth_non_unit_ == 0) {
+    std::snprintf(text, sizeof text,
+                  "the truth %s has no orientation: all %llu of its quaternions are zero or "
+                  "non-finite, no rotation",
+                  what, static_cast<unsigned long long>(truth_unusable_));
+    throw ToolError(text, kExitTruthRefused);
+  }
+  if (truth_non_unit_ > 0 && double(truth_non_unit_) > kMaxNonUnitShare * double(seen)) {
+    std::snprintf(text, sizeof text,
+                  "the truth %s is no attitude: %llu of its %llu quaternions are not unit (norm "
+                  "off 1 by more than %.0e; a truth's are)",
+                  what, static_cast<unsigned long long>(truth_non_unit_),
+                  static_cast<unsigned long long>(seen), kUnitTolerance);
+    throw ToolError(text, kExitTruthRefused);
+  }
+}
+
+void Evaluation::checkTruthTurn() const {
+  // The method with the most compared samples: every method integrates the same rates, and
+  // the angles they turn through differ by their errors only.
+  const Method* most = methods_.front().get();
+  for (const auto& m : methods_) {
+    if (m->compared > most->compared) most = m.get();
+  }
+  char seconds[32];
+  std::snprintf(seconds, sizeof seconds, "%.3g",
+                ranking_windows_.empty() ? 0.0 : ranking_windows_.front());
+  if (const auto why = turnMismatch(most->truth_turn, most->estimate_turn)) {
+    throw ToolError("the truth " + truth_topic_ + " is no truth of the rates " + rates_topic_ +
+                        ": " + *why + " (summed over steps of " + seconds + " s)",
+                    kExitTruthRefused);
   }
 }
 
 void Evaluation::handle(const rosbag::MessageInstance& m) {
   if (!fixes_topic_.empty() && sameTopic(m.getTopic(), fixes_topic_)) return addFix(m);
-  if (sameTopic(m.getTopic(), rates_topic_)) {
-    RateSample s;
-    if (!decodeRate(m, s)) return;
-    if (!s.w.allFinite()) {
-      // Skipped like a lost sample: one NaN would otherwise reach the offset search's sums.
-      ++rate_non_finite_;
-      return;
-    }
-    s.seq = rate_count_;
-    if (rate_count_++ == 0) first_rate_ = s.stamp;
-    last_rate_ = std::max(last_rate_, s.stamp);
-    if (!calibrating_) return push(s);
-    calibration_rates_.push_back(s);
-    if (!truth_start_) {
-      // Before any truth only the last max_offset (+1 s) of rates can still be compared.
-      const Stamp keep = s.stamp - static_cast<Stamp>((o_.max_offset + 1.0) / kNs);
-      const auto old = std::find_if(calibration_rates_.begin(), calibration_rates_.end(),
-                                    [keep](const RateSample& r) { return r.stamp >= keep; });
-      before_truth_ += static_cast<std::uint64_t>(old - calibration_rates_.begin());
-      calibration_rates_.erase(calibration_rates_.begin(), old);
-    }
+  const bool rate = sameTopic(m.getTopic(), rates_topic_);
+  if (rate) handleRate(m);
+  // An Imu topic may be both (rates_topic_ == truth_topic_: an AHRS's orientation as truth).
+  if (!rate || sameTopic(m.getTopic(), truth_topic_)) handleTruth(m);
+}
+
+void Evaluation::handleRate(const rosbag::MessageInstance& m) {
+  RateSample s;
+  if (!decodeRate(m, s)) return;
+  if (!s.w.allFinite()) {
+    // Skipped like a lost sample: one NaN would otherwise reach the offset search's sums.
+    ++rate_non_finite_;
     return;
   }
+  s.seq = rate_count_;
+  if (rate_count_ > 0 && s.stamp > last_rate_) intervals_.add(double(s.stamp - last_rate_) * kNs);
+  if (rate_count_++ == 0) first_rate_ = s.stamp;
+  last_rate_ = std::max(last_rate_, s.stamp);
+  if (!calibrating_) return push(s);
+  keepForCalibration(s);
+}
+
+void Evaluation::keepForCalibration(const RateSample& s) {
+  calibration_rates_.push_back(s);
+  if (!truth_start_) {
+    // Before any truth only the last max_offset (+1 s) of rates can still be compared.
+    const Stamp keep = s.stamp - static_cast<Stamp>((o_.max_offset + 1.0) / kNs);
+    const auto old = std::find_if(calibration_rates_.begin(), calibration_rates_.end(),
+                                  [keep](const RateSample& r) { return r.stamp >= keep; });
+    before_truth_ += static_cast<std::uint64_t>(old - calibration_rates_.begin());
+    calibration_rates_.erase(calibration_rates_.begin(), old);
+  }
+}
+
+void Evaluation::handleTruth(const rosbag::MessageInstance& m) {
   TruthSample t;
   if (!decodeTruth(m, t)) return;
   addTruth(t);
@@ -861,6 +1041,14 @@ bool Evaluation::decodeTruth(const rosbag::MessageInstance& m, TruthSample& out)
   } else if (isType<nav_msgs::Odometry>(m)) {
     decodeInto(m, buffer_, odometry_);
     out = {stampOr(odometry_.header.stamp, record_), toEigen(odometry_.pose.pose.orientation)};
+  } else if (isType<sensor_msgs::Imu>(m)) {
+    decodeInto(m, buffer_, imu_);
+    // REP-145: orientation_covariance[0] == -1 says the message has no orientation.
+    if (imu_.orientation_covariance[0] == -1.0) {
+      ++truth_no_orientation_;
+      return false;
+    }
+    out = {stampOr(imu_.header.stamp, record_), toEigen(imu_.orientation)};
   } else {
     decodeInto(m, buffer_, tf_);
     const auto it =
@@ -873,6 +1061,10 @@ bool Evaluation::decodeTruth(const rosbag::MessageInstance& m, TruthSample& out)
   const auto q = safeNormalized(out.q);
   if (!q) {
     ++truth_unusable_;  // non-finite or zero: no rotation
+    return false;
+  }
+  if (std::abs(out.q.norm() - 1.0) > kUnitTolerance) {
+    ++truth_non_unit_;  // a rotation only after normalising: not what a truth gives
     return false;
   }
   out.q = *q;
@@ -908,6 +1100,7 @@ void Evaluation::addTruth(const TruthSample& s) {
 
 void Evaluation::calibrate() {
   calibrating_ = false;
+  checkTruthSamples();
   if (truth_.size() < 3 || calibration_rates_.size() < 10) {
     throw ToolError("too little data to align: " + std::to_string(truth_.size()) +
                         " truth samples and " + std::to_string(calibration_rates_.size()) +
@@ -931,6 +1124,11 @@ void Evaluation::calibrate() {
   truth_period_ = medianInterval(truth_times);
   rate_period_ = medianInterval(rate_times);
   truth_gap_ = o_.truth_gap ? *o_.truth_gap : 2.5 * truth_period_;
+  ranking_windows_ = rankingWindows(truth_period_, rate_period_);
+  std::vector<double> windows(std::begin(kShownWindows), std::end(kShownWindows));
+  windows.insert(windows.end(), ranking_windows_.begin(), ranking_windows_.end());
+  for (auto& method : methods_)
+    method->setWindows(windows, truth_period_, ranking_windows_.front());
   const std::vector<TimedRate> truth_rates = differentiate(attitudes, truth_gap_);
   const RateTrack track(truth_rates, truth_gap_);
   std::optional<Eigen::Matrix3d> mount;
@@ -1025,18 +1223,21 @@ void Evaluation::applyDelayModel() {
       return;
     }
     std::snprintf(text, sizeof text,
-                  "not estimated: with one clock the rates would lag by %.4f ms, which %s; "
-                  "compared as with --truth-clock separate. ",
+                  "not estimated: the data contradict --truth-clock same (with one clock the "
+                  "rates would lag by %.4f ms, which %s); compared as with the truth's clock "
+                  "unknown (--truth-clock separate), exit code 5. ",
                   total_delay_ * 1e3,
-                  total_delay_ < 0.0 ? "is no delay (the truth is stamped late or on another "
-                                       "clock: give --truth-clock separate)"
+                  total_delay_ < 0.0 ? "is no delay: the truth is stamped late or on another clock"
                                      : "exceeds max_dt (rate_delay is at most max_dt)");
     fallback = text;
+    clock_contradicted_ = true;
   }
   for (auto& m : methods_)
     m->start(m->configuredRateDelay(), o + own(*m) + m->configuredRateDelay());
   delay_note_ = fallback +
-                (fallback.empty() ? std::string("not estimated (--truth-clock separate): ") : "") +
+                (fallback.empty() ? std::string("not estimated (the truth's clock unknown: "
+                                                "--truth-clock separate, the default): ")
+                                  : "") +
                 "the offset is the clocks' and holds any delay of the rates, which this data "
                 "cannot tell from it; every method runs with the configured rate_delay";
 }
@@ -1100,20 +1301,27 @@ std::size_t Evaluation::recommended() const {
   // the timing noise counting as equal, ties broken in a fixed order (the integrator table's,
   // instantaneous before interval_average). Errors are the same on every run; the costs are
   // not, so the order, not the clock, decides between methods the clock cannot tell apart.
+  // The error ranked: the relative error over the ranking window (the integrator's own, not
+  // the drift of the bias and of the truth), or the whole-run RMS where no window was measured.
+  const bool windowed = rankedByWindow();
+  auto error = [this, windowed](const Method& m) {
+    const double e = windowed ? rankingError(m, rank_window_) : m.rms();
+    return std::isnan(e) ? std::numeric_limits<double>::infinity() : e;
+  };
   double best = std::numeric_limits<double>::infinity();
   for (const auto& m : methods_) {
-    if (m->scored()) best = std::min(best, m->rms());
+    if (m->scored()) best = std::min(best, error(*m));
   }
   const double level = 1.1 * std::max(best, resolutionFloor());
   double cheapest = std::numeric_limits<double>::infinity();
   for (const auto& m : methods_) {
-    if (m->scored() && m->rms() <= level) cheapest = std::min(cheapest, m->costNs());
+    if (m->scored() && error(*m) <= level) cheapest = std::min(cheapest, m->costNs());
   }
   const double affordable = cheapest * (1.0 + costTolerance());
   std::optional<std::size_t> pick;
   for (std::size_t i = 0; i < methods_.size(); ++i) {
     const Method& m = *methods_[i];
-    if (!m.scored() || m.rms() > level || m.costNs() > affordable) continue;
+    if (!m.scored() || error(m) > level || m.costNs() > affordable) continue;
     if (!pick || m.order() < methods_[*pick]->order()) pick = i;
   }
   return pick.value_or(0);
@@ -1145,9 +1353,15 @@ std::optional<std::string> Evaluation::noRecommendation() const {
 void Evaluation::report(std::FILE* out) const {
   const double span = double(last_rate_ - first_rate_) * kNs;
   std::fprintf(out, "evaluate_bag: %s, %.1f s of rates\n", o_.input.c_str(), span);
-  std::fprintf(out, "  rates %s (%s): %llu samples, %.1f Hz\n", rates_topic_.c_str(),
-               rates_type_.c_str(), static_cast<unsigned long long>(rate_count_),
-               rate_period_ > 0 ? 1.0 / rate_period_ : 0.0);
+  // The mean rate over the whole run, and the intervals' spread beside it (receipt stamps of a
+  // jittered stream: its median interval alone can be far from the mean).
+  std::fprintf(out,
+               "  rates %s (%s): %llu samples, %.1f Hz mean (intervals %.3f ms mean, %.3f ms "
+               "standard deviation, %.3f ms median over the calibration)\n",
+               rates_topic_.c_str(), rates_type_.c_str(),
+               static_cast<unsigned long long>(rate_count_),
+               intervals_.mean > 0 ? 1.0 / intervals_.mean : 0.0, intervals_.mean * 1e3,
+               intervals_.sd() * 1e3, rate_period_ * 1e3);
   std::fprintf(out,
                "  truth %s%s (%s): %llu samples, %.1f Hz; not differentiated across gaps above "
                "%.4g s%s\n",
@@ -1198,8 +1412,35 @@ void Evaluation::report(std::FILE* out) const {
                  "count as equally accurate\n",
                  unresolved.c_str(), floor);
   }
-  std::fprintf(out, "\n  %-24s %10s %10s %11s %10s %10s %9s %9s\n", "method", "max [rad]",
-               "RMS [rad]", "drift[rad/s]", "RPE 1 s", "RPE 10 s", "ns/sample", "delay[ms]");
+  char ranked[32];
+  std::snprintf(ranked, sizeof ranked, "RPE %.3g s", rankingWindow());
+  std::string windows;
+  for (std::size_t w = 0; w < ranking_windows_.size(); ++w) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%s%.3g", w ? ", " : "", ranking_windows_[w]);
+    windows += text;
+  }
+  std::fprintf(out,
+               "  ranking window: %.3g s, of %s s (from %.0f periods of the slower stream, "
+               "doubling to %.0f s): the shortest at which the smallest relative error is above "
+               "what the truth resolves; the drift of the gyro's bias and of the truth grows "
+               "with the window and hides the integrator's own error\n",
+               rankingWindow(), windows.c_str(), kRankingWindowSamples, kLongestRankingWindow);
+  if (!rankedByWindow()) {
+    std::fprintf(out,
+                 "  warning: fewer than %llu windows measured at any of them: ranked by the "
+                 "whole-run RMS error\n",
+                 static_cast<unsigned long long>(kMinWindows));
+  }
+  if (fix_decoder_) {
+    std::fprintf(out,
+                 "  with fixes: scored from the first state after the first applied fix "
+                 "(%llu truth samples before it not scored, %s)\n",
+                 static_cast<unsigned long long>(first.before_fix), first.name().c_str());
+  }
+  std::fprintf(out, "\n  %-24s %10s %10s %11s %10s %10s %10s %9s %9s\n", "method", "max [rad]",
+               "RMS [rad]", "drift[rad/s]", "RPE 1 s", "RPE 10 s", ranked, "ns/sample",
+               "delay[ms]");
   const std::size_t pick = recommended();
   for (std::size_t i = 0; i < methods_.size(); ++i) {
     const Method& m = *methods_[i];
@@ -1213,10 +1454,11 @@ void Evaluation::report(std::FILE* out) const {
       }
       return std::string(text);
     };
-    std::fprintf(out, "  %-24s %s %s %s %s %s %9.1f %9.4f%s\n", m.name().c_str(),
+    std::fprintf(out, "  %-24s %s %s %s %s %s %s %9.1f %9.4f%s\n", m.name().c_str(),
                  cell(m.max_error, 10).c_str(), cell(m.rms(), 10).c_str(),
                  cell(m.drift(), 11).c_str(), cell(m.window(0).rms(), 10).c_str(),
-                 cell(m.window(1).rms(), 10).c_str(), m.costNs(), m.rateDelay() * 1e3,
+                 cell(m.window(1).rms(), 10).c_str(),
+                 cell(rankingError(m, rank_window_), 10).c_str(), m.costNs(), m.rateDelay() * 1e3,
                  !m.scored()             ? "  (not scored)"
                  : !refused && i == pick ? "  <- recommended"
                                          : "");
@@ -1228,15 +1470,28 @@ void Evaluation::report(std::FILE* out) const {
     return;
   }
   const Method& r = *methods_[pick];
-  std::fprintf(out,
-               "\n  recommendation: integrator %s, rate_samples %s, rate_delay %.6g (the cheapest "
-               "within 10 %% of the lowest RMS error, costs within %.0f %% equal, ties in the "
-               "integrator table's order)\n",
-               r.integrator().c_str(), r.samples().c_str(), r.rateDelay(), 100.0 * costTolerance());
-  std::fprintf(out,
-               "  settings:\n    integrator: %s\n    rate_samples: %s\n    rate_delay: %.6g%s\n",
-               r.integrator().c_str(), r.samples().c_str(), r.rateDelay(),
-               delay_estimated_ ? "" : "  # configured: not estimated from this data");
+  char ranked_error[64];
+  if (rankedByWindow()) {
+    std::snprintf(ranked_error, sizeof ranked_error, "relative error over %.3g s", rankingWindow());
+  } else {
+    std::snprintf(ranked_error, sizeof ranked_error, "whole-run RMS error");
+  }
+  std::fprintf(
+      out,
+      "\n  recommendation: integrator %s, rate_samples %s (the cheapest within 10 %% of the "
+      "lowest %s, costs within %.0f %% equal, ties in the integrator table's order)\n",
+      r.integrator().c_str(), r.samples().c_str(), ranked_error, 100.0 * costTolerance());
+  // rate_delay only when the clocks are known to be one: otherwise the offset holds it.
+  std::fprintf(out, "  settings:\n    integrator: %s\n    rate_samples: %s\n",
+               r.integrator().c_str(), r.samples().c_str());
+  if (delay_estimated_) {
+    std::fprintf(out, "    rate_delay: %.6g\n", r.rateDelay());
+  } else {
+    std::fprintf(out,
+                 "    # rate_delay: not recommended (the truth's clock is not known to be the "
+                 "rates': the offset found holds any delay; give --truth-clock same when one "
+                 "clock stamps both)\n");
+  }
   std::fprintf(out, "  %.3f s wall for %llu messages\n", wall_,
                static_cast<unsigned long long>(rate_count_ + truth_count_));
 }
@@ -1269,19 +1524,21 @@ void Evaluation::writeCsv(const std::string& summary_path, const std::string& se
   std::fputs(
       "method,integrator,rate_samples,offset_s,rate_delay_s,compared,in_rate_gaps,outside_states,"
       "max_error_rad,rms_error_rad,drift_rad_per_s,rpe_1s_rms_rad,rpe_1s_max_rad,"
-      "rpe_10s_rms_rad,rpe_10s_max_rad,cost_ns_per_sample,recommended\n",
+      "rpe_10s_rms_rad,rpe_10s_max_rad,ranking_window_s,rpe_ranking_rms_rad,cost_ns_per_sample,"
+      "recommended\n",
       summary.get());
   const std::size_t pick = recommended();
   for (std::size_t i = 0; i < methods_.size(); ++i) {
     const Method& m = *methods_[i];
     std::fprintf(summary.get(),
-                 "%s,%s,%s,%.9g,%.9g,%llu,%llu,%llu,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.2f,%d\n",
+                 "%s,%s,%s,%.9g,%.9g,%llu,%llu,%llu,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,"
+                 "%.2f,%d\n",
                  m.name().c_str(), m.integrator().c_str(), m.samples().c_str(), m.offset,
                  m.rateDelay(), static_cast<unsigned long long>(m.compared),
                  static_cast<unsigned long long>(m.in_gap),
                  static_cast<unsigned long long>(m.outside), m.max_error, m.rms(), m.drift(),
-                 m.window(0).rms(), m.window(0).max, m.window(1).rms(), m.window(1).max, m.costNs(),
-                 i == pick ? 1 : 0);
+                 m.window(0).rms(), m.window(0).max, m.window(1).rms(), m.window(1).max,
+                 rankingWindow(), rankingError(m, rank_window_), m.costNs(), i == pick ? 1 : 0);
   }
   summary.close();
   CsvFile series(series_path, o_.prefix + "_series.csv");
@@ -1318,6 +1575,12 @@ int run(int argc, char** argv) {
   series.commit();
   evaluation.report(stdout);
   std::printf("  wrote %s and %s\n", summary.path().c_str(), series.path().c_str());
+  if (evaluation.clockContradicted()) {
+    std::fprintf(stderr,
+                 "evaluate_bag: --truth-clock same is contradicted by the data: compared with the "
+                 "truth's clock unknown (see the rate delay line)\n");
+    return kExitClockContradicted;
+  }
   return 0;
 }
 

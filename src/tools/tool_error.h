@@ -15,6 +15,12 @@ enum ExitCode : int {
   kExitFailed = 1,         ///< an input could not be read (missing, damaged) or an output written
   kExitUsage = 2,          ///< bad options or parameters, an output that is an input
   kExitNothingUsable = 3,  ///< the run completed but produced nothing usable (says why)
+  /// evaluate_bag: the truth cannot be one (no orientation, non-unit quaternions, a turn the
+  /// rates do not make); nothing written
+  kExitTruthRefused = 4,
+  /// evaluate_bag: the outputs are complete, but --truth-clock same was contradicted by the
+  /// data and the truth compared as on a clock of its own
+  kExitClockContradicted = 5,
 };
 
 /// One clear line for the user; the tools print it and exit with `code`.

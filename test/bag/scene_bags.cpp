@@ -128,6 +128,13 @@ void writeTruth(rosbag::Bag& bag, const SceneBag& s, Stamp stamp, const Eigen::Q
       m.pose.pose.orientation = transform.transform.rotation;
       return bag.write(s.truth_topic, t, m);
     }
+    case TruthType::Imu: {
+      sensor_msgs::Imu m;
+      m.header = transform.header;
+      m.orientation = transform.transform.rotation;
+      m.orientation_covariance[0] = s.truth_orientation_covariance;
+      return bag.write(s.truth_topic, t, m);
+    }
     case TruthType::Tf: {
       tf2_msgs::TFMessage m;
       geometry_msgs::TransformStamped other = transform;  // another pair in the same message
@@ -220,21 +227,24 @@ Written writeSceneBag(const std::string& path, const SceneBag& s) {
       const double stamped = tt + s.truth_offset;
       if (stamped > s.gap_from && stamped < s.gap_to) continue;
       const Stamp stamp = stampAt(stamped);
-      Eigen::Quaterniond q = s.fixed * s.motion.attitude(tt) * s.mount;
+      Eigen::Quaterniond q =
+          s.fixed * (s.truth_attitude ? s.truth_attitude(tt) : s.motion.attitude(tt)) * s.mount;
       if (s.truth_noise > 0.0) {
         const Eigen::Vector3d n(normalRandom(truth_random), normalRandom(truth_random),
                                 normalRandom(truth_random));
         q = q * ap::expMap(s.truth_noise * n);
       }
+      q.coeffs() *= s.truth_norm;
       writeTruth(bag, s, stamp, q);
       if (s.truth != TruthType::None) out.truth_stamps.push_back(stamp);
     }
-    Eigen::Vector3d w = lowpass ? (*lowpass)(sampled(t)) : sampled(t);
+    Eigen::Vector3d w = (lowpass ? (*lowpass)(sampled(t)) : sampled(t)) + s.bias;
     if (std::find(s.non_finite.begin(), s.non_finite.end(), k) != s.non_finite.end()) {
       w.y() = std::nan("");
     }
     const double delay = k > 0 && s.jitter > 0.0 ? s.jitter * normalRandom(random) : 0.0;
-    const bool lost = k > 3 && s.drop > 0.0 && uniformRandom(random) < s.drop;
+    const bool lost = (k > 3 && s.drop > 0.0 && uniformRandom(random) < s.drop) ||
+                      std::find(s.lost.begin(), s.lost.end(), k) != s.lost.end();
     if (lost) continue;
     const Stamp stamp = stampAt(t + delay);
     writeRate(bag, s, stamp, w);

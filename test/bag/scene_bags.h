@@ -43,7 +43,7 @@ Motion torquedFromRest(const Eigen::Vector3d& n, double torque, double inertia);
 
 enum class RateType { Imu, TwistStamped };
 enum class Compression { None, Bz2, Lz4 };
-enum class TruthType { None, Pose, PoseWithCovariance, Transform, Odometry, Tf };
+enum class TruthType { None, Pose, PoseWithCovariance, Transform, Odometry, Tf, Imu };
 
 struct SceneBag {
   Motion motion;
@@ -72,6 +72,14 @@ struct SceneBag {
   Eigen::Quaterniond fixed = Eigen::Quaterniond::Identity();  ///< A = q_VW
   Eigen::Quaterniond mount = Eigen::Quaterniond::Identity();  ///< q_ST
   std::vector<long> non_finite;  ///< indices of rate samples written with a NaN component
+  std::vector<long> lost;        ///< indices of rate samples not written (lost)
+  Eigen::Vector3d bias = Eigen::Vector3d::Zero();  ///< rad/s, added to every rate sample
+  /// When set: the truth's attitude q_WS(t) (a truth with errors of its own, or none at all),
+  /// in place of the motion's
+  std::function<Eigen::Quaterniond(double)> truth_attitude;
+  double truth_norm = 1.0;  ///< the truth quaternions' coefficients multiplied by it
+  /// TruthType::Imu: orientation_covariance[0] (REP-145: -1 says "no orientation")
+  double truth_orientation_covariance = 0.0;
   Compression compression = Compression::None;  ///< of the bag's chunks
 };
 

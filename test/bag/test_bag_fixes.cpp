@@ -311,4 +311,33 @@ TEST(BagFixes, EvaluateBagScoresTheFusedOutput) {
   EXPECT_FALSE(csv.good());
 }
 
+// The scores start at the first applied fix: the engines start 0.1 rad off the truth, the
+// first fix (stamped 0, recorded 0.1 s late) is too old and the second (stamped 0.2 s) is
+// applied when recorded, at 0.3 s; the first state after it is the rate sample at 0.305 s, so
+// the truth samples at 0, 0.02, ..., 0.30 s (16) are not scored, and the start-up error
+// (0.1 rad) is not among the scores: the largest is a tenth of it or less.
+TEST(BagFixes, EvaluateBagScoresFromTheFirstAppliedFix) {
+  TempDir dir;
+  writeBiasedCone(dir.file("in.bag"), 20.0, true, 0.1, true);
+  const Eigen::Quaterniond off =
+      kCone.attitude(0.0) * Eigen::Quaterniond(Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitX()));
+  char initial[200];
+  std::snprintf(initial, sizeof initial,
+                " --set 'initial_orientation=[%.17g, %.17g, %.17g, %.17g]'", off.x(), off.y(),
+                off.z(), off.w());
+  const RunResult r = run(kEvaluateCore + " " + dir.file("in.bag") + initial + kBiasSettings +
+                          " --offset 0 --mount 0 0 0 1 --integrators cf4 --rate-samples "
+                          "instantaneous --no-progress --truth /truth --fixes /fix --csv " +
+                          dir.file("fused"));
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("scored from the first state after the first applied fix (16 truth "
+                          "samples before it not scored"),
+            std::string::npos)
+      << r.output;
+  const auto rows = readCsv(dir.file("fused.csv"));
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(std::stod(field(rows[0], "compared")) + 16.0, 20.0 * kRateHz / 4.0 + 1.0) << r.output;
+  EXPECT_LE(std::stod(field(rows[0], "max_error_rad")), 0.01) << r.output;
+}
+
 }  // namespace
