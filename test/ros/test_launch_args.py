@@ -58,12 +58,17 @@ class LaunchArgsTest(unittest.TestCase):
                                 "%s takes imu_topic but not imu_out_topic, state_topic" % path)
         check_each(self, launch_files(), check)
 
-    def test_the_frames_default_to_the_parameters_defaults(self):
-        """attitude_propagator.launch's frame args are the node's defaults, not empty."""
+    def test_the_frames_default_to_the_config_files(self):
+        """attitude_propagator.launch's frame args leave the config file's frames (default
+        `(config)`, not empty: roslaunch --ros-args shows an empty default as required), and
+        each doc= names the node's own default for a file that sets none."""
         path = [p for p in launch_files() if p.endswith("/attitude_propagator.launch")][0]
         args = dict(declared_args(path))
-        self.assertEqual(args["fixed_frame"]["default"], "world")
-        self.assertEqual(args["body_frame"]["default"], "base_link")
+        for name, default in (("fixed_frame", "world"), ("body_frame", "base_link"),
+                              ("world_frame", "enu"), ("fix_frame", "body_frame")):
+            self.assertEqual(args[name]["default"], "(config)", name)
+            self.assertIn("default: the config file's %s, else %s" % (name, default),
+                          args[name]["doc"], name)
 
     def test_ros_args_lists_no_required_argument(self):
         """What a user sees: `roslaunch --ros-args` names no argument as required."""
