@@ -31,6 +31,7 @@ SERIAL = {
     "node_habits.test": "wall time: diagnostics of samples lost while it publishes at rate",
     "param_limits.test": "the extreme accepted parameters must run in bounded CPU",
     "tf_conflict.test": "the 2 s clearance of a conflict is measured in wall time",
+    "two_clocks.test": "two /clock publishers paced in wall time must interleave their ticks",
 }
 # Started first so that the two workers end together: the longest commands.
 FIRST = ("bag_tools_tests", "core_tests", "node_vs_bag.test", "kinematic.test")

@@ -469,7 +469,14 @@ class BagPropagator : public EngineSink {
     const auto& imu = *static_cast<const ImuPayload*>(input.payload.get());
     writer_->imu(imu.msg, state, imu.q_BI, record_);
   }
-  void note(const EngineNote&) override {}  // counted by the engine, summarised at the end
+  void note(const EngineNote& note) override {
+    // Counted by the engine, summarised at the end; the clock's second timeline is named there
+    // by the publishers the bag recorded (the latest tick's, the one before from another).
+    if (note.kind == EngineNote::ClockTwoTimelines && clock_sources_.empty()) {
+      clock_sources_ = clockPublishersText(clock_publisher_, previous_clock_publisher_);
+      clock_apart_ = static_cast<double>(*engine_->clockNow() - note.stamp) * 1e-9;
+    }
+  }
 
  private:
   std::vector<std::string> checkTopics();
@@ -530,6 +537,9 @@ class BagPropagator : public EngineSink {
   tf2_msgs::TFMessage tf_msg_;
   std::uint64_t tf_read_ = 0;  // /tf messages heard (not inputs: not in the summary's count)
   rosgraph_msgs::Clock clock_msg_;
+  std::string clock_publisher_, previous_clock_publisher_;  // of the latest ticks (callerid)
+  std::string clock_sources_;  // the first two timelines recognised: their publishers
+  double clock_apart_ = 0.0;   // and how far apart (s)
   std::vector<std::uint8_t> buffer_;
   std::unique_ptr<tf2::BufferCore> tf_buffer_;  // the bag's /tf_static, then its /tf
   std::map<std::string, geometry_msgs::TransformStamped> static_edges_;  // by child frame
@@ -669,6 +679,10 @@ void BagPropagator::dispatch(const rosbag::MessageInstance& m) {
     take(in);
   } else if (!clock_.empty() && sameTopic(topic, clock_)) {
     decodeInto(m, buffer_, clock_msg_);
+    if (m.getCallerId() != clock_publisher_) {
+      previous_clock_publisher_ = clock_publisher_;
+      clock_publisher_ = m.getCallerId();
+    }
     if (!o_.io_floor) engine_->clockTick(toStamp(clock_msg_.clock));
   } else if (!bias_.empty() && sameTopic(topic, bias_)) {
     onBias(m);
@@ -882,6 +896,13 @@ void BagPropagator::summary(std::FILE* out, bool written) const {
       static_cast<unsigned long long>(states_), written ? o_.output.c_str() : "nothing written",
       wall_, wall_ > 0 ? double(messages_) / wall_ : 0.0, wall_ > 0 ? bag_seconds_ / wall_ : 0.0,
       o_.io_floor ? " (I/O floor: no propagation)" : "");
+  if (c.clock_conflicts > 0) {
+    std::fprintf(out,
+                 "  clock: two timelines took turns on %s, %.3f s apart (%s): %llu times "
+                 "recognised, the later followed, the other's ticks ignored, no reset for them\n",
+                 logText(clock_).c_str(), clock_apart_, clock_sources_.c_str(),
+                 static_cast<unsigned long long>(c.clock_conflicts));
+  }
   if (o_.io_floor) return;
   const auto pending = static_cast<std::uint64_t>(engine_->pending());
   const std::uint64_t accounted = accepted + dropped_total + pending;
