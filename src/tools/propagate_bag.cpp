@@ -249,7 +249,8 @@ Options parseOptions(int argc, char** argv) {
   for (const auto& s : sets) applySetting(s, o.parameters);
   // tf1's leading '/' in a frame parameter is read without it (frame_ids.h), with a warning.
   for (const auto& w : tf2FrameParameters(o.parameters)) {
-    std::fprintf(stderr, "warning: %s\n", w.c_str());
+    // The frame as given is the user's text: capped by the one text rule, as the node's line.
+    std::fprintf(stderr, "warning: %s\n", logText(w, 4 * kLogTextBytes).c_str());
   }
   validateParameters(o.parameters);  // std::invalid_argument: a usage error, before any reading
   if (o.output.empty()) {
@@ -723,11 +724,12 @@ void BagPropagator::onFix(const rosbag::MessageInstance& m) {
 
 void BagPropagator::warnFrames() {
   // Once per frame with tf1's leading '/' (frame_ids.h); nothing to do otherwise.
+  // A message's frame id is the sender's text: capped by the one text rule, as the node's line.
   for (const auto& w : decoders_.takeFrameWarnings()) {
-    std::fprintf(stderr, "warning: %s\n", w.c_str());
+    std::fprintf(stderr, "warning: %s\n", logText(w, 4 * kLogTextBytes).c_str());
   }
   for (const auto& w : fix_decoder_.takeFrameWarnings()) {
-    std::fprintf(stderr, "warning: %s\n", w.c_str());
+    std::fprintf(stderr, "warning: %s\n", logText(w, 4 * kLogTextBytes).c_str());
   }
 }
 
@@ -966,7 +968,7 @@ void BagPropagator::fixSummary(std::FILE* out) const {
   std::fputc('\n', out);
 }
 
-std::string valueText(const std::string& v) { return v.empty() ? "''" : v; }
+std::string valueText(const std::string& v) { return v.empty() ? "''" : logText(v); }
 std::string valueText(bool v) { return v ? "true" : "false"; }
 std::string valueText(double v) {
   // The shortest digits that read back as v: 1e-09, not 1.0000000000000001e-09.
@@ -1008,14 +1010,14 @@ bool BagPropagator::mountReachable(std::FILE* out) {
   readStaticTransforms();
   if (tf_buffer_->canTransform(body, frame, ros::Time())) {
     std::fprintf(out, "  mount: rates in '%s', joined to body_frame '%s' by /tf_static\n",
-                 frame.c_str(), body.c_str());
+                 logText(frame).c_str(), logText(body).c_str());
     return true;
   }
   if (!tf_.empty()) {
     std::fprintf(out,
                  "  mount: rates in '%s': no static transform to body_frame '%s'; looked up "
                  "on %s as recorded\n",
-                 frame.c_str(), body.c_str(), tf_.c_str());
+                 logText(frame).c_str(), logText(body).c_str(), tf_.c_str());
     return true;
   }
   std::fprintf(out, "  mount: %s\n", noMountText(frame, body, "--set body_frame=").c_str());
@@ -1062,8 +1064,8 @@ int BagPropagator::dryRun(std::FILE* out) {
                "  settings: model %s, integrator %s, rate_input %s, fixed_frame %s, body_frame "
                "%s, max_dt %g s%s; time from %s\n",
                engine_->modelName().c_str(), integrator.c_str(), p.rate_input.c_str(),
-               p.fixed_frame.c_str(), p.body_frame.c_str(), p.max_dt, grid.c_str(),
-               clock_driven_ ? clock_.c_str() : "the input stamps");
+               logText(p.fixed_frame).c_str(), logText(p.body_frame).c_str(), p.max_dt,
+               grid.c_str(), clock_driven_ ? clock_.c_str() : "the input stamps");
   std::string all;
   forEachParameter(p, [&all](const char* name, const auto& value, const char*, const char*) {
     all += (all.empty() ? "" : ", ") + std::string(name) + "=" + valueText(value);
@@ -1099,6 +1101,10 @@ int run(int argc, char** argv) {
     return BagPropagator(o, bags).dryRun(stdout);
   }
   PendingFile output(o.output);  // destroyed last: the writer closes before it is removed
+  if (output.leftovers() > 0) {
+    std::fprintf(stderr, "propagate_bag: removed %d partial output(s) of %s left by killed runs\n",
+                 output.leftovers(), o.output.c_str());
+  }
   BagPropagator propagator(o, bags);
   propagator.run(output.temporary());
   throwIfInterrupted();  // a signal after the last message: still no output
