@@ -330,6 +330,19 @@ TEST(BagSafety, HugeLeadingSlashFrameIdIsCappedInTheWarning) {
   EXPECT_LT(r.output.size(), 4000u);
 }
 
+// A frame parameter of 100 kB would be carried by every output message (2.2 GB for 11 000
+// states): refused before anything is read, exit 2, in one short line.
+TEST(BagSafety, HugeFrameParameterIsRefused) {
+  TempDir dir;
+  const std::string in = writeConingBag(dir);
+  const RunResult r = run(kPropagate + " " + in + " -o " + dir.file("out.bag") +
+                          " --no-progress --set fixed_frame=" + std::string(100000, 'w'));
+  EXPECT_EQ(r.status, 2) << r.output.substr(0, 500);
+  EXPECT_NE(r.output.find("at most 256 bytes"), std::string::npos) << r.output.substr(0, 500);
+  EXPECT_LT(r.output.size(), 2000u);
+  EXPECT_FALSE(exists(dir.file("out.bag")));
+}
+
 // An output that is a symlink is written where it points, the link kept: a dangling one (its
 // target created), and one to an existing file (replaced).
 TEST(BagSafety, SymlinkOutputIsWrittenWhereItPoints) {
