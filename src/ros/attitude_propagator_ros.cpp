@@ -247,7 +247,8 @@ void AttitudePropagatorRos::onGyroBias(const geometry_msgs::Vector3Stamped::Cons
 void AttitudePropagatorRos::onFix(const ros::MessageEvent<const topic_tools::ShapeShifter>& event) {
   guarded("orientation_fix", [&] {
     pollClock();
-    fixes_->onMessage(*event.getConstMessage(), event.getReceiptTime(), *engine_, tf_frames_);
+    fixes_->onMessage(*event.getConstMessage(), event.getReceiptTime(), event.getPublisherName(),
+                      *engine_, tf_frames_);
   });
 }
 
