@@ -52,6 +52,9 @@ class FixFloodTest(unittest.TestCase):
         wait_for(lambda: account() and account()[0] == FIXES + 1, 60.0,
                  "every fix accounted for (now %s)" % (account(),))
         total, values = account()
+        print("fix_flood: %d fixes sent, %s lost before the node, %s accepted, %s too old"
+              % (FIXES + 1, values["fixes_lost"], values["fixes_accepted"],
+                 values["fixes_too_old"]))
         self.assertEqual(total, FIXES + 1, values)
         self.assertGreater(int(values["fixes_lost"]), 0,
                            "the burst overflowed no queue: %s" % values)
