@@ -8,6 +8,6 @@ source_ros
 stable_source >/dev/null
 cd "$WORKSPACE"
 # shellcheck disable=SC2046
-catkin_make -DCMAKE_BUILD_TYPE=Release $(compiler_launcher) \
+catkin_make $(prepare_devel_space "$WORKSPACE") -DCMAKE_BUILD_TYPE=Release $(compiler_launcher) \
   -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
   -j"$(nproc)" "$@"

@@ -99,6 +99,20 @@ stable_source() {
   echo "${WORKSPACE}/src/attitude_propagator"
 }
 
+# catkin writes the environment its test commands run in (build/catkin_generated/
+# setup_cached.sh) when it configures, with only the devel folders that exist by then: in a new
+# workspace the package's Python messages would be missing from every rostest's PYTHONPATH. So
+# the folders are made first, and a workspace configured without them is configured again.
+# Prints the catkin_make argument that does that (--force-cmake), or nothing.
+#   prepare_devel_space WORKSPACE
+prepare_devel_space() {
+  local ws="$1" python
+  python="$ws/devel/lib/python3/dist-packages"
+  mkdir -p "$python" "$ws/devel/lib/pkgconfig"
+  local cached="$ws/build/catkin_generated/setup_cached.sh"
+  if [ -f "$cached" ] && ! grep -q "$python" "$cached"; then echo "--force-cmake"; fi
+}
+
 source_workspace() {
   set +u
   # shellcheck disable=SC1091

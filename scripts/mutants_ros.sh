@@ -61,7 +61,8 @@ mkdir -p "$package" "$results"
 /usr/bin/python3 "$driver" sync --package "$REPO_DIR" "$package" || exit 2
 echo "mutants_ros: building the node in $ws"
 if command -v ccache >/dev/null; then export AP_COMPILER_LAUNCHER=ccache; fi
-catkin=(catkin_make -DCMAKE_BUILD_TYPE=Release $(compiler_launcher) -DCMAKE_EXPORT_COMPILE_COMMANDS=ON
+catkin=(catkin_make $(prepare_devel_space "$ws") -DCMAKE_BUILD_TYPE=Release $(compiler_launcher)
+  -DCMAKE_EXPORT_COMPILE_COMMANDS=ON
   -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 -j"$(nproc)")
 # Configured and the generated headers made first (the compile commands, and what the node's
 # files include), then each file's mutants written into one schema of it in the copy, then one

@@ -27,10 +27,12 @@ PACKAGE = "attitude_propagator"
 # Rostests whose verdict depends on the clock or the CPU: they run alone, after the rest.
 SERIAL = {
     "attack.test": "hostile input in wall time; a flood must be answered within its time limits",
+    "fix_flood.test": "a burst of fixes must outrun the node's replays to overflow its queue",
     "input_window.test": "judges one-second windows of wall time (lost samples per window)",
     "node_habits.test": "wall time: diagnostics of samples lost while it publishes at rate",
     "param_limits.test": "the extreme accepted parameters must run in bounded CPU",
     "tf_conflict.test": "the 2 s clearance of a conflict is measured in wall time",
+    "two_clocks.test": "two /clock publishers paced in wall time must interleave their ticks",
 }
 # Started first so that the two workers end together: the longest commands.
 FIRST = ("bag_tools_tests", "core_tests", "node_vs_bag.test", "kinematic.test")

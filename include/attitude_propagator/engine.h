@@ -193,7 +193,9 @@ class AttitudeEngine : private PropagatorHost {
 
   /// One tick of a complete clock record (every /clock message under sim time): a jump back
   /// by more than the threshold resets; a jump ahead by more than max_dt is a gap, so the grid
-  /// stamps inside it are not published; otherwise every grid stamp up to `now` is.
+  /// stamps inside it are not published; otherwise every grid stamp up to `now` is. Two
+  /// timelines taking turns (two /clock publishers) cost one reset at most: the later one is
+  /// followed and the other's ticks are ignored until the clock settles (ClockTimeline).
   void clockTick(Stamp now);
   /// A look at the clock from a callback, where ticks may have been missed (wall time, or a
   /// timer that ran late): jumps back reset, but lateness is never a gap, and every grid
@@ -217,6 +219,11 @@ class AttitudeEngine : private PropagatorHost {
   std::string setState(Stamp stamp, const Eigen::Quaterniond& q_WB, const Eigen::Vector3d& w_B);
 
   const EngineCounters& counters() const { return counters_; }
+  /// While ROS time takes turns between two timelines (two /clock publishers): the newest tick
+  /// of the one not followed; empty otherwise (ClockTimeline).
+  std::optional<Stamp> otherClock() const { return clock_line_.other(); }
+  /// The ROS time followed; empty before the first look at the clock.
+  std::optional<Stamp> clockNow() const { return clock_; }
   /// The configuration in force (budgets, bounds), for callers that drive the clock.
   const EngineConfig& config() const { return config_; }
   /// Mean seconds by which the inputs of `source` arrive behind the clock (negative: ahead);
@@ -256,13 +263,14 @@ class AttitudeEngine : private PropagatorHost {
   void stepTaken(const ModelStep& step) override;
 
   void rebaseIfFar(Stamp stamp);
-  bool clockWentBack(Stamp now);
+  /// Judges a look at the clock (ClockTimeline): a jump back resets, two timelines are counted
+  /// and noted; clock_ follows. Returns the verdict.
+  ClockTimeline::Verdict judgeClock(Stamp now);
   bool tooFarAhead(Stamp stamp) const;
   /// Judges an input against its source's timeline; false when it is dropped.
   bool inOrder(Source source, Stamp stamp);
   void restartTimeline(Source source, Stamp stamp);
   SourceTimeline& timeline(Source source) { return timelines_[static_cast<std::size_t>(source)]; }
-  void advanceClock(Stamp now, bool went_back);
   void resetState(bool forget_time);
   Eigen::Matrix3d initialCovariance() const;
   EngineState stateAt(Stamp stamp) const;
@@ -318,7 +326,8 @@ class AttitudeEngine : private PropagatorHost {
 
   std::optional<Stamp> origin_;              // core time 0, whole seconds; set by the first stamp
   std::optional<Stamp> last_published_;      // one state per stamp, increasing
-  std::optional<Stamp> clock_;               // the latest ROS time seen
+  std::optional<Stamp> clock_;               // the ROS time followed (clock_line_)
+  ClockTimeline clock_line_;                 // ROS time's own timeline(s)
   Stamp rate_delay_ns_ = 0;                  // config_.rate_delay
   std::array<SourceTimeline, 3> timelines_;  // per Source: Imu, Twist, Torque
   EngineCounters counters_;

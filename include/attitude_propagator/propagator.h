@@ -100,6 +100,9 @@ struct EngineCounters {
   std::uint64_t gaps = 0;        ///< longer than max_dt: state held
   std::uint64_t resets = 0;      ///< the state back to the initial one: time went back, reset()
   std::uint64_t jumps_back = 0;  ///< a source's stamps went back, and persisted
+  /// Two timelines recognised on the clock (ClockTimeline: two /clock publishers): the later
+  /// one followed, the other's ticks ignored, no reset.
+  std::uint64_t clock_conflicts = 0;
   std::uint64_t rejected_future = 0;  ///< stamped more than max_future ahead of the clock
   /// Jumped ahead of its source and of the clock by more than backward_jump beyond its source's
   /// usual lead, and not yet
@@ -133,6 +136,9 @@ struct EngineNote {
     StampsJumpedBack,  ///< a source's stamps went back by more than the threshold, and persisted
     Future,            ///< an input stamped more than max_future ahead of the clock: refused
     ClockJumpedBack,   ///< ROS time went back by more than the threshold: reset
+    /// ROS time takes turns between two timelines (ClockTimeline): the later one followed, no
+    /// reset; stamp: the tick of the other timeline.
+    ClockTwoTimelines,
     Stale,
     NonFinite,
     OutOfRange,

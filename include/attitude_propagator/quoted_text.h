@@ -21,4 +21,9 @@ constexpr std::size_t kLogTextBytes = 64;
 /// raised for text that quotes message strings inside a longer explanation (tf's errors).
 std::string logText(const std::string& text, std::size_t max_bytes = kLogTextBytes);
 
+/// The publishers of two timelines taking turns on a clock topic (ClockTimeline), for the
+/// node's warning and diagnostics and propagate_bag's summary: `followed` (the later
+/// timeline's), `other` (empty, or the same: one publisher alternating), each through logText.
+std::string clockPublishersText(const std::string& followed, const std::string& other);
+
 }  // namespace attitude_propagator

@@ -74,4 +74,45 @@ class SourceTimeline {
   bool repeats_ = false;
 };
 
+/// Seconds of the followed clock without a tick of the other timeline after which a clock seen
+/// on two timelines has settled on one; and how long after a jump back a return to the timeline
+/// it left is taken for a second timeline (docs/design.md §6.5).
+constexpr double kClockSettle = 5.0;
+
+/// What the engine knows of ROS time itself (docs/design.md §6.5): the clock it follows, and
+/// whether two timelines take turns on it (two /clock publishers: a stale simulator and a bag;
+/// or one clock alternating between two times). A jump back by more than backward_jump starts
+/// time again; a jump forward that returns, within kClockSettle, to the timeline the last jump
+/// back left shows two timelines: from then on the later one is followed and the ticks of the
+/// other are ignored (no reset), until the other has been silent for kClockSettle seconds of
+/// the followed clock, or the followed one for kClockSettle seconds of the other (then time
+/// has gone back for good: one reset).
+class ClockTimeline {
+ public:
+  enum class Verdict {
+    On,          ///< forward by at most max_dt, or back within backward_jump (jitter: it stays)
+    Ahead,       ///< forward by more than max_dt: a gap
+    JumpedBack,  ///< back by more than backward_jump: time starts again
+    /// Forward to the timeline the last jump back left: two timelines. The later one is
+    /// followed from this tick (a gap from the earlier one), without a reset.
+    TwoTimelines,
+    OtherTimeline,  ///< a tick of the earlier timeline while two are seen: ignored
+  };
+
+  Verdict judge(Stamp now, const TimePolicy& policy);
+  /// The clock followed; empty before the first tick.
+  std::optional<Stamp> now() const { return now_; }
+  /// While two timelines are seen: the newest tick of the one not followed.
+  std::optional<Stamp> other() const { return two_ ? other_ : std::nullopt; }
+
+ private:
+  std::optional<Stamp> now_;
+  std::optional<Stamp> left_;     // the clock the last jump back left
+  std::optional<Stamp> back_to_;  // where that jump landed
+  bool two_ = false;
+  std::optional<Stamp> other_;        // newest tick of the other timeline
+  Stamp other_seen_at_ = 0;           // the followed clock when the other last ticked
+  std::optional<Stamp> other_since_;  // the other's first tick since the followed one ticked
+};
+
 }  // namespace attitude_propagator

@@ -27,6 +27,11 @@
 
 namespace attitude_propagator {
 
+/// Seconds by which a stamp the filter returns follows the one before, at least: a published
+/// stamp has whole nanoseconds, and core time's round-off is a fraction of one, so two returned
+/// stamps are never published alike (docs/numerics.md §3).
+constexpr double kMinStampStep = 2e-9;
+
 /// The `stamp_filter` parameter.
 enum class StampFilter {
   None,         ///< stamps used as they come
@@ -74,7 +79,8 @@ class SensorClockFilter {
   explicit SensorClockFilter(const Options& options);
 
   /// Feeds a receipt stamp (finite, seconds) and returns the sensor-clock stamp. The returned
-  /// stamps increase strictly until a restart.
+  /// stamps increase strictly, by kMinStampStep at least, until a restart (a jump restarts at the
+  /// stamp as it came; every other restart no earlier than kMinStampStep after the last).
   Result filter(double t_receipt);
 
   /// Forgets the model: the next stamp starts it again.

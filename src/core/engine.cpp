@@ -183,31 +183,42 @@ std::int64_t AttitudeEngine::gridIndexAtOrBefore(Stamp now) const {
   return attitude_propagator::gridIndexAtOrBefore(now, config_.publish_rate);
 }
 
-bool AttitudeEngine::clockWentBack(Stamp now) {
-  const double threshold = timePolicyOf(config_).backward_jump;
-  const bool back = clock_ && static_cast<double>(*clock_ - now) * 1e-9 > threshold;
-  if (back) {
-    // A looped bag or a restarted simulation: the past is gone.
-    ++counters_.resets;
-    sink_.note({EngineNote::ClockJumpedBack, std::nullopt, now});
-    resetState(true);
+ClockTimeline::Verdict AttitudeEngine::judgeClock(Stamp now) {
+  const ClockTimeline::Verdict verdict = clock_line_.judge(now, timePolicyOf(config_));
+  clock_ = clock_line_.now();  // before the notes: the sink may ask what time it is
+  switch (verdict) {
+    case ClockTimeline::Verdict::JumpedBack:
+      // A looped bag or a restarted simulation: the past is gone.
+      ++counters_.resets;
+      sink_.note({EngineNote::ClockJumpedBack, std::nullopt, now});
+      resetState(true);
+      break;
+    case ClockTimeline::Verdict::TwoTimelines:
+      // Two clocks take turns: following either costs nothing more than the jump back before.
+      ++counters_.clock_conflicts;
+      sink_.note({EngineNote::ClockTwoTimelines, std::nullopt, *clock_line_.other()});
+      break;
+    case ClockTimeline::Verdict::On:
+    case ClockTimeline::Verdict::Ahead:
+    case ClockTimeline::Verdict::OtherTimeline:
+      break;
   }
-  return back;
+  return verdict;
 }
 
 void AttitudeEngine::clockTick(Stamp now) {
   if (now <= 0) return;  // sim time before the first /clock
-  const bool back = clockWentBack(now);
-  const double max_dt = timePolicyOf(config_).max_dt;
-  const bool jumped = !back && clock_ && static_cast<double>(now - *clock_) * 1e-9 > max_dt;
-  advanceClock(now, back);
+  const ClockTimeline::Verdict verdict = judgeClock(now);
+  if (verdict == ClockTimeline::Verdict::OtherTimeline) return;  // not the clock followed
+  const bool jumped =
+      verdict == ClockTimeline::Verdict::Ahead || verdict == ClockTimeline::Verdict::TwoTimelines;
   propagator_->publishDue(jumped);
   if (keep_history_) applyDueFixes();  // the dynamic model's time moved on
 }
 
 void AttitudeEngine::poll(Stamp now) {
   if (now <= 0) return;
-  advanceClock(now, clockWentBack(now));
+  if (judgeClock(now) == ClockTimeline::Verdict::OtherTimeline) return;
   propagator_->publishDue(false);
   if (keep_history_) applyDueFixes();
 }
@@ -219,11 +230,6 @@ void AttitudeEngine::drain() {
 
 bool AttitudeEngine::tooFarAhead(Stamp stamp) const {
   return clock_ && static_cast<double>(stamp - *clock_) * 1e-9 > config_.max_future;
-}
-
-void AttitudeEngine::advanceClock(Stamp now, bool went_back) {
-  // A step back within the threshold is jitter of the time source: the clock stays put.
-  clock_ = went_back || !clock_ ? now : std::max(*clock_, now);
 }
 
 // ---------------------------------------------------------------------------------------------

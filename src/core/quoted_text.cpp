@@ -19,4 +19,9 @@ std::string logText(const std::string& text, std::size_t max_bytes) {
   return out;
 }
 
+std::string clockPublishersText(const std::string& followed, const std::string& other) {
+  if (other.empty() || other == followed) return "one publisher alternating: " + logText(followed);
+  return "followed: " + logText(followed) + ", other: " + logText(other);
+}
+
 }  // namespace attitude_propagator

@@ -1,5 +1,7 @@
 #include "attitude_propagator/source_timeline.h"
 
+#include <algorithm>
+
 namespace attitude_propagator {
 
 namespace {
@@ -55,6 +57,59 @@ bool SourceTimeline::heldAhead(Stamp clock, Stamp stamp, const TimePolicy& polic
 void SourceTimeline::observeLag(Stamp clock, Stamp stamp) {
   const double lag = seconds(clock - stamp);
   lag_ = lag_ ? *lag_ + kLagWeight * (lag - *lag_) : lag;
+}
+
+ClockTimeline::Verdict ClockTimeline::judge(Stamp now, const TimePolicy& policy) {
+  if (!now_) {
+    now_ = now;
+    return Verdict::On;
+  }
+  if (two_) {
+    if (seconds(*now_ - now) > policy.backward_jump) {  // the other timeline
+      if (!other_since_) other_since_ = now;
+      other_ = now;
+      other_seen_at_ = *now_;
+      if (seconds(now - *other_since_) <= kClockSettle) return Verdict::OtherTimeline;
+      // The followed timeline fell silent while the other went on: time went back for good.
+      two_ = false;
+      other_.reset();
+      other_since_.reset();
+      left_ = *now_;
+      back_to_ = now;
+      now_ = now;
+      return Verdict::JumpedBack;
+    }
+    other_since_.reset();
+    if (seconds(now - other_seen_at_) > kClockSettle) {  // settled on the followed timeline
+      two_ = false;
+      other_.reset();
+    }
+  }
+  if (seconds(*now_ - now) > policy.backward_jump) {
+    left_ = *now_;
+    back_to_ = now;
+    now_ = now;
+    return Verdict::JumpedBack;
+  }
+  if (left_ && seconds(*now_ - *back_to_) > kClockSettle) left_.reset();  // a real jump back
+  const double ahead = seconds(now - *now_);
+  if (left_ && ahead > policy.backward_jump && seconds(*left_ - now) < policy.backward_jump &&
+      seconds(now - *left_) <= seconds(*now_ - *back_to_) + policy.max_dt) {
+    // Back on the timeline the last jump back left, where it would be by now: two timelines.
+    two_ = true;
+    other_ = *now_;
+    other_seen_at_ = now;
+    other_since_.reset();
+    left_.reset();
+    now_ = now;
+    return Verdict::TwoTimelines;
+  }
+  if (ahead > policy.max_dt) {
+    now_ = now;
+    return Verdict::Ahead;
+  }
+  now_ = std::max(*now_, now);
+  return Verdict::On;
 }
 
 }  // namespace attitude_propagator

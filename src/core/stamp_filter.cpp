@@ -54,10 +54,12 @@ void SensorClockFilter::reset() {
 double SensorClockFilter::jitter() const { return std::sqrt(variance_); }
 
 double SensorClockFilter::after(double t) {
-  // At least a picosecond: next to the origin (core time 0 on a whole second) the next double is
-  // a denormal, a step cf4 cannot take (its result is not finite). A picosecond is still far
-  // below a stamp's nanosecond, so a FIFO read's samples keep sharing one published stamp.
-  return std::max(std::nextafter(t, std::numeric_limits<double>::infinity()), t + 1e-12);
+  // At least kMinStampStep: a published stamp has whole nanoseconds, and two returned stamps
+  // closer than that would be published alike (a sample stamped like the one before it). Two
+  // nanoseconds, because core time (seconds since the origin, within kFarFromOrigin) carries a
+  // round-off of a fraction of one. It also keeps the step off the denormals next to the origin
+  // (core time 0 on a whole second), a step cf4 cannot take.
+  return std::max(std::nextafter(t, std::numeric_limits<double>::infinity()), t + kMinStampStep);
 }
 
 double SensorClockFilter::lineMinus(std::uint64_t index, double t) const {
@@ -139,12 +141,14 @@ SensorClockFilter::Result SensorClockFilter::filter(double t_receipt) {
   const double periods = slope_ > 0.0 ? std::round(dt / slope_)
                          : as_batch   ? static_cast<double>(batch_)
                                       : 1.0;
-  if (std::abs(dt) > options_.restart_jump + std::max(periods, 1.0) * slope_ ||
-      periods > kMaxSkip) {
+  if (std::abs(dt) > options_.restart_jump + std::max(periods, 1.0) * slope_) {
     ++restarts_;
     start(t_receipt);
     return {t_receipt, Verdict::Restarted, 0};
   }
+  // Too many periods for a short time: the period known is far too short (stamps bunched), not
+  // a jump of time: the stamps go on from the last one returned.
+  if (periods > kMaxSkip) return restartAfter(t_receipt);
   const std::uint64_t m = periods > 1.0 ? static_cast<std::uint64_t>(periods) : 1;
   // After batches of repeated stamps a new stamp is the oldest sample of the next batch, whose
   // newest the stamp belongs to: m periods on is the newest, this sample the one after the
@@ -196,7 +200,8 @@ SensorClockFilter::Result SensorClockFilter::filter(double t_receipt) {
   refit();
   sample_index_ = own;
   // The line through noisy stamps can move back by a hair while it learns; stamps must not.
-  const double out = std::max(lineAt(sample_index_), last_output_ + 0.5 * slope_);
+  const double out =
+      std::max({lineAt(sample_index_), last_output_ + 0.5 * slope_, after(last_output_)});
   last_output_ = out;
   return {out, Verdict::Modelled, lost};
 }
@@ -304,7 +309,12 @@ void SensorClockFilter::add(double y) {
 // Weighted least squares y = a + b x; the origin then moves onto the line (a = 0).
 void SensorClockFilter::refit() {
   const double det = s0_ * sxx_ - sx_ * sx_;
-  if (det > 1e-12 * s0_ * sxx_) slope_ = (s0_ * sxy_ - sx_ * sy_) / det;
+  // A period is positive: a fit that says otherwise (stamps bunched after a new rate) keeps the
+  // period known before; the line's offset still follows the stamps.
+  if (det > 1e-12 * s0_ * sxx_) {
+    const double slope = (s0_ * sxy_ - sx_ * sy_) / det;
+    if (slope > 0.0) slope_ = slope;
+  }
   const double a = (sy_ - slope_ * sx_) / s0_;
   sy_ -= a * s0_;
   sxy_ -= a * sx_;

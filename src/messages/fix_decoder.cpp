@@ -1,5 +1,6 @@
 #include "attitude_propagator/messages/fix_decoder.h"
 
+#include <algorithm>
 #include <utility>
 
 #include "attitude_propagator/messages/conversions.h"
@@ -32,6 +33,31 @@ const char* fixRefusedCounter(Refused why) {
 Eigen::Matrix3d orientationBlock(const boost::array<double, 36>& covariance) {
   using Matrix6 = Eigen::Matrix<double, 6, 6, Eigen::RowMajor>;
   return Eigen::Map<const Matrix6>(covariance.data()).bottomRightCorner<3, 3>();
+}
+
+std::uint64_t SequenceGaps::observe(const std::string& publisher, std::uint32_t seq) {
+  ++observed_;
+  auto it = std::find_if(last_.begin(), last_.end(),
+                         [&](const Last& l) { return l.publisher == publisher; });
+  if (it == last_.end()) {
+    if (last_.size() >= kMaxPublishers) {
+      last_.erase(std::min_element(last_.begin(), last_.end(),
+                                   [](const Last& a, const Last& b) { return a.heard < b.heard; }));
+    }
+    last_.push_back({publisher, seq, observed_});
+    return 0;
+  }
+  const std::uint64_t gap = seq > it->seq ? std::uint64_t{seq} - it->seq - 1 : 0;
+  it->seq = seq;
+  it->heard = observed_;
+  lost_ += gap;
+  return gap;
+}
+
+std::optional<std::uint32_t> headerSeq(const std::uint8_t* data, std::size_t size) {
+  if (data == nullptr || size < 4) return std::nullopt;
+  return std::uint32_t{data[0]} | std::uint32_t{data[1]} << 8 | std::uint32_t{data[2]} << 16 |
+         std::uint32_t{data[3]} << 24;  // ROS serialises little-endian
 }
 
 FixDecoder::FixDecoder(FixFrames frames)

@@ -52,6 +52,11 @@ void tf2FrameParameter(const std::string& name, std::string& value,
                                 " refused; accepted: a tf2 frame id without spaces, tabs or "
                                 "line breaks (a leading '/' is removed)");
   }
+  if (tf2FrameId(value).size() > kMaxFrameParameterBytes) {
+    throw std::invalid_argument(
+        name + ": frame id " + quoted(value) + " refused; accepted: at most " +
+        std::to_string(kMaxFrameParameterBytes) + " bytes (every message published carries it)");
+  }
   if (value.empty() || value.front() != '/') return;
   const std::string id = tf2FrameId(value);
   warnings.push_back(name + ": frame id " + quoted(value) + " has a leading '/' (tf1); read as " +

@@ -120,8 +120,11 @@ void AttitudePropagatorRos::subscribe() {
   if (sim_time_) {
     // Under sim time /clock is the time source: every tick is seen, in order with the inputs
     // on this queue, so a jump of the clock is told apart from a callback that ran late.
-    clock_sub_ =
-        nh_.subscribe("/clock", kInputQueueSize, &AttitudePropagatorRos::onClock, this, hints);
+    clock_sub_ = nh_.subscribe<rosgraph_msgs::Clock>(
+        "/clock", kInputQueueSize,
+        boost::function<void(const ros::MessageEvent<const rosgraph_msgs::Clock>&)>(
+            [this](const ros::MessageEvent<const rosgraph_msgs::Clock>& e) { onClock(e); }),
+        ros::VoidConstPtr(), hints);
   }
 }
 
@@ -179,8 +182,9 @@ void AttitudePropagatorRos::guarded(const char* where, F&& f) {
 void AttitudePropagatorRos::log(const std::optional<LogLine>& line) {
   if (!line) return;
   if (!line->kind.empty()) {
-    // ROS_LOG_THROTTLE's rule (on ROS time), with the last line kept per kind.
-    const double now = ros::Time::now().toSec();
+    // ROS_LOG_THROTTLE's rule, on wall time (ROS time may take turns between two /clock
+    // publishers), with the last line kept per kind.
+    const double now = ros::WallTime::now().toSec();
     double& last = last_logged_[line->kind];
     if (!(last + kWarnPeriod <= now || now < last)) return;
     last = now;
@@ -243,12 +247,20 @@ void AttitudePropagatorRos::onGyroBias(const geometry_msgs::Vector3Stamped::Cons
 void AttitudePropagatorRos::onFix(const ros::MessageEvent<const topic_tools::ShapeShifter>& event) {
   guarded("orientation_fix", [&] {
     pollClock();
-    fixes_->onMessage(*event.getConstMessage(), event.getReceiptTime(), *engine_, tf_frames_);
+    fixes_->onMessage(*event.getConstMessage(), event.getReceiptTime(), event.getPublisherName(),
+                      *engine_, tf_frames_);
   });
 }
 
-void AttitudePropagatorRos::onClock(const rosgraph_msgs::Clock::ConstPtr& msg) {
-  guarded("/clock", [&] { engine_->clockTick(toStamp(msg->clock)); });
+void AttitudePropagatorRos::onClock(const ros::MessageEvent<const rosgraph_msgs::Clock>& event) {
+  guarded("/clock", [&] {
+    const std::string& publisher = event.getPublisherName();
+    if (publisher != clock_publisher_) {
+      previous_clock_publisher_ = clock_publisher_;
+      clock_publisher_ = publisher;
+    }
+    engine_->clockTick(toStamp(event.getConstMessage()->clock));
+  });
 }
 
 void AttitudePropagatorRos::submit(const Input& input) {
@@ -345,7 +357,13 @@ void AttitudePropagatorRos::inputApplied(const Input& input, const EngineState& 
 }
 
 void AttitudePropagatorRos::note(const EngineNote& note) {
-  log(noteText(note, engine_->counters(), config_.parameters, engine_->dynamicModel()));
+  if (note.kind == EngineNote::ClockTwoTimelines) {
+    // The tick that returned to the later timeline is the latest; the one before it, from
+    // another publisher, the earlier timeline's (one publisher alternating: no other).
+    diagnostics_.clockSources(clockPublishersText(clock_publisher_, previous_clock_publisher_));
+  }
+  log(noteText(note, engine_->counters(), config_.parameters, engine_->dynamicModel(),
+               diagnostics_.clockSources()));
 }
 
 void AttitudePropagatorRos::onTfSeen(const ros::MessageEvent<const tf2_msgs::TFMessage>& event,

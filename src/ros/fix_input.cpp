@@ -4,9 +4,11 @@
 #include <optional>
 
 #include <ros/console.h>
+#include <ros/serialization.h>
 
 #include "attitude_propagator/messages/conversions.h"
 #include "attitude_propagator/ros/log_text.h"
+#include "attitude_propagator/ros/node_queues.h"
 
 namespace attitude_propagator {
 
@@ -36,7 +38,20 @@ FixInput::FixInput(const NodeConfig& config)
     : decoder_(FixFrames::of(config)), config_(engineConfig(config).fixes) {}
 
 void FixInput::onMessage(const topic_tools::ShapeShifter& msg, const ros::Time& arrival,
-                         AttitudeEngine& engine, FrameSource& frames) {
+                         const std::string& publisher, AttitudeEngine& engine,
+                         FrameSource& frames) {
+  buffer_.resize(msg.size());
+  ros::serialization::OStream bytes(buffer_.data(), static_cast<std::uint32_t>(buffer_.size()));
+  msg.write(bytes);
+  if (const std::optional<std::uint32_t> seq = headerSeq(buffer_.data(), buffer_.size())) {
+    if (const std::uint64_t lost = gaps_.observe(publisher, *seq)) {
+      ROS_WARN_THROTTLE(kFixWarnPeriod,
+                        "orientation_fix: %lu fixes from %s lost before the node (header.seq "
+                        "jumped to %u: its subscriber queue of %u overflowed, or the "
+                        "connection dropped them) (%lu lost so far)",
+                        lost, logText(publisher).c_str(), *seq, kSparseQueueSize, gaps_.lost());
+    }
+  }
   NotingFrames noting(frames, uses_tf_);
   const Decoded<Fix> fix = decoder_.topic(msg, arrival, &noting);
   for (const auto& w : decoder_.takeFrameWarnings()) {
@@ -86,6 +101,7 @@ void FixInput::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status,
   status.add(fixRefusedCounter(Refused::NoOrientation), r.no_orientation);
   status.add(fixRefusedCounter(Refused::FixBodyFrame), r.body_frame);
   status.add("fixes_pending", engine.pendingFixes());
+  status.add("fixes_lost", gaps_.lost());
   if (config_.estimate_gyro_bias) {
     const Eigen::Vector3d& b = engine.gyroBiasEstimate();
     const Eigen::Vector3d s = engine.gyroBiasStddev();

@@ -52,6 +52,15 @@ void NodeDiagnostics::diagnose(const ros::WallTime& now, const NodeConfig& confi
   const bool refused_lately = !last_refused_.isZero() && (now - last_refused_).toSec() <= 1.0;
   summarize(status, expects_input, silence, window_.problem(), fixes, c,
             inputLagBeyondWarning(engine), refused_lately ? refused_cause_ : std::string());
+  if (const std::optional<Stamp> other = engine.otherClock()) {
+    // The cause of what else goes wrong (jumps, refused stamps): named first.
+    const double apart = static_cast<double>(*engine.clockNow() - *other) * 1e-9;
+    const std::string sources = clock_sources_.empty() ? "publishers unknown" : clock_sources_;
+    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                         "ROS time takes turns between two timelines %.3f s apart (%s): the later "
+                         "followed, the other ignored",
+                         apart, sources.c_str());
+  }
   const EngineState state = engine.state();
   status.add("model", engine.modelName());
   status.add("integrator", integratorName(engine.integrator()));
@@ -71,6 +80,11 @@ void NodeDiagnostics::diagnose(const ros::WallTime& now, const NodeConfig& confi
   status.add("gaps", c.gaps);
   status.add("resets", c.resets);
   status.add("jumps_back", c.jumps_back);
+  status.add("clock_conflicts", c.clock_conflicts);
+  if (const std::optional<Stamp> other = engine.otherClock()) {
+    status.add("clock_other_timeline_s", static_cast<double>(*other) * 1e-9);
+    status.add("clock_sources", clock_sources_);
+  }
   status.add("rejected_future", c.rejected_future);
   status.add("held_ahead", c.held_ahead);
   status.add("dropped_on_reset", c.dropped_on_reset);

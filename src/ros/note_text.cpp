@@ -7,7 +7,8 @@ namespace attitude_propagator {
 namespace {
 
 std::string noteText(const EngineNote& note, const EngineCounters& c, const Parameters& p,
-                     bool dynamic_model, const char* what, double t) {
+                     bool dynamic_model, const char* what, double t,
+                     const std::string& clock_sources) {
   switch (note.kind) {
     case EngineNote::Gap:
       return formatted(
@@ -31,6 +32,13 @@ std::string noteText(const EngineNote& note, const EngineCounters& c, const Para
           "ROS time jumped back to %.3f s (looped bag or restarted clock): reset to the initial "
           "state (%lu resets so far)",
           t, c.resets);
+    case EngineNote::ClockTwoTimelines:
+      return formatted(
+          "ROS time takes turns between two timelines (%s; the other at %.3f s): two /clock "
+          "publishers? The later one is followed and the other's ticks ignored, no further "
+          "reset until one falls silent for %g s (%lu times so far)",
+          clock_sources.empty() ? "publishers unknown" : clock_sources.c_str(), t, kClockSettle,
+          c.clock_conflicts);
     case EngineNote::Stale:
       return formatted("%s: stamp %.6f at or before the last one: dropped (%lu so far)", what, t,
                        c.dropped_stale);
@@ -69,11 +77,11 @@ std::string noteText(const EngineNote& note, const EngineCounters& c, const Para
 }  // namespace
 
 LogLine noteText(const EngineNote& note, const EngineCounters& c, const Parameters& p,
-                 bool dynamic_model) {
+                 bool dynamic_model, const std::string& clock_sources) {
   const char* what = note.source ? sourceName(*note.source) : "ROS time";
   const double t = static_cast<double>(note.stamp) * 1e-9;
   return {ros::console::levels::Warn, "note " + std::to_string(note.kind),
-          noteText(note, c, p, dynamic_model, what, t)};
+          noteText(note, c, p, dynamic_model, what, t, clock_sources)};
 }
 
 }  // namespace attitude_propagator

@@ -1,5 +1,7 @@
 #include "output_files.h"
 
+#include <dirent.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <sys/statvfs.h>
 #include <unistd.h>
@@ -38,6 +40,45 @@ std::string canonicalPath(const std::string& path) {
     return text;
   }
   return path;
+}
+
+/// The file a path names once its symlinks are followed (at most 40, as the kernel): the
+/// path itself when it is none; the target of a dangling one. A relative target is read from
+/// the link's directory. Written there, and renamed there, the link stays a link.
+std::string followLinks(std::string path) {
+  for (int hops = 0; hops < 40; ++hops) {
+    struct stat s {};
+    if (::lstat(path.c_str(), &s) != 0 || !S_ISLNK(s.st_mode)) return path;
+    std::string target(static_cast<std::size_t>(s.st_size > 0 ? s.st_size : 4096) + 1, '\0');
+    const ssize_t n = ::readlink(path.c_str(), &target[0], target.size());
+    if (n < 0) return path;
+    target.resize(static_cast<std::size_t>(n));
+    if (target.empty()) return path;
+    const auto slash = path.rfind('/');
+    path = target.front() == '/' || slash == std::string::npos ? target
+                                                               : path.substr(0, slash + 1) + target;
+  }
+  throw UsageError(path + ": too many levels of symbolic links");
+}
+
+/// Removes the temporary files `prefix`<pid> in `dir` left by runs that no longer exist (killed
+/// by SIGKILL, or a power cut: no handler could remove them). Returns how many.
+int removeLeftovers(const std::string& dir, const std::string& prefix) {
+  DIR* d = ::opendir(dir.empty() ? "." : dir.c_str());
+  if (d == nullptr) return 0;
+  int removed = 0;
+  while (const dirent* e = ::readdir(d)) {
+    const std::string name = e->d_name;
+    if (name.compare(0, prefix.size(), prefix) != 0 || name.size() == prefix.size()) continue;
+    const std::string digits = name.substr(prefix.size());
+    if (digits.find_first_not_of("0123456789") != std::string::npos || digits.size() > 9) continue;
+    const long pid = std::stol(digits);
+    if (pid <= 0 || pid == ::getpid()) continue;
+    if (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;  // still running
+    if (std::remove((dir + name).c_str()) == 0) ++removed;
+  }
+  ::closedir(d);
+  return removed;
 }
 
 std::string megabytes(std::uint64_t bytes) {
@@ -86,11 +127,22 @@ void requireFreeSpace(const std::string& output, std::uint64_t bytes) {
 }
 
 PendingFile::PendingFile(std::string path) : path_(std::move(path)) {
+  {
+    const auto slash = path_.rfind('/');
+    if ((slash == std::string::npos ? path_ : path_.substr(slash + 1)).empty()) {
+      throw UsageError(path_ + ": not a file name");
+    }
+  }
+  // An output that is a symlink (dangling or not) is written where it points: renamed over its
+  // own name, the link would be replaced by a regular file.
+  path_ = followLinks(path_);
   const auto slash = path_.rfind('/');
   const std::string dir = slash == std::string::npos ? "" : path_.substr(0, slash + 1);
   const std::string name = slash == std::string::npos ? path_ : path_.substr(slash + 1);
   if (name.empty()) throw UsageError(path_ + ": not a file name");
-  temporary_ = dir + "." + name + ".partial-" + std::to_string(::getpid());
+  const std::string prefix = "." + name + ".partial-";
+  leftovers_ = removeLeftovers(dir, prefix);
+  temporary_ = dir + prefix + std::to_string(::getpid());
   slot_ = registerPending(temporary_);
 }
 

@@ -23,6 +23,9 @@ void requireFreeSpace(const std::string& output, std::uint64_t bytes);
 /// An output written under a temporary name in the same directory and renamed to its own
 /// name by commit(): a failed or interrupted run leaves nothing under the name, and the
 /// temporary file is removed (by the destructor, or by the signal handler on a second signal).
+/// An output that is a symlink, dangling or not, is written where it points (the link stays).
+/// Temporary files of the same output left by runs no longer running (SIGKILL, which no handler
+/// sees) are removed when the next one starts (leftovers()).
 class PendingFile {
  public:
   explicit PendingFile(std::string path);
@@ -30,13 +33,17 @@ class PendingFile {
   PendingFile(const PendingFile&) = delete;
   PendingFile& operator=(const PendingFile&) = delete;
   const std::string& temporary() const { return temporary_; }
+  /// The file written: the output's name, its symlinks followed.
   const std::string& path() const { return path_; }
+  /// Temporary files of this output from runs no longer running, removed at the start.
+  int leftovers() const { return leftovers_; }
   void commit();
 
  private:
   std::string path_;
   std::string temporary_;
   bool committed_ = false;
+  int leftovers_ = 0;
   int slot_ = -1;  // in the signal handler's list of files to remove
 };
 

@@ -249,7 +249,8 @@ Options parseOptions(int argc, char** argv) {
   for (const auto& s : sets) applySetting(s, o.parameters);
   // tf1's leading '/' in a frame parameter is read without it (frame_ids.h), with a warning.
   for (const auto& w : tf2FrameParameters(o.parameters)) {
-    std::fprintf(stderr, "warning: %s\n", w.c_str());
+    // The frame as given is the user's text: capped by the one text rule, as the node's line.
+    std::fprintf(stderr, "warning: %s\n", logText(w, 4 * kLogTextBytes).c_str());
   }
   validateParameters(o.parameters);  // std::invalid_argument: a usage error, before any reading
   if (o.output.empty()) {
@@ -469,7 +470,14 @@ class BagPropagator : public EngineSink {
     const auto& imu = *static_cast<const ImuPayload*>(input.payload.get());
     writer_->imu(imu.msg, state, imu.q_BI, record_);
   }
-  void note(const EngineNote&) override {}  // counted by the engine, summarised at the end
+  void note(const EngineNote& note) override {
+    // Counted by the engine, summarised at the end; the clock's second timeline is named there
+    // by the publishers the bag recorded (the latest tick's, the one before from another).
+    if (note.kind == EngineNote::ClockTwoTimelines && clock_sources_.empty()) {
+      clock_sources_ = clockPublishersText(clock_publisher_, previous_clock_publisher_);
+      clock_apart_ = static_cast<double>(*engine_->clockNow() - note.stamp) * 1e-9;
+    }
+  }
 
  private:
   std::vector<std::string> checkTopics();
@@ -530,6 +538,9 @@ class BagPropagator : public EngineSink {
   tf2_msgs::TFMessage tf_msg_;
   std::uint64_t tf_read_ = 0;  // /tf messages heard (not inputs: not in the summary's count)
   rosgraph_msgs::Clock clock_msg_;
+  std::string clock_publisher_, previous_clock_publisher_;  // of the latest ticks (callerid)
+  std::string clock_sources_;  // the first two timelines recognised: their publishers
+  double clock_apart_ = 0.0;   // and how far apart (s)
   std::vector<std::uint8_t> buffer_;
   std::unique_ptr<tf2::BufferCore> tf_buffer_;  // the bag's /tf_static, then its /tf
   std::map<std::string, geometry_msgs::TransformStamped> static_edges_;  // by child frame
@@ -669,6 +680,10 @@ void BagPropagator::dispatch(const rosbag::MessageInstance& m) {
     take(in);
   } else if (!clock_.empty() && sameTopic(topic, clock_)) {
     decodeInto(m, buffer_, clock_msg_);
+    if (m.getCallerId() != clock_publisher_) {
+      previous_clock_publisher_ = clock_publisher_;
+      clock_publisher_ = m.getCallerId();
+    }
     if (!o_.io_floor) engine_->clockTick(toStamp(clock_msg_.clock));
   } else if (!bias_.empty() && sameTopic(topic, bias_)) {
     onBias(m);
@@ -709,11 +724,12 @@ void BagPropagator::onFix(const rosbag::MessageInstance& m) {
 
 void BagPropagator::warnFrames() {
   // Once per frame with tf1's leading '/' (frame_ids.h); nothing to do otherwise.
+  // A message's frame id is the sender's text: capped by the one text rule, as the node's line.
   for (const auto& w : decoders_.takeFrameWarnings()) {
-    std::fprintf(stderr, "warning: %s\n", w.c_str());
+    std::fprintf(stderr, "warning: %s\n", logText(w, 4 * kLogTextBytes).c_str());
   }
   for (const auto& w : fix_decoder_.takeFrameWarnings()) {
-    std::fprintf(stderr, "warning: %s\n", w.c_str());
+    std::fprintf(stderr, "warning: %s\n", logText(w, 4 * kLogTextBytes).c_str());
   }
 }
 
@@ -882,6 +898,13 @@ void BagPropagator::summary(std::FILE* out, bool written) const {
       static_cast<unsigned long long>(states_), written ? o_.output.c_str() : "nothing written",
       wall_, wall_ > 0 ? double(messages_) / wall_ : 0.0, wall_ > 0 ? bag_seconds_ / wall_ : 0.0,
       o_.io_floor ? " (I/O floor: no propagation)" : "");
+  if (c.clock_conflicts > 0) {
+    std::fprintf(out,
+                 "  clock: two timelines took turns on %s, %.3f s apart (%s): %llu times "
+                 "recognised, the later followed, the other's ticks ignored, no reset for them\n",
+                 logText(clock_).c_str(), clock_apart_, clock_sources_.c_str(),
+                 static_cast<unsigned long long>(c.clock_conflicts));
+  }
   if (o_.io_floor) return;
   const auto pending = static_cast<std::uint64_t>(engine_->pending());
   const std::uint64_t accounted = accepted + dropped_total + pending;
@@ -945,7 +968,7 @@ void BagPropagator::fixSummary(std::FILE* out) const {
   std::fputc('\n', out);
 }
 
-std::string valueText(const std::string& v) { return v.empty() ? "''" : v; }
+std::string valueText(const std::string& v) { return v.empty() ? "''" : logText(v); }
 std::string valueText(bool v) { return v ? "true" : "false"; }
 std::string valueText(double v) {
   // The shortest digits that read back as v: 1e-09, not 1.0000000000000001e-09.
@@ -987,14 +1010,14 @@ bool BagPropagator::mountReachable(std::FILE* out) {
   readStaticTransforms();
   if (tf_buffer_->canTransform(body, frame, ros::Time())) {
     std::fprintf(out, "  mount: rates in '%s', joined to body_frame '%s' by /tf_static\n",
-                 frame.c_str(), body.c_str());
+                 logText(frame).c_str(), logText(body).c_str());
     return true;
   }
   if (!tf_.empty()) {
     std::fprintf(out,
                  "  mount: rates in '%s': no static transform to body_frame '%s'; looked up "
                  "on %s as recorded\n",
-                 frame.c_str(), body.c_str(), tf_.c_str());
+                 logText(frame).c_str(), logText(body).c_str(), tf_.c_str());
     return true;
   }
   std::fprintf(out, "  mount: %s\n", noMountText(frame, body, "--set body_frame=").c_str());
@@ -1041,8 +1064,8 @@ int BagPropagator::dryRun(std::FILE* out) {
                "  settings: model %s, integrator %s, rate_input %s, fixed_frame %s, body_frame "
                "%s, max_dt %g s%s; time from %s\n",
                engine_->modelName().c_str(), integrator.c_str(), p.rate_input.c_str(),
-               p.fixed_frame.c_str(), p.body_frame.c_str(), p.max_dt, grid.c_str(),
-               clock_driven_ ? clock_.c_str() : "the input stamps");
+               logText(p.fixed_frame).c_str(), logText(p.body_frame).c_str(), p.max_dt,
+               grid.c_str(), clock_driven_ ? clock_.c_str() : "the input stamps");
   std::string all;
   forEachParameter(p, [&all](const char* name, const auto& value, const char*, const char*) {
     all += (all.empty() ? "" : ", ") + std::string(name) + "=" + valueText(value);
@@ -1078,6 +1101,10 @@ int run(int argc, char** argv) {
     return BagPropagator(o, bags).dryRun(stdout);
   }
   PendingFile output(o.output);  // destroyed last: the writer closes before it is removed
+  if (output.leftovers() > 0) {
+    std::fprintf(stderr, "propagate_bag: removed %d partial output(s) of %s left by killed runs\n",
+                 output.leftovers(), o.output.c_str());
+  }
   BagPropagator propagator(o, bags);
   propagator.run(output.temporary());
   throwIfInterrupted();  // a signal after the last message: still no output

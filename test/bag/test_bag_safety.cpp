@@ -8,6 +8,7 @@
 #include <sys/mount.h>
 #include <sys/stat.h>
 #include <sys/statvfs.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -308,6 +309,80 @@ TEST(BagSafety, HugeFrameIdIsCappedInTheLog) {
   const RunResult r = run(kPropagate + " " + in + " -o " + dir.file("out.bag") + " --no-progress");
   EXPECT_NE(r.output.find("...(10000000 bytes)"), std::string::npos) << r.output.size();
   EXPECT_LT(r.output.size(), 4000u);
+}
+
+// A frame id with tf1's leading '/' is warned about once; 10 MB of it is capped by the one text
+// rule (quoted_text.h), as the node's line is.
+TEST(BagSafety, HugeLeadingSlashFrameIdIsCappedInTheWarning) {
+  TempDir dir;
+  const std::string in = dir.file("in.bag");
+  {
+    rosbag::Bag bag(in, rosbag::bagmode::Write);
+    for (int k = 0; k < 3; ++k) {
+      sensor_msgs::Imu m;
+      m.header.stamp = rosTime(stampAt(0.01 * k));
+      m.header.frame_id = "/" + std::string(10 * 1000 * 1000, 'f');
+      bag.write("/imu/data_raw", m.header.stamp, m);
+    }
+  }
+  const RunResult r = run(kPropagate + " " + in + " -o " + dir.file("out.bag") + " --no-progress");
+  EXPECT_NE(r.output.find("bytes)"), std::string::npos) << r.output.substr(0, 2000);
+  EXPECT_LT(r.output.size(), 4000u);
+}
+
+// A frame parameter of 100 kB would be carried by every output message (2.2 GB for 11 000
+// states): refused before anything is read, exit 2, in one short line.
+TEST(BagSafety, HugeFrameParameterIsRefused) {
+  TempDir dir;
+  const std::string in = writeConingBag(dir);
+  const RunResult r = run(kPropagate + " " + in + " -o " + dir.file("out.bag") +
+                          " --no-progress --set fixed_frame=" + std::string(100000, 'w'));
+  EXPECT_EQ(r.status, 2) << r.output.substr(0, 500);
+  EXPECT_NE(r.output.find("at most 256 bytes"), std::string::npos) << r.output.substr(0, 500);
+  EXPECT_LT(r.output.size(), 2000u);
+  EXPECT_FALSE(exists(dir.file("out.bag")));
+}
+
+// An output that is a symlink is written where it points, the link kept: a dangling one (its
+// target created), and one to an existing file (replaced).
+TEST(BagSafety, SymlinkOutputIsWrittenWhereItPoints) {
+  TempDir dir;
+  const std::string in = writeConingBag(dir);
+  ASSERT_EQ(::symlink("target.bag", dir.file("dangling.bag").c_str()), 0);
+  RunResult r = run(kPropagate + " " + in + " -o " + dir.file("dangling.bag") + " --no-progress");
+  ASSERT_EQ(r.status, 0) << r.output;
+  struct stat s {};
+  ASSERT_EQ(::lstat(dir.file("dangling.bag").c_str(), &s), 0);
+  EXPECT_TRUE(S_ISLNK(s.st_mode));
+  ASSERT_EQ(::lstat(dir.file("target.bag").c_str(), &s), 0);
+  EXPECT_TRUE(S_ISREG(s.st_mode));
+  EXPECT_GT(s.st_size, 1000);
+  // Again, now that the target exists.
+  r = run(kPropagate + " " + in + " -o " + dir.file("dangling.bag") + " --no-progress");
+  ASSERT_EQ(r.status, 0) << r.output;
+  ASSERT_EQ(::lstat(dir.file("dangling.bag").c_str(), &s), 0);
+  EXPECT_TRUE(S_ISLNK(s.st_mode));
+  EXPECT_TRUE(noPartialFiles(dir));
+}
+
+// SIGKILL leaves the partial output (no handler runs): the next run of the same output removes
+// those of runs no longer running, and says so; one of a run still going (this test) stays.
+TEST(BagSafety, PartialOutputsOfKilledRunsAreRemovedByTheNext) {
+  TempDir dir;
+  const std::string in = writeConingBag(dir);
+  const pid_t gone = ::fork();
+  if (gone == 0) ::_exit(0);
+  ASSERT_GT(gone, 0);
+  ::waitpid(gone, nullptr, 0);  // a pid no longer running
+  const std::string dead = dir.file(".out.bag.partial-" + std::to_string(gone));
+  const std::string alive = dir.file(".out.bag.partial-" + std::to_string(::getpid()));
+  writeText(dead, "left by a killed run");
+  writeText(alive, "a run still going");
+  const RunResult r = run(kPropagate + " " + in + " -o " + dir.file("out.bag") + " --no-progress");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_FALSE(exists(dead));
+  EXPECT_TRUE(exists(alive));
+  EXPECT_NE(r.output.find("removed 1 partial output(s)"), std::string::npos) << r.output;
 }
 
 // Damage anywhere: 16 bytes overwritten at 33 places spread over the file (headers, chunk data,

@@ -2,6 +2,7 @@
 // with jitter, lost, delayed, at a new rate, after a restart. The truth is the simulated clock.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -9,6 +10,7 @@
 #include <vector>
 
 #include "attitude_propagator/coning_motion.h"
+#include "attitude_propagator/engine.h"
 #include "attitude_propagator/kinematic_propagator.h"
 #include "attitude_propagator/quaternion.h"
 #include "attitude_propagator/stamp_filter.h"
@@ -456,4 +458,84 @@ TEST(SensorClockFilter, ResetForgetsTheBatchSize) {
   EXPECT_EQ(filter.batchSize(), 1u);
   for (int n = 0; n < 5; ++n) filter.filter(100.0 + kPeriod * n + (n % 2) * 1e-5);
   EXPECT_EQ(filter.batchSize(), 1u);
+}
+
+// The node's rule "no stamp is published twice" (docs/node.md) through rate changes: 100 Hz, then
+// 5 kHz, then 100 Hz again, received with a latency and a jitter of up to several 5 kHz periods,
+// in order (the engine drops a receipt stamp before its source's newest before the filter), and
+// with bursts whose receipt stamps are a nanosecond apart. No jump of time happens: every stamp
+// returned, rounded to the nanosecond of a published stamp, is later than the one before.
+class RateChanges : public ::testing::TestWithParam<double> {};
+
+TEST_P(RateChanges, NeverRepeatAPublishedStamp) {
+  const double jitter = GetParam();
+  ap::SensorClockFilter filter;
+  std::uint64_t state = 5;
+  double t = 1000.0;  // core time: seconds since the origin
+  double receipt = 0.0;
+  long long published = std::numeric_limits<long long>::min();
+  int repeated = 0, in_a_row = 0, longest = 0;
+  auto run = [&](double period, double seconds) {
+    const long n = std::lround(seconds / period);
+    for (long k = 0; k < n; ++k) {
+      t += period;
+      receipt = std::max(receipt + 1e-9, t + 5e-4 + jitter * std::abs(normalRandom(state)));
+      const ap::SensorClockFilter::Result r = filter.filter(receipt);
+      const long long ns = std::llround(r.t * 1e9);
+      if (ns <= published) {
+        ++repeated;
+        longest = std::max(longest, ++in_a_row);
+      } else {
+        in_a_row = 0;
+      }
+      published = std::max(published, ns);
+    }
+  };
+  run(0.01, 5.0);
+  run(0.0002, 2.0);
+  run(0.01, 5.0);
+  EXPECT_EQ(repeated, 0) << "longest run " << longest << ", restarts " << filter.restarts();
+}
+
+INSTANTIATE_TEST_SUITE_P(Jitters, RateChanges, ::testing::Values(0.0, 2e-4, 1e-3, 3e-3, 1e-2));
+
+// The same through the engine (kinematic, stamp_filter sensor_clock): the states handed on with
+// each applied rate (imu/data's stamps) never repeat a stamp.
+TEST(SensorClockFilter, RateChangesRepeatNoStampOfTheAppliedRates) {
+  struct Stamps : ap::EngineSink {
+    std::vector<ap::Stamp> applied;
+    void publishState(const ap::EngineState&) override {}
+    void inputApplied(const ap::Input&, const ap::EngineState& s) override {
+      applied.push_back(s.stamp);
+    }
+    void note(const ap::EngineNote&) override {}
+  } sink;
+  ap::EngineConfig config;
+  config.kinematic.stamp_filter = ap::StampFilter::SensorClock;
+  ap::AttitudeEngine engine(config, sink);
+  std::uint64_t state = 9;
+  const ap::Stamp epoch = 1780000000LL * 1000000000LL;
+  ap::Stamp receipt = 0;
+  double t = 0.0;
+  auto run = [&](double period, double seconds) {
+    const long n = std::lround(seconds / period);
+    for (long k = 0; k < n; ++k) {
+      t += period;
+      const double late = 5e-4 + 3e-3 * std::abs(normalRandom(state));
+      receipt = std::max<ap::Stamp>(receipt + 1, epoch + std::llround((t + late) * 1e9));
+      ap::Input in;
+      in.source = ap::Source::Imu;
+      in.stamp = receipt;
+      in.value = Eigen::Vector3d(0.0, 0.0, 0.3);
+      engine.submit(in);
+    }
+  };
+  run(0.01, 5.0);
+  run(0.0002, 2.0);
+  run(0.01, 5.0);
+  ASSERT_GT(sink.applied.size(), 10000u);
+  std::size_t repeated = 0;
+  for (std::size_t i = 1; i < sink.applied.size(); ++i)
+    repeated += sink.applied[i] <= sink.applied[i - 1];
+  EXPECT_EQ(repeated, 0u);
 }

@@ -7,6 +7,8 @@
 
 #include <cmath>
 #include <cstdint>
+#include <map>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -593,3 +595,182 @@ TEST_P(RandomTimelines, EveryPublishedStampOnceInOrderUnitAndNeverBeyondMaxFutur
 }
 
 INSTANTIATE_TEST_SUITE_P(Models, RandomTimelines, ::testing::Bool());
+
+// ---------------------------------------------------------------------------------------------
+// ClockTimeline: ROS time's own timeline, and two taking turns (two /clock publishers)
+// ---------------------------------------------------------------------------------------------
+
+namespace {
+
+using ClockVerdict = ap::ClockTimeline::Verdict;
+
+/// Counts of each verdict over a run of ticks, and whether the clock followed ever went back
+/// after two timelines were recognised.
+struct ClockRun {
+  std::map<ClockVerdict, int> verdicts;
+  int followed_back_after_two = 0;
+
+  void tick(ap::ClockTimeline& clock, double t) {
+    const std::optional<ap::Stamp> before = clock.now();
+    const ClockVerdict v = clock.judge(ns(t), policy());
+    ++verdicts[v];
+    if (verdicts[ClockVerdict::TwoTimelines] > 0 && before && *clock.now() < *before &&
+        v != ClockVerdict::JumpedBack) {
+      ++followed_back_after_two;
+    }
+  }
+  int count(ClockVerdict v) const { return verdicts.count(v) ? verdicts.at(v) : 0; }
+};
+
+}  // namespace
+
+TEST(ClockTimeline, ALoopedClockJumpsBackOnceAndGoesOnWithoutASecondTimeline) {
+  ap::ClockTimeline clock;
+  ClockRun run;
+  for (int k = 0; k <= 300; ++k) run.tick(clock, 100.0 + 0.01 * k);  // 100 .. 103
+  for (int k = 0; k <= 800; ++k) run.tick(clock, 95.0 + 0.01 * k);   // looped: 95 .. 103
+  EXPECT_EQ(run.count(ClockVerdict::JumpedBack), 1);
+  EXPECT_EQ(run.count(ClockVerdict::TwoTimelines), 0);
+  EXPECT_EQ(run.count(ClockVerdict::OtherTimeline), 0);
+  EXPECT_FALSE(clock.other());
+}
+
+/// Two /clock publishers 5 s apart, each at 100 Hz, ticks interleaved; `later_first`: the later
+/// timeline ticks first.
+class TwoClockPublishers : public ::testing::TestWithParam<bool> {};
+
+TEST_P(TwoClockPublishers, CostOneJumpBackAtMostAndTheLaterTimelineIsFollowed) {
+  ap::ClockTimeline clock;
+  ClockRun run;
+  const bool later_first = GetParam();
+  for (int k = 0; k < 300; ++k) {  // 3 s of each
+    const double later = 100.0 + 0.01 * k, earlier = 95.0 + 0.01 * k;
+    run.tick(clock, later_first ? later : earlier);
+    run.tick(clock, later_first ? earlier : later);
+  }
+  EXPECT_EQ(run.count(ClockVerdict::JumpedBack), 1);
+  EXPECT_EQ(run.count(ClockVerdict::TwoTimelines), 1);
+  EXPECT_EQ(run.followed_back_after_two, 0);
+  EXPECT_EQ(*clock.now(), ns(100.0 + 0.01 * 299));
+  ASSERT_TRUE(clock.other());
+  EXPECT_EQ(*clock.other(), ns(95.0 + 0.01 * 299));
+}
+
+INSTANTIATE_TEST_SUITE_P(EitherFirst, TwoClockPublishers, ::testing::Bool());
+
+TEST(ClockTimeline, ASlowSecondPublisherIsRecognisedToo) {
+  // A stale simulator at 1 Hz, 5 s behind a bag at 100 Hz.
+  ap::ClockTimeline clock;
+  ClockRun run;
+  for (int k = 0; k < 1000; ++k) {
+    run.tick(clock, 100.0 + 0.01 * k);
+    if (k % 100 == 50) run.tick(clock, 95.0 + 0.01 * k);
+  }
+  EXPECT_EQ(run.count(ClockVerdict::JumpedBack), 1);
+  EXPECT_EQ(run.count(ClockVerdict::TwoTimelines), 1);
+  // Ten ticks of the slow one: the first is the jump back, the other nine are ignored.
+  EXPECT_EQ(run.count(ClockVerdict::OtherTimeline), 9);
+  EXPECT_EQ(run.followed_back_after_two, 0);
+}
+
+TEST(ClockTimeline, SettlesWhenTheOtherFallsSilentAndThenAJumpBackCountsAgain) {
+  ap::ClockTimeline clock;
+  ClockRun run;
+  for (int k = 0; k < 100; ++k) {
+    run.tick(clock, 100.0 + 0.01 * k);
+    run.tick(clock, 95.0 + 0.01 * k);
+  }
+  ASSERT_EQ(run.count(ClockVerdict::TwoTimelines), 1);
+  // The earlier publisher stops; the later goes on for more than kClockSettle.
+  const double settled = 101.0 + ap::kClockSettle + 0.5;
+  for (double t = 101.0; t <= settled; t += 0.01) run.tick(clock, t);
+  EXPECT_FALSE(clock.other());
+  // A genuine loop after that: time starts again.
+  EXPECT_EQ(clock.judge(ns(50.0), policy()), ClockVerdict::JumpedBack);
+}
+
+TEST(ClockTimeline, WhenTheFollowedFallsSilentTheOtherIsTakenWithOneJumpBack) {
+  // 20 s apart: the later publisher stops, the earlier goes on; it is taken once it went on for
+  // more than kClockSettle without a tick of the followed one.
+  ap::ClockTimeline clock;
+  ClockRun run;
+  for (int k = 0; k < 100; ++k) {
+    run.tick(clock, 120.0 + 0.01 * k);
+    run.tick(clock, 100.0 + 0.01 * k);
+  }
+  ASSERT_EQ(run.count(ClockVerdict::JumpedBack), 1);
+  ASSERT_EQ(run.count(ClockVerdict::TwoTimelines), 1);
+  int back = 0;
+  std::optional<ap::Stamp> back_at;
+  for (int k = 100; k <= 100 + 1000; ++k) {
+    const double t = 100.0 + 0.01 * k;
+    if (clock.judge(ns(t), policy()) == ClockVerdict::JumpedBack) {
+      ++back;
+      back_at = ns(t);
+    }
+  }
+  EXPECT_EQ(back, 1);
+  ASSERT_TRUE(back_at);
+  // From the other's first tick since the followed one's last: 100.99.
+  EXPECT_GT(*back_at - ns(100.99), ns(ap::kClockSettle));
+  EXPECT_LE(*back_at - ns(100.99), ns(ap::kClockSettle + 0.02));
+  EXPECT_FALSE(clock.other());
+  EXPECT_EQ(*clock.now(), ns(111.0));
+}
+
+TEST(ClockTimeline, WhenTheFollowedFallsSilentACloseOtherCatchesUpWithoutAJump) {
+  // 5 s apart: the clock followed stays at the later publisher's last tick until the earlier
+  // timeline reaches it (within backward_jump: jitter), then goes on with it; never back. It
+  // has settled kClockSettle after the other's last tick behind (100.99).
+  ap::ClockTimeline clock;
+  ClockRun run;
+  for (int k = 0; k < 100; ++k) {
+    run.tick(clock, 100.0 + 0.01 * k);
+    run.tick(clock, 95.0 + 0.01 * k);
+  }
+  for (int k = 100; k <= 1000; ++k) run.tick(clock, 95.0 + 0.01 * k);
+  EXPECT_EQ(*clock.now(), ns(105.0));
+  EXPECT_TRUE(clock.other());  // not settled yet
+  for (int k = 1001; k <= 1200; ++k) run.tick(clock, 95.0 + 0.01 * k);
+  EXPECT_EQ(run.count(ClockVerdict::JumpedBack), 1);  // the first, before two were known
+  EXPECT_EQ(run.followed_back_after_two, 0);
+  EXPECT_FALSE(clock.other());
+}
+
+TEST(ClockTimeline, AForwardJumpLongAfterALoopIsAGapNotASecondTimeline) {
+  ap::ClockTimeline clock;
+  for (double t = 100.0; t < 101.0; t += 0.01) clock.judge(ns(t), policy());
+  EXPECT_EQ(clock.judge(ns(50.0), policy()), ClockVerdict::JumpedBack);
+  for (double t = 50.0; t < 50.0 + ap::kClockSettle + 1.0; t += 0.01) clock.judge(ns(t), policy());
+  EXPECT_EQ(clock.judge(ns(101.0), policy()), ClockVerdict::Ahead);
+}
+
+TEST(TimePolicy, TwoClockPublishersCostOneResetAndStampsGoBackOnce) {
+  // Both models: 3 s of two /clock publishers 5 s apart at 100 Hz each, rates stamped on the
+  // later timeline (the kinematic model's time).
+  for (const bool dynamic : {false, true}) {
+    Watcher sink;
+    sink.kinematic = !dynamic;
+    ap::AttitudeEngine engine(rateConfig(dynamic), sink);
+    int back_notes = 0;
+    for (int k = 0; k < 300; ++k) {
+      engine.clockTick(at(100.0 + 0.01 * k));
+      engine.clockTick(at(95.0 + 0.01 * k));
+      engine.submit(rate(at(100.0 + 0.01 * k), kSpin));
+    }
+    for (const ap::EngineNote& n : sink.notes)
+      back_notes += n.kind == ap::EngineNote::ClockJumpedBack;
+    const ap::EngineCounters& c = engine.counters();
+    EXPECT_LE(c.resets, 1u) << dynamic;
+    EXPECT_LE(back_notes, 1) << dynamic;
+    EXPECT_EQ(c.clock_conflicts, 1u) << dynamic;
+    // Refused only while the earlier timeline is followed: between its jump back and the next
+    // tick of the later one, the input ticked before it.
+    EXPECT_LE(c.rejected_future, 1u) << dynamic;
+    EXPECT_EQ(sink.repeated_or_older, 0u) << dynamic;  // within the one epoch after the reset
+    ASSERT_TRUE(engine.otherClock());
+    EXPECT_EQ(*engine.otherClock(), at(95.0 + 0.01 * 299));
+    ASSERT_FALSE(sink.states.empty());
+    EXPECT_GE(sink.states.back().stamp, at(102.9));
+  }
+}

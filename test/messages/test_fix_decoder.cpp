@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -461,4 +462,36 @@ TEST(FixFrames, FromTheParameters) {
       EXPECT_EQ(std::string(e.what()).rfind("fix_frame", 0), 0u) << e.what();
     }
   }
+}
+
+// Messages lost before the node, from each publisher's header.seq: a gap of k is k lost; a seq
+// at or before the last (a restarted publisher, a sender leaving seq 0) none; publishers apart.
+TEST(SequenceGaps, CountsEachPublishersGapsOnly) {
+  ap::SequenceGaps gaps;
+  EXPECT_EQ(gaps.observe("/a", 7), 0u);  // the first heard: nothing known before it
+  EXPECT_EQ(gaps.observe("/a", 8), 0u);
+  EXPECT_EQ(gaps.observe("/b", 0), 0u);
+  EXPECT_EQ(gaps.observe("/a", 12), 3u);  // 9, 10, 11
+  EXPECT_EQ(gaps.observe("/b", 0), 0u);   // a sender that does not number
+  EXPECT_EQ(gaps.observe("/a", 2), 0u);   // restarted
+  EXPECT_EQ(gaps.observe("/a", 3), 0u);
+  EXPECT_EQ(gaps.observe("/a", 0xFFFFFFFFu), 0xFFFFFFFFull - 4);
+  EXPECT_EQ(gaps.lost(), 3u + 0xFFFFFFFFull - 4);
+}
+
+TEST(SequenceGaps, RemembersABoundedNumberOfPublishers) {
+  ap::SequenceGaps gaps;
+  for (std::size_t i = 0; i <= ap::SequenceGaps::kMaxPublishers; ++i)
+    gaps.observe("/p" + std::to_string(i), 1);
+  // /p0 was forgotten (heard from longest ago): its next seq is a first again.
+  EXPECT_EQ(gaps.observe("/p0", 5), 0u);
+  EXPECT_EQ(gaps.observe("/p2", 5), 3u);
+}
+
+TEST(SequenceGaps, HeaderSeqIsTheSerialisedMessagesFirstField) {
+  geometry_msgs::PoseStamped m;
+  m.header.seq = 0x01020304u;
+  const std::vector<std::uint8_t> bytes = messages_test::Serialized::of(m).bytes;
+  EXPECT_EQ(ap::headerSeq(bytes.data(), bytes.size()), std::optional<std::uint32_t>(0x01020304u));
+  EXPECT_FALSE(ap::headerSeq(bytes.data(), 3));
 }

@@ -189,3 +189,28 @@ TEST(FrameIds, FrameParameterWithASpaceRefusedNamingIt) {
     EXPECT_NE(std::string(e.what()).find("spaces"), std::string::npos) << e.what();
   }
 }
+
+// Every message published carries fixed_frame or body_frame: a frame parameter longer than
+// kMaxFrameParameterBytes is refused naming it and the bound; one of exactly that many (after
+// its leading '/') is accepted.
+TEST(FrameIds, FrameParameterLongerThanTheBoundRefusedNamingIt) {
+  ap::Parameters p;
+  p.fixed_frame = "/" + std::string(ap::kMaxFrameParameterBytes, 'w');
+  EXPECT_NO_THROW(ap::tf2FrameParameters(p));
+  EXPECT_EQ(p.fixed_frame.size(), ap::kMaxFrameParameterBytes);
+  for (const std::size_t bytes : {ap::kMaxFrameParameterBytes + 1, std::size_t{100000}}) {
+    ap::Parameters q;
+    q.fix_frame = std::string(bytes, 'f');
+    try {
+      ap::tf2FrameParameters(q);
+      FAIL() << "accepted " << bytes;
+    } catch (const std::invalid_argument& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("fix_frame"), std::string::npos) << what.substr(0, 300);
+      EXPECT_NE(what.find("at most " + std::to_string(ap::kMaxFrameParameterBytes) + " bytes"),
+                std::string::npos)
+          << what.substr(0, 300);
+      EXPECT_LT(what.size(), 1000u);  // the frame itself quoted by the one text rule
+    }
+  }
+}

@@ -26,7 +26,9 @@
 // - stamps: a zero stamp means the arrival time; none at all: NoTime.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -78,6 +80,35 @@ const char* fixRefusedCounter(Refused why);
 /// The orientation block of a 6x6 pose covariance (row-major; x, y, z, then the rotations
 /// about X, Y, Z): rows and columns 3-5.
 Eigen::Matrix3d orientationBlock(const boost::array<double, 36>& covariance);
+
+/// Messages lost before they reached the node (a subscriber queue that overflowed, a dropped
+/// connection), counted from the gaps in each publisher's header.seq: a stamped message's seq
+/// goes up by one per message its publisher sends (rospy numbers every message; a roscpp
+/// sender numbers them only if it fills seq itself). A seq at or below the publisher's last (a
+/// restarted publisher, a sender that leaves seq 0) is no gap. At most kMaxPublishers are
+/// remembered; a new one beyond them forgets the one heard from longest ago.
+class SequenceGaps {
+ public:
+  static constexpr std::size_t kMaxPublishers = 64;
+  /// Notes message `seq` from `publisher`; returns the messages lost just before it.
+  std::uint64_t observe(const std::string& publisher, std::uint32_t seq);
+  /// Every message lost so far.
+  std::uint64_t lost() const { return lost_; }
+
+ private:
+  struct Last {
+    std::string publisher;
+    std::uint32_t seq;
+    std::uint64_t heard;  // the count of messages observed when last heard
+  };
+  std::vector<Last> last_;
+  std::uint64_t observed_ = 0;
+  std::uint64_t lost_ = 0;
+};
+
+/// The header.seq of a serialised stamped message (its first field: every type a fix or a rate
+/// is read from begins with a std_msgs/Header), or nothing when it is too short.
+std::optional<std::uint32_t> headerSeq(const std::uint8_t* data, std::size_t size);
 
 class FixDecoder {
  public:

@@ -87,14 +87,15 @@ class AttitudePropagatorRos : public EngineSink {
   template <class F>
   void guarded(const char* where, F&& f);
   /// Logs a line composed elsewhere (note_text.h, input_text.h ...), throttled per kind
-  /// (kWarnPeriod of ROS time) unless its kind is empty.
+  /// (kWarnPeriod of wall time: ROS time may take turns between two /clock publishers) unless
+  /// its kind is empty.
   void log(const std::optional<LogLine>& line);
 
   // Inputs.
   void onImu(const ros::MessageEvent<const sensor_msgs::Imu>& event);
   void onTwist(const ros::MessageEvent<const topic_tools::ShapeShifter>& event);
   void onTorque(const ros::MessageEvent<const topic_tools::ShapeShifter>& event);
-  void onClock(const rosgraph_msgs::Clock::ConstPtr& msg);
+  void onClock(const ros::MessageEvent<const rosgraph_msgs::Clock>& event);
   /// A gyro bias, in force for rates stamped at or after its stamp.
   void onGyroBias(const geometry_msgs::Vector3Stamped::ConstPtr& msg);
   /// An absolute attitude fix (fix_input.h).
@@ -184,7 +185,10 @@ class AttitudePropagatorRos : public EngineSink {
   std::unique_ptr<dynamic_reconfigure::Server<AttitudePropagatorConfig>> reconfigure_server_;
   NodeDiagnostics diagnostics_;
   std::uint64_t callback_errors_ = 0;
-  std::map<std::string, double> last_logged_;  // per kind of line: ROS time (s) last logged
+  std::map<std::string, double> last_logged_;  // per kind of line: wall time (s) last logged
+  // The publishers of the latest /clock tick and of the one before from another publisher:
+  // named when ROS time takes turns between two timelines.
+  std::string clock_publisher_, previous_clock_publisher_;
 };
 
 }  // namespace attitude_propagator

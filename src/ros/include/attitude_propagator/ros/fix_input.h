@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include <diagnostic_updater/DiagnosticStatusWrapper.h>
 #include <ros/time.h>
@@ -26,9 +27,11 @@ class FixInput {
   explicit FixInput(const NodeConfig& config);
 
   /// Decodes one message (`frames` is asked for the header frame and fix_frame's mount),
-  /// submits the fix, and logs a refusal or an outcome other than applied or waiting.
+  /// submits the fix, and logs a refusal or an outcome other than applied or waiting. The
+  /// messages of `publisher` lost before it (its header.seq's gap: SequenceGaps) are counted
+  /// (fixes_lost) and warned about.
   void onMessage(const topic_tools::ShapeShifter& msg, const ros::Time& arrival,
-                 AttitudeEngine& engine, FrameSource& frames);
+                 const std::string& publisher, AttitudeEngine& engine, FrameSource& frames);
   /// A fix has needed tf: the node keeps its listener.
   bool usesTf() const { return uses_tf_; }
   /// Fixes refused or not applied since the last one applied (counted from the counters, so a
@@ -47,6 +50,8 @@ class FixInput {
   void logOutcome(FixOutcome outcome, Stamp stamp, const AttitudeEngine& engine);
 
   FixDecoder decoder_;
+  SequenceGaps gaps_;  // fixes lost before the node (the subscriber queue, the transport)
+  std::vector<std::uint8_t> buffer_;  // a message's bytes, for its header.seq
   FixConfig config_;
   bool uses_tf_ = false;
   std::uint64_t applied_seen_ = 0;               // fixes_accepted when last looked at

@@ -51,6 +51,10 @@ class NodeDiagnostics {
     last_refused_ = now;
     refused_cause_ = std::move(cause);
   }
+  /// The /clock publishers of the two timelines last recognised (clockSourcesText), named
+  /// while the engine sees two.
+  void clockSources(std::string text) { clock_sources_ = std::move(text); }
+  const std::string& clockSources() const { return clock_sources_; }
   /// Closes the one-second window of input counters when it is due (input_window.h).
   void closeInputWindow(const ros::WallTime& now, const AttitudeEngine& engine, double max_dt) {
     window_.closeInputWindow(now, engine.counters(), max_dt);
@@ -69,6 +73,7 @@ class NodeDiagnostics {
   ros::WallTime last_input_;
   ros::WallTime last_refused_;
   std::string refused_cause_;
+  std::string clock_sources_;
   InputWindow window_;
 };
 
