@@ -9,9 +9,11 @@
 # modified.
 #   bash scripts/mutants_ros.sh [--only ID]... [--timeout S] [results_dir]
 #   bash scripts/mutants.sh --list --list-file mutants_ros.txt   the mutants, and whether each applies
-# The scratch workspace ($MUTANTS_ROS_DIR/ws, default $AP_WORKSPACE/mutants_ros) is kept: a
-# second run copies only the files that changed and rebuilds only what they touch. Its first
-# build compiles the whole node. JUnit XML goes to results_dir (default
+# The scratch workspace ($MUTANTS_ROS_DIR/ws; default $AP_WORKSPACE/mutants_ros when
+# AP_WORKSPACE is set, otherwise ~/.cache/attitude_propagator_mutants_ros, one place for every
+# clone: it holds a copy, not the checkout) is kept: a later run, from this clone or another,
+# copies only the files that changed and rebuilds only what they touch. Its first build
+# configures the workspace and compiles the whole node. JUnit XML goes to results_dir (default
 # $MUTANTS_ROS_DIR/results/mutants_ros.xml), one test case per mutant, a survivor failing.
 # Environment: MUTANTS_ROS_DIR, MUTANTS_ROS_TIMEOUT (seconds per rostest, default 300).
 # Exit status: 0 when every mutant is killed, 1 when one survives or does not apply, 2 when the
@@ -21,7 +23,8 @@ source "$(dirname "${BASH_SOURCE[0]}")/common.sh"
 source_ros
 
 driver="$REPO_DIR/test/mutants/mutate.py"
-dir="${MUTANTS_ROS_DIR:-$WORKSPACE/mutants_ros}"
+dir="${MUTANTS_ROS_DIR:-${AP_WORKSPACE:+$AP_WORKSPACE/mutants_ros}}"
+dir="${dir:-${XDG_CACHE_HOME:-$HOME/.cache}/attitude_propagator_mutants_ros}"
 ws="$dir/ws"
 package="$ws/src/attitude_propagator"
 timeout="${MUTANTS_ROS_TIMEOUT:-300}"
