@@ -2,10 +2,11 @@
 # Sourced, not run.
 
 REPO_DIR="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd -P)"
-# The catkin workspace and every build of the scripts live in the checkout's .workspace/
-# (ignored by git; the package is linked into its src/), so a build finds its sources at the
-# same relative path in every clone and the compiler cache below serves a clone anywhere.
-# AP_WORKSPACE puts them elsewhere.
+# The catkin workspace and the builds of the checkout's own files (the sanitizer build, the
+# mutants' plain CMake build) live in the checkout's .workspace/ (ignored by git; the package is
+# linked into its src/), so a build finds its sources at the same relative path in every clone
+# and the compiler cache below serves a clone anywhere. AP_WORKSPACE puts them elsewhere. (The
+# node mutants' catkin workspace holds a copy and lives at one place: scripts/mutants_ros.sh.)
 WORKSPACE="${AP_WORKSPACE:-$REPO_DIR/.workspace}"
 
 # ROS tools and matplotlib live in Debian's /usr/bin/python3, not in a python3 earlier on PATH.
