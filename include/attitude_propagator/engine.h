@@ -267,9 +267,20 @@ class AttitudeEngine : private PropagatorHost {
   /// and noted; clock_ follows. Returns the verdict.
   ClockTimeline::Verdict judgeClock(Stamp now);
   bool tooFarAhead(Stamp stamp) const;
-  /// Judges an input against its source's timeline; false when it is dropped.
-  bool inOrder(Source source, Stamp stamp);
+  /// An input as submitted (after rate_delay) with the stamp it was received with (the bias's).
+  struct ReceivedInput {
+    Input input;
+    Stamp received_stamp;
+  };
+  /// Judges an input against its source's timeline; false when it is not used now (dropped, or
+  /// held in a run from an earlier time). When it completes a backward jump, `confirming` gets
+  /// the inputs of the run before it, in order: they are used before it (docs/design.md §6.5).
+  bool inOrder(const ReceivedInput& input, std::vector<ReceivedInput>& confirming);
+  /// Counts and notes the inputs held in `source`'s run as stale: the run broke.
+  void dropHeldRun(Source source);
   void restartTimeline(Source source, Stamp stamp);
+  /// Hands an input in order to the model: the bias in force subtracted, due fixes applied.
+  void use(const ReceivedInput& received);
   SourceTimeline& timeline(Source source) { return timelines_[static_cast<std::size_t>(source)]; }
   void resetState(bool forget_time);
   Eigen::Matrix3d initialCovariance() const;
@@ -330,6 +341,9 @@ class AttitudeEngine : private PropagatorHost {
   ClockTimeline clock_line_;                 // ROS time's own timeline(s)
   Stamp rate_delay_ns_ = 0;                  // config_.rate_delay
   std::array<SourceTimeline, 3> timelines_;  // per Source: Imu, Twist, Torque
+  // Per source: the inputs of a run from an earlier time, held until it is a jump (then used
+  // from the new anchor) or breaks (then dropped as stale); fewer than kJumpConfirmation.
+  std::array<std::vector<ReceivedInput>, 3> held_runs_;
   EngineCounters counters_;
 
   // Fixes: the history (a ring, allocated as it grows, kept from the first fix on), the fixes

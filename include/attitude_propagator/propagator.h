@@ -91,8 +91,9 @@ struct EngineCounters {
   std::uint64_t rejected_no_rate = 0;     ///< REP-145: angular_velocity_covariance[0] == -1
   std::uint64_t rejected_type = 0;        ///< a message type the topic does not take
   std::uint64_t rejected_covariance = 0;  ///< not symmetric, negative or huge
-  /// At or before the newest input of its source (a straggler, by any amount; the first
-  /// inputs of a backward jump before it is recognised; a rate older than a set_state).
+  /// At or before the newest input of its source (a straggler, by any amount; a run from an
+  /// earlier time that broke before it was a jump, counted when it broke; a rate older than a
+  /// set_state). The inputs of a run are counted when it breaks or is a jump (then as used).
   std::uint64_t dropped_stale = 0;
   std::uint64_t dropped_no_tf = 0;
   std::uint64_t dropped_no_time = 0;

@@ -18,7 +18,8 @@ using Stamp = std::int64_t;
 /// Inputs in a row, each further back than backward_jump from the newest and each going on from
 /// the one before (later, by at most max_dt), that make a backward jump. One straggler is noise;
 /// two can be a driver resending its last pair after a reconnect; three in order are a timeline
-/// (a looped bag, a restarted driver). At 100 Hz the two dropped before it cost 20 ms.
+/// (a looped bag, a restarted driver). The engine holds the ones before it and uses them once
+/// the jump is recognised (or drops them when the run breaks): no sample of a jump is lost.
 constexpr int kJumpConfirmation = 3;
 
 /// Weight of a new input in the mean lag (an exponential mean over about this many inputs'
@@ -54,6 +55,9 @@ class SourceTimeline {
 
   /// The newest stamp used, empty before the first.
   std::optional<Stamp> newest() const { return newest_; }
+  /// How many inputs in a row, the last one judged included, make the run from an earlier time
+  /// that may become a backward jump (0: none; reset to 0 when the jump is recognised).
+  int run() const { return run_; }
   /// Forgets every stamp: time itself went back (the clock), so every stamp starts afresh.
   void forget() {
     newest_.reset();

@@ -272,9 +272,19 @@ void AttitudeEngine::submit(const Input& raw) {
     sink_.note({EngineNote::Future, input.source, input.stamp});
     return;
   }
-  if (!inOrder(input.source, input.stamp)) return;
+  std::vector<ReceivedInput> confirming;
+  const ReceivedInput received{input, raw.stamp};
+  if (!inOrder(received, confirming)) return;
+  // The inputs that confirmed a jump back go first, from the new anchor: the state after the
+  // jump is the one a fresh start on the new stamps has.
+  for (const ReceivedInput& earlier : confirming) use(earlier);
+  use(received);
+}
+
+void AttitudeEngine::use(const ReceivedInput& received) {
+  Input input = received.input;
   // A bias stamped at or before the message's own stamp applies to it.
-  if (input.source != Source::Torque) input.value -= biasAt(raw.stamp);
+  if (input.source != Source::Torque) input.value -= biasAt(received.received_stamp);
   submitToModel(input);
   if (keep_history_) applyDueFixes();
 }
@@ -310,7 +320,10 @@ void AttitudeEngine::replayStep(const ModelStep& step) {
   propagator_->replay(corrected);
 }
 
-bool AttitudeEngine::inOrder(Source source, Stamp stamp) {
+bool AttitudeEngine::inOrder(const ReceivedInput& received,
+                             std::vector<ReceivedInput>& confirming) {
+  const Source source = received.input.source;
+  const Stamp stamp = received.input.stamp;
   SourceTimeline& line = timeline(source);
   if (clock_ && line.heldAhead(*clock_, stamp, timePolicyOf(config_))) {
     // One forward glitch: taken, it would make the on-time inputs after it a jump back.
@@ -318,19 +331,37 @@ bool AttitudeEngine::inOrder(Source source, Stamp stamp) {
     sink_.note({EngineNote::HeldAhead, source, stamp});
     return false;
   }
-  switch (line.judge(stamp, timePolicyOf(config_))) {
-    case SourceTimeline::Verdict::InOrder:
-      break;
-    case SourceTimeline::Verdict::Straggler:
+  std::vector<ReceivedInput>& run = held_runs_[static_cast<std::size_t>(source)];
+  const SourceTimeline::Verdict verdict = line.judge(stamp, timePolicyOf(config_));
+  if (verdict == SourceTimeline::Verdict::JumpedBack) {
+    confirming = std::move(run);
+    run.clear();
+    restartTimeline(source, stamp);
+    if (clock_) timeline(source).observeLag(*clock_, stamp);
+    return true;
+  }
+  // The run held so far is over unless this input goes on with it.
+  if (line.run() <= 1) dropHeldRun(source);
+  if (verdict == SourceTimeline::Verdict::Straggler) {
+    if (line.run() >= 1) {
+      run.push_back(received);  // counted when the run is a jump or breaks
+    } else {
       ++counters_.dropped_stale;
       sink_.note({EngineNote::Stale, source, stamp});
-      return false;
-    case SourceTimeline::Verdict::JumpedBack:
-      restartTimeline(source, stamp);
-      break;
+    }
+    return false;
   }
   if (clock_) timeline(source).observeLag(*clock_, stamp);
   return true;
+}
+
+void AttitudeEngine::dropHeldRun(Source source) {
+  std::vector<ReceivedInput>& run = held_runs_[static_cast<std::size_t>(source)];
+  for (const ReceivedInput& held : run) {
+    ++counters_.dropped_stale;
+    sink_.note({EngineNote::Stale, source, held.input.stamp});
+  }
+  run.clear();
 }
 
 void AttitudeEngine::restartTimeline(Source source, Stamp stamp) {
@@ -521,6 +552,8 @@ void AttitudeEngine::resetState(bool forget_time) {
     origin_.reset();
     last_published_.reset();
     for (SourceTimeline& line : timelines_) line.forget();
+    // Runs from an earlier time of the timelines forgotten: never a jump now.
+    for (Source source : {Source::Imu, Source::Twist, Source::Torque}) dropHeldRun(source);
   }
 }
 

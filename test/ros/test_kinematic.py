@@ -280,12 +280,14 @@ class KinematicTest(unittest.TestCase):
         self.assertRotation(as_tuple(self.kin_state(50 * H).orientation),
                             axis_angle((0, 0, 1), 0.5))
         # A looped bag: 50 s back. The jump is recognised at the third stamp in a row from the
-        # earlier time (the first two are dropped as stragglers); the state there is the
-        # initial one, and goes on from it.
+        # earlier time (the first two held until then); the state starts again from the
+        # initial one at the first of them and all of them are integrated, as a fresh start.
         self.feed("kin", [(-50.0 + k * H, (0, 0, 1), None) for k in range(4)])
-        self.assertRotation(as_tuple(self.kin_state(-50.0 + 2 * H).orientation), (0, 0, 0, 1))
+        self.assertRotation(as_tuple(self.kin_state(-50.0).orientation), (0, 0, 0, 1))
+        self.assertRotation(as_tuple(self.kin_state(-50.0 + 2 * H).orientation),
+                            axis_angle((0, 0, 1), 2 * H))
         self.assertRotation(as_tuple(self.kin_state(-50.0 + 3 * H).orientation),
-                            axis_angle((0, 0, 1), H))
+                            axis_angle((0, 0, 1), 3 * H))
         # reset calls count too: this test's setUp reset it once, the jump once more.
         self.diag.wait_counter("/kin/attitude_propagator", "resets", before + 1)
 
