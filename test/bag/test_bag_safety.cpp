@@ -587,7 +587,9 @@ int interruptWhenWriting(const TempDir& dir, const std::string& command,
 }
 
 // SIGHUP, SIGINT and SIGTERM while the output is being written: exit 128 + the signal and the
-// partial output removed; a second signal right after the first too (the handler removes it).
+// partial output removed; a second signal right after the first too (the handler removes it and
+// exits with 128 + the signal it handled second: when both are pending at once, Linux delivers
+// the lower-numbered first, so after SIGTERM then SIGINT either may be the second).
 TEST(BagSafety, SignalsRemoveThePartialOutput) {
   TempDir dir;
   SceneBag scene;
@@ -603,7 +605,12 @@ TEST(BagSafety, SignalsRemoveThePartialOutput) {
     const int status = interruptWhenWriting(dir, command, signals);
     if (status == -2) continue;  // finished before the partial file was seen: nothing to test
     ++tried;
-    EXPECT_EQ(status, 128 + signals.back()) << signals.size() << " signals";
+    if (signals.size() == 1 || signals.front() == signals.back()) {
+      EXPECT_EQ(status, 128 + signals.back()) << signals.size() << " signals";
+    } else {
+      EXPECT_TRUE(status == 128 + signals.front() || status == 128 + signals.back())
+          << "exit " << status << " after signals " << signals.front() << ", " << signals.back();
+    }
     EXPECT_TRUE(noPartialFiles(dir));
     EXPECT_FALSE(exists(dir.file("out.bag")));
   }
