@@ -236,6 +236,17 @@ TEST(BagSafety, OutputLargerThanTheDiskIsRefusedAtTheStart) {
 // ---------------------------------------------------------------------------------------------
 
 /// Overwrites `n` bytes at `position` with a pattern.
+// Three Imu messages 10 ms apart on /imu/data_raw, each with FRAME_ID.
+void writeImuBag(const std::string& path, const std::string& frame_id) {
+  rosbag::Bag bag(path, rosbag::bagmode::Write);
+  for (int k = 0; k < 3; ++k) {
+    sensor_msgs::Imu m;
+    m.header.stamp = rosTime(stampAt(0.01 * k));
+    m.header.frame_id = frame_id;
+    bag.write("/imu/data_raw", m.header.stamp, m);
+  }
+}
+
 void damage(const std::string& path, std::uint64_t position, std::size_t n) {
   std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
   f.seekp(static_cast<std::streamoff>(position));
@@ -297,15 +308,7 @@ TEST(BagSafety, OtherFormatVersionIsNamed) {
 TEST(BagSafety, HugeFrameIdIsCappedInTheLog) {
   TempDir dir;
   const std::string in = dir.file("in.bag");
-  {
-    rosbag::Bag bag(in, rosbag::bagmode::Write);
-    for (int k = 0; k < 3; ++k) {
-      sensor_msgs::Imu m;
-      m.header.stamp = rosTime(stampAt(0.01 * k));
-      m.header.frame_id = std::string(10 * 1000 * 1000, 'f');
-      bag.write("/imu/data_raw", m.header.stamp, m);
-    }
-  }
+  writeImuBag(in, std::string(10 * 1000 * 1000, 'f'));
   const RunResult r = run(kPropagate + " " + in + " -o " + dir.file("out.bag") + " --no-progress");
   EXPECT_NE(r.output.find("...(10000000 bytes)"), std::string::npos) << r.output.size();
   EXPECT_LT(r.output.size(), 4000u);
@@ -316,15 +319,7 @@ TEST(BagSafety, HugeFrameIdIsCappedInTheLog) {
 TEST(BagSafety, HugeLeadingSlashFrameIdIsCappedInTheWarning) {
   TempDir dir;
   const std::string in = dir.file("in.bag");
-  {
-    rosbag::Bag bag(in, rosbag::bagmode::Write);
-    for (int k = 0; k < 3; ++k) {
-      sensor_msgs::Imu m;
-      m.header.stamp = rosTime(stampAt(0.01 * k));
-      m.header.frame_id = "/" + std::string(10 * 1000 * 1000, 'f');
-      bag.write("/imu/data_raw", m.header.stamp, m);
-    }
-  }
+  writeImuBag(in, "/" + std::string(10 * 1000 * 1000, 'f'));
   const RunResult r = run(kPropagate + " " + in + " -o " + dir.file("out.bag") + " --no-progress");
   EXPECT_NE(r.output.find("bytes)"), std::string::npos) << r.output.substr(0, 2000);
   EXPECT_LT(r.output.size(), 4000u);
