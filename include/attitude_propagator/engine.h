@@ -21,6 +21,10 @@
 #include <Eigen/Geometry>
 
 #include "attitude_propagator/dynamic_propagator.h"
+#include "attitude_propagator/estimation/aiding.h"
+#include "attitude_propagator/estimation/error_state.h"
+#include "attitude_propagator/estimation/magnetic_heading.h"
+#include "attitude_propagator/estimation/measurement.h"
 #include "attitude_propagator/integrator.h"
 #include "attitude_propagator/kinematic_propagator.h"
 #include "attitude_propagator/propagator.h"
@@ -81,21 +85,18 @@ enum class FixOutcome {
 };
 const char* fixOutcomeName(FixOutcome outcome);
 
-/// The error state beside the attitude: P_B, and with estimate_gyro_bias the bias estimate,
-/// its covariance and the cross-covariance with the attitude error (numerics.md §7.1).
-struct ErrorState {
-  Eigen::Matrix3d P_B = Eigen::Matrix3d::Zero();     ///< attitude error, body frame (rad^2)
-  Eigen::Matrix3d P_Bb = Eigen::Matrix3d::Zero();    ///< attitude error x bias error
-  Eigen::Matrix3d P_bb = Eigen::Matrix3d::Zero();    ///< bias error ((rad/s)^2)
-  Eigen::Vector3d bias_B = Eigen::Vector3d::Zero();  ///< estimated bias (rad/s), body frame
-};
-
 /// One entry of the fix history: a step of the model (a rate input as the model received it,
 /// after rate_delay and the configured bias, the bias estimate subtracted when it is applied;
-/// a torque; an advance of the dynamic model to a grid stamp), and the model, its orientation
-/// and the error state after it, at the stamp the state then held at.
+/// a torque; an advance of the dynamic model to a grid stamp) or a gravity or field measurement
+/// applied, and the model, its orientation and the error state after it, at the stamp the state
+/// then held at.
 struct FixHistoryEntry {
   ModelStep step;
+  /// A measurement applied after the state before it (a replay applies it again, as it was
+  /// applied: fused or as a reset), stamped D further along the motion: q_f = q (x) D.
+  std::shared_ptr<const Measurement> measurement;
+  Eigen::Quaterniond D = Eigen::Quaterniond::Identity();
+  bool measurement_reset = false;
   ModelSnapshot model;
   Eigen::Quaterniond q_WB = Eigen::Quaterniond::Identity();
   ErrorState error;
@@ -133,6 +134,8 @@ struct EngineConfig {
   std::uint64_t work_budget = std::uint64_t{1} << 18;
   /// Absolute attitude fixes and the gyro bias estimate.
   FixConfig fixes;
+  /// Gravity and the magnetic field as measurements (kinematic model).
+  AidingConfig aiding;
 };
 
 /// Inputs arriving on average more than this many seconds away from the clock (behind, or
@@ -182,6 +185,22 @@ class AttitudeEngine : private PropagatorHost {
   /// the angular velocity its own). Never throws. docs/design.md §6.9.
   FixOutcome submitFix(Stamp stamp, const Eigen::Quaterniond& q_WB,
                        const Eigen::Matrix3d& covariance_B);
+  /// A specific force f_B (m/s^2, body frame, gravity included: REP-145) measured at `stamp`,
+  /// with its covariance (m^2/s^4; all zero: accel_stddev^2 I): a measurement of the gravity
+  /// direction, applied at its stamp (moved back by rate_delay, as the IMU's rates are) like a
+  /// fix (the rates since replayed) and counted in counters().accel. Off (ignored) without
+  /// use_accel. Never throws. docs/design.md §6.10.
+  AidingOutcome submitAcceleration(Stamp stamp, const Eigen::Vector3d& f_B,
+                                   const Eigen::Matrix3d& covariance_B);
+  /// A magnetic field m_B (tesla, body frame) measured at `stamp`, with its covariance (T^2; all
+  /// zero: mag_stddev^2 I): a measurement of the heading alone, counted in counters().mag.
+  /// Off (ignored) without use_mag. Never throws.
+  AidingOutcome submitMagneticField(Stamp stamp, const Eigen::Vector3d& m_B,
+                                    const Eigen::Matrix3d& covariance_B);
+  /// Gravity and field samples waiting for the rates to reach their stamps.
+  std::size_t pendingMeasurements() const { return pending_measurements_.size(); }
+  /// Whether the tilt is known: always, but with align before the first gravity sample.
+  bool tiltKnown() const { return tilt_known_; }
   /// Fixes waiting for the rates to reach their stamps.
   std::size_t pendingFixes() const { return pending_fixes_.size(); }
   /// Rate inputs kept for late fixes (0 before the first fix).
@@ -318,8 +337,45 @@ class AttitudeEngine : private PropagatorHost {
   void keepApplied(const PendingFix& fix);
   /// Saves the model's state after a replayed step into its entry.
   void saveReplayed(FixHistoryEntry& entry);
-  /// Applies the waiting fixes the rates have reached.
+  /// Applies the waiting fixes (and gravity and field samples) the rates have reached.
   void applyDueFixes();
+  /// Where a fix or a measurement stamped at or before the newest entry acts: the last entry k
+  /// at or before its stamp, restored into the model (the newest state saved in live_), and
+  /// the motion D from it to the stamp. Empty (nothing touched) when it is too old.
+  struct Located {
+    std::size_t k;
+    Eigen::Quaterniond q_k;
+    Eigen::Quaterniond D;
+  };
+  std::optional<Located> locate(Stamp stamp);
+  /// Repeats the entries from `first` on from the model's state: the steps, and the
+  /// measurements as they were applied.
+  void replayFrom(std::size_t first);
+  /// A gravity or field sample on its way: the measurement and the value it was made from.
+  struct PendingMeasurement {
+    Stamp stamp;
+    std::shared_ptr<const Measurement> measurement;
+    Eigen::Vector3d value;
+  };
+  AidingOutcome placeMeasurement(PendingMeasurement pm);
+  AidingOutcome applyMeasurement(const PendingMeasurement& pm);
+  /// Fuses, aligns to or recovers with a measurement at the attitude q and error state e of
+  /// its stamp; `reset` says whether it was applied as a reset.
+  AidingOutcome decideMeasurement(const PendingMeasurement& pm, Eigen::Quaterniond& q,
+                                  ErrorState& e, bool& reset);
+  void applyDueMeasurements();
+  AidingCounters& aidingCounters(MeasurementKind kind) {
+    return kind == MeasurementKind::Gravity ? counters_.accel : counters_.mag;
+  }
+  /// Applies again, as it was applied, the measurement of `entry` to the model's state.
+  void reapplyMeasurement(const FixHistoryEntry& entry);
+  /// A new entry at position `pos` of the history (oldest first), the entries from it on moved
+  /// up by one; the oldest dropped when the memory bound is reached.
+  FixHistoryEntry& insertHistoryEntry(std::size_t& pos);
+  /// The slot after the newest entry of the history, grown or, at the memory bound, the oldest.
+  FixHistoryEntry& nextHistorySlot();
+  /// Fills `slot` with the model's state now.
+  void fillEntry(FixHistoryEntry& slot);
   void countFix(FixOutcome outcome);
   /// The bias prior: estimate zero, covariance gyro_bias_stddev^2 I, no cross terms.
   void resetBiasState();
@@ -360,6 +416,14 @@ class AttitudeEngine : private PropagatorHost {
   bool replaying_ = false;
   const Input* submitting_ = nullptr;  // the input being handed to the model, as received
   ModelSnapshot live_;                 // the newest state while a fix is worked out
+
+  // Gravity and the magnetic field (docs/design.md §6.10).
+  std::vector<PendingMeasurement> pending_measurements_;  // by stamp, kMaxPendingMeasurements
+  bool tilt_known_ = true;  // false with align until the first gravity sample
+  RejectionRun accel_run_;  // the gate's rejections in a row, per kind
+  RejectionRun mag_run_;
+  MagneticReference mag_reference_;     // the field's magnitude and dip, learned
+  std::optional<Stamp> mag_off_since_;  // the field off its reference since
 };
 
 }  // namespace attitude_propagator

@@ -126,4 +126,31 @@ constexpr int kFixRejectionRun = 5;
 /// (P = R = 0 on an axis) still has an invertible S: 1 nrad.
 constexpr double kMinInnovationVariance = 1e-18;
 
+// ---- Gravity and the magnetic field as measurements (docs/design.md §6.10) -------------------
+
+/// The gravity direction's gate: chi-square with 2 degrees of freedom at 99.9 %.
+constexpr double kAccelGate = 13.816;
+/// The heading's gate: chi-square with 1 degree of freedom at 99.9 %.
+constexpr double kMagGate = 10.828;
+/// An accelerometer sample whose |f| is off g by more than this fraction is linear
+/// acceleration (a bump, a launch, free fall) and not used (accel_rejected_magnitude).
+constexpr double kAccelMagnitudeTolerance = 0.1;
+/// A magnetometer sample whose |m| is off the learned magnitude by more than this fraction, or
+/// whose dip is off the learned dip by more than kMagDipTolerance (rad), is a disturbance and
+/// not used (mag_rejected_magnitude).
+constexpr double kMagMagnitudeTolerance = 0.15;
+constexpr double kMagDipTolerance = 0.1745329251994330;  // 10 degrees
+/// How fast the learned field follows the accepted samples (fraction per sample).
+constexpr double kMagReferenceFollow = 0.01;
+/// Seconds of gate rejections in a row after which the next sample the gate rejects is applied
+/// as a reset (counted *_recovered): by then the estimate, not the sensor, is what is wrong.
+constexpr double kAidingRecovery = 10.0;
+/// Gravity and field samples stamped ahead of the newest rate wait for the rates to reach them,
+/// at most this many; past it the one stamped furthest ahead is dropped (*_queue_full).
+constexpr std::size_t kMaxPendingMeasurements = 64;
+/// rad/s: the rate noise per sample assumed with use_accel or use_mag when neither rate_stddev
+/// nor the message gives one, so the covariance grows between measurements (a MEMS gyro's
+/// noise at 100 Hz, 0.3 deg/s per sample).
+constexpr double kAidedRateStddev = 0.005;
+
 }  // namespace attitude_propagator

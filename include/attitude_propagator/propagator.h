@@ -18,6 +18,7 @@
 
 #include "attitude_propagator/dynamic_propagator.h"
 #include "attitude_propagator/dynamic_state.h"
+#include "attitude_propagator/estimation/aiding.h"
 #include "attitude_propagator/integrator.h"
 #include "attitude_propagator/kinematic_propagator.h"
 #include "attitude_propagator/source_timeline.h"
@@ -128,6 +129,10 @@ struct EngineCounters {
   std::uint64_t fixes_bad_covariance = 0;  ///< non-finite, asymmetric, negative or above pi^2
   std::uint64_t fixes_queue_full = 0;      ///< ahead of the newest rate, the queue full: dropped
   std::uint64_t fixes_future = 0;          ///< stamped more than max_future ahead of the clock
+  // Gravity (use_accel) and the magnetic field (use_mag) as measurements (docs/design.md §6.10),
+  // named accel_* and mag_* after AidingCounters::forEach.
+  AidingCounters accel;
+  AidingCounters mag;
 };
 
 /// Something the node should log (throttled per kind).

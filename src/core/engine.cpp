@@ -7,6 +7,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "attitude_propagator/estimation/attitude_fix.h"
 #include "attitude_propagator/limits.h"
 #include "attitude_propagator/orientation_covariance.h"
 #include "attitude_propagator/publish_grid.h"
@@ -60,6 +61,37 @@ void checkFixConfig(const FixConfig& f) {
           "gyro_bias_stddev: accepted: 0 to 10 rad/s, got " + std::to_string(f.gyro_bias_stddev));
 }
 
+void checkAidingConfig(const EngineConfig& c) {
+  const AidingConfig& a = c.aiding;
+  auto require = [](bool ok, const std::string& what) {
+    if (!ok) throw std::invalid_argument(what);
+  };
+  if (a.any()) {
+    require(c.model == Model::Kinematic, std::string(a.use_accel ? "use_accel" : "use_mag") +
+                                             ": accepted: true with the kinematic model only");
+  }
+  require(std::isfinite(a.accel_stddev) && a.accel_stddev > 0.0 && a.accel_stddev <= 100.0,
+          "accel_stddev: accepted: more than 0 and at most 100 m/s^2, got " +
+              std::to_string(a.accel_stddev));
+  require(
+      std::isfinite(a.mag_stddev) && a.mag_stddev > 0.0 && a.mag_stddev <= 1e-2,
+      "mag_stddev: accepted: more than 0 and at most 0.01 T, got " + std::to_string(a.mag_stddev));
+  require(std::isfinite(a.declination) && std::abs(a.declination) <= M_PI,
+          "declination: accepted: -pi to pi rad (east of north positive), got " +
+              std::to_string(a.declination));
+  require(std::isfinite(a.accel_gate) && a.accel_gate > 0.0 && std::isfinite(a.mag_gate) &&
+              a.mag_gate > 0.0 && std::isfinite(a.recovery) && a.recovery > 0.0,
+          "accel_gate, mag_gate, recovery: accepted: finite numbers > 0");
+}
+
+/// The rate noise per sample in force for inputs without a covariance: rate_stddev, or with
+/// gravity or field measurements and no rate_stddev, kAidedRateStddev (else the covariance
+/// would never grow between measurements and the gates would refuse every one).
+Eigen::Matrix3d defaultRateCovariance(const EngineConfig& c) {
+  const double s = c.aiding.any() && c.rate_stddev == 0.0 ? kAidedRateStddev : c.rate_stddev;
+  return s * s * Eigen::Matrix3d::Identity();
+}
+
 /// A fix's covariance: like a rate covariance from a message (finite, symmetric, variances at
 /// least 0, correlations at most one), with variances at most pi^2 (an orientation's ceiling).
 bool validFixCovariance(const Eigen::Matrix3d& R) {
@@ -111,8 +143,11 @@ AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink)
   // A FIFO read stamps its samples alike; the sensor-clock filter gives each its own stamp.
   const bool fifo_reads = propagator_->takesRepeatedRateStamps();
   for (Source s : {Source::Imu, Source::Twist}) timeline(s).allowRepeatedStamps(fifo_reads);
-  default_R_B_ = config_.rate_stddev * config_.rate_stddev * Eigen::Matrix3d::Identity();
+  default_R_B_ = defaultRateCovariance(config_);
   checkFixConfig(config_.fixes);
+  checkAidingConfig(config_);
+  keep_history_ = config_.aiding.any();  // measurements are applied at their stamps
+  tilt_known_ = !config_.aiding.align;
   if (config_.fixes.estimate_gyro_bias && config_.model != Model::Kinematic) {
     throw std::invalid_argument("estimate_gyro_bias: accepted: true with the kinematic model only");
   }
@@ -138,6 +173,8 @@ void AttitudeEngine::anchorCovariance() {
 }
 
 Eigen::Matrix3d AttitudeEngine::initialCovariance() const {
+  // Aligned from gravity: nothing is known before the first sample.
+  if (config_.aiding.align) return kMaxOrientationVariance * Eigen::Matrix3d::Identity();
   const double s = config_.initial_orientation_stddev;
   return clampOrientationCovariance(s * s * Eigen::Matrix3d::Identity());
 }
@@ -548,6 +585,12 @@ void AttitudeEngine::resetState(bool forget_time) {
   // inputs dropped at the reset.
   counters_.fixes_too_old += pending_fixes_.size();
   pending_fixes_.clear();
+  for (const PendingMeasurement& pm : pending_measurements_)
+    ++aidingCounters(pm.measurement->kind()).too_old;
+  pending_measurements_.clear();
+  tilt_known_ = !config_.aiding.align;  // the initial state again
+  accel_run_.clear();
+  mag_run_.clear();
   if (forget_time) {
     origin_.reset();
     last_published_.reset();
@@ -564,6 +607,7 @@ std::string AttitudeEngine::reconfigure(const EngineConfig& next) {
     checkMaxFuture(next.max_future);
     rate_delay_ns = checkedRateDelay(next);
     checkFixConfig(next.fixes);
+    checkAidingConfig(next);
     if (next.fixes.estimate_gyro_bias && next.model != Model::Kinematic) {
       return "estimate_gyro_bias: accepted: true with the kinematic model only";
     }
@@ -579,7 +623,8 @@ std::string AttitudeEngine::reconfigure(const EngineConfig& next) {
   if (estimate_changed) resetBiasState();
   config_.gyro_bias_B = bias_B;
   rate_delay_ns_ = rate_delay_ns;
-  default_R_B_ = config_.rate_stddev * config_.rate_stddev * Eigen::Matrix3d::Identity();
+  default_R_B_ = defaultRateCovariance(config_);
+  keep_history_ = keep_history_ || config_.aiding.any();
   return {};  // P_B carries on: the new propagator starts from the current state
 }
 
@@ -603,6 +648,7 @@ std::string AttitudeEngine::setState(Stamp stamp, const Eigen::Quaterniond& q_WB
   }
   P_B_.setZero();  // pinned: the state is what the caller says it is
   error_.P_Bb.setZero();
+  tilt_known_ = true;
   clearHistory();  // a fix stamped before the pin is too old
   if (keep_history_) recordHistory(ModelStep{}, true);
   emitState(stamp);
@@ -697,6 +743,7 @@ void AttitudeEngine::applyDueFixes() {
     pending_fixes_.erase(pending_fixes_.begin());
     countFix(applyInStampOrder(fix));
   }
+  applyDueMeasurements();
 }
 
 void AttitudeEngine::clearHistory() {
@@ -711,26 +758,11 @@ void AttitudeEngine::recordHistory(const ModelStep& step, bool base) {
   if (!t) return;
   const std::optional<Stamp> stamp = stampAt(*t);
   if (!stamp) return;
-  FixHistoryEntry* slot = nullptr;
-  if (history_size_ < history_.size()) {
-    slot = &historyEntry(history_size_++);
-  } else if (history_.size() < kMaxFixHistorySamples) {
-    // Grow the ring: oldest first again, then one more slot at the end.
-    std::rotate(history_.begin(), history_.begin() + static_cast<std::ptrdiff_t>(history_head_),
-                history_.end());
-    history_head_ = 0;
-    history_.emplace_back();
-    slot = &history_.back();
-    ++history_size_;
-  } else {
-    slot = &history_[history_head_];  // full: the oldest goes (the memory bound, limits.h)
-    history_head_ = (history_head_ + 1) % history_.size();
-  }
+  FixHistoryEntry* slot = &nextHistorySlot();
   slot->step = step;
   slot->step.input.payload.reset();  // the message is not kept
-  propagator_->save(slot->model);
-  slot->q_WB = propagator_->state().q_WB;
-  slot->error = error_;
+  slot->measurement.reset();
+  fillEntry(*slot);
   slot->stamp = *stamp;
   slot->base = base;
   // Keep the newest entry at or before newest - fix_history (a fix stamped exactly there needs
@@ -740,6 +772,22 @@ void AttitudeEngine::recordHistory(const ModelStep& step, bool base) {
     history_head_ = (history_head_ + 1) % history_.size();
     --history_size_;
   }
+}
+
+FixHistoryEntry& AttitudeEngine::nextHistorySlot() {
+  if (history_size_ < history_.size()) return historyEntry(history_size_++);
+  if (history_.size() < kMaxFixHistorySamples) {
+    // Grow the ring: oldest first again, then one more slot at the end.
+    std::rotate(history_.begin(), history_.begin() + static_cast<std::ptrdiff_t>(history_head_),
+                history_.end());
+    history_head_ = 0;
+    history_.emplace_back();
+    ++history_size_;
+    return history_.back();
+  }
+  FixHistoryEntry& slot = history_[history_head_];  // full: the oldest goes (limits.h)
+  history_head_ = (history_head_ + 1) % history_.size();
+  return slot;
 }
 
 // A fix stamped before fixes already applied (an earlier fix that arrived later) is applied at
@@ -779,97 +827,84 @@ void AttitudeEngine::keepApplied(const PendingFix& fix) {
 // corrected there. Otherwise the estimate at the fix's stamp is interpolated along the geodesic
 // to the next state, q_f = q_k (x) D, D = Exp(a Log(q_k^-1 q_k+1)), a = (t_f - t_k) /
 // (t_k+1 - t_k); an error at t_f is the error at t_k seen through D (dtheta_k = C(D) dtheta_f),
-// so the innovation r = Log(q_f^-1 (x) q_fix) and the fix's covariance are carried to t_k by
-// C(D), and the update is made there.
-FixOutcome AttitudeEngine::applyFix(const PendingFix& fix) {
+// so the error state is carried to t_f (moveErrorState), the update made there, and the result
+// carried back to t_k.
+std::optional<AttitudeEngine::Located> AttitudeEngine::locate(Stamp stamp) {
   const std::size_t n = history_size_;
-  if (n == 0) return FixOutcome::TooOld;
+  if (n == 0) return std::nullopt;
   const Stamp newest = historyEntry(n - 1).stamp;
   const Stamp span = static_cast<Stamp>(std::llround(config_.fixes.history * 1e9));
-  if (newest - fix.stamp > span) return FixOutcome::TooOld;
+  if (newest - stamp > span) return std::nullopt;
   std::size_t k = n;
-  while (k > 0 && historyEntry(k - 1).stamp > fix.stamp) --k;
-  if (k == 0) return FixOutcome::TooOld;  // before the oldest state kept (or the anchor)
+  while (k > 0 && historyEntry(k - 1).stamp > stamp) --k;
+  if (k == 0) return std::nullopt;  // before the oldest state kept (or the anchor)
   --k;
-  FixHistoryEntry& base = historyEntry(k);
-  propagator_->save(live_);  // the newest state, kept should the gate reject the fix
+  const FixHistoryEntry& base = historyEntry(k);
+  propagator_->save(live_);  // the newest state, kept should the measurement not be applied
   propagator_->restore(base.model);
-  Eigen::Quaterniond q_k = base.q_WB;
-  Eigen::Quaterniond D = Eigen::Quaterniond::Identity();
-  if (base.stamp < fix.stamp && k + 1 < n) {
-    if (propagator_->advanceForFix(coreTime(fix.stamp))) {
-      q_k = propagator_->state().q_WB;  // the model's own state at the fix's stamp
+  Located at{k, base.q_WB, Eigen::Quaterniond::Identity()};
+  if (base.stamp < stamp && k + 1 < n) {
+    if (propagator_->advanceForFix(coreTime(stamp))) {
+      at.q_k = propagator_->state().q_WB;  // the model's own state at the stamp
     } else {
       const FixHistoryEntry& next = historyEntry(k + 1);
-      const double a = static_cast<double>(fix.stamp - base.stamp) /
-                       static_cast<double>(next.stamp - base.stamp);
-      D = expMap(a * logMap(q_k.conjugate() * next.q_WB));
+      const double a =
+          static_cast<double>(stamp - base.stamp) / static_cast<double>(next.stamp - base.stamp);
+      at.D = expMap(a * logMap(at.q_k.conjugate() * next.q_WB));
     }
   }
-  const Eigen::Matrix3d C = D.toRotationMatrix();
-  const Eigen::Vector3d r = C * logMap((q_k * D).conjugate() * fix.q_WB);
-  const Eigen::Matrix3d R = C * fix.R_B * C.transpose();
+  return at;
+}
 
-  ErrorState e = base.error;
-  Eigen::Quaterniond q = q_k;
+FixOutcome AttitudeEngine::applyFix(const PendingFix& fix) {
+  const std::optional<Located> at = locate(fix.stamp);
+  if (!at) return FixOutcome::TooOld;
+  const AttitudeFix measurement(fix.q_WB, fix.R_B, config_.fixes.gate);
+  Eigen::Quaterniond q = at->q_k * at->D;  // at the fix's stamp
+  ErrorState e = moveErrorState(historyEntry(at->k).error, at->D);
   bool reset = config_.fixes.mode == FixMode::Reset;
-  if (!reset) {
-    Eigen::Matrix3d S = e.P_B + R;
-    S.diagonal() = S.diagonal().cwiseMax(kMinInnovationVariance);
-    const Eigen::LDLT<Eigen::Matrix3d> ldlt(S);
-    const double d2 = r.dot(ldlt.solve(r));
-    if (!(d2 <= config_.fixes.gate)) {
-      if (rejected_in_a_row_ < kFixRejectionRun) {
-        ++rejected_in_a_row_;
-        propagator_->restore(live_);
-        return FixOutcome::RejectedGate;
-      }
-      reset = true;  // a run of rejections: the estimate is what is wrong
-    } else {
-      // Multiplicative EKF update of x = (dtheta_B, db), H = [I 0] (numerics.md §7.1), with
-      // the Joseph form for P. Without a bias estimate its blocks are zero and stay so.
-      using Matrix6 = Eigen::Matrix<double, 6, 6>;
-      Matrix6 P;
-      P << e.P_B, e.P_Bb, e.P_Bb.transpose(), e.P_bb;
-      const Eigen::Matrix<double, 6, 3> K = ldlt.solve(P.leftCols<3>().transpose()).transpose();
-      const Eigen::Matrix<double, 6, 1> dx = K * r;
-      q = q_k * expMap(dx.head<3>());
-      e.bias_B += dx.tail<3>();
-      Matrix6 I_KH = Matrix6::Identity();
-      I_KH.leftCols<3>() -= K;
-      P = I_KH * P * I_KH.transpose() + K * R * K.transpose();
-      P = 0.5 * (P + P.transpose());
-      e.P_B = clampOrientationCovariance(P.topLeftCorner<3, 3>());
-      e.P_Bb = P.topRightCorner<3, 3>();
-      e.P_bb = P.bottomRightCorner<3, 3>();
+  if (!reset && !fuseMeasurement(measurement, q, e).accepted) {
+    if (rejected_in_a_row_ < kFixRejectionRun) {
+      ++rejected_in_a_row_;
+      propagator_->restore(live_);
+      return FixOutcome::RejectedGate;
     }
+    reset = true;  // a run of rejections: the estimate is what is wrong
   }
-  if (reset) {
-    q = q_k * expMap(r);  // = q_fix (x) D^-1: the fix, carried back to t_k
-    e.P_B = clampOrientationCovariance(R);
-    e.P_Bb.setZero();
-  }
+  if (reset) measurement.reset(q, e);
   rejected_in_a_row_ = 0;
 
   // The corrected state replaces the saved one (moved to the fix's stamp when the model moved
   // there), and the steps since are repeated from it.
-  propagator_->correctOrientation(q);
-  error_ = e;
-  saveReplayed(base);
-  replaying_ = true;
-  for (std::size_t i = k + 1; i < n; ++i) {
-    FixHistoryEntry& entry = historyEntry(i);
-    if (!entry.base) replayStep(entry.step);
-    saveReplayed(entry);
-  }
-  replaying_ = false;
+  propagator_->correctOrientation(q * at->D.conjugate());
+  error_ = moveErrorState(e, at->D.conjugate());
+  saveReplayed(historyEntry(at->k));
+  replayFrom(at->k + 1);
   return reset ? FixOutcome::Reset : FixOutcome::Accepted;
 }
 
+void AttitudeEngine::replayFrom(std::size_t first) {
+  replaying_ = true;
+  for (std::size_t i = first; i < history_size_; ++i) {
+    FixHistoryEntry& entry = historyEntry(i);
+    if (entry.measurement) {
+      reapplyMeasurement(entry);
+    } else if (!entry.base) {
+      replayStep(entry.step);
+    }
+    saveReplayed(entry);
+  }
+  replaying_ = false;
+}
+
+void AttitudeEngine::fillEntry(FixHistoryEntry& slot) {
+  propagator_->save(slot.model);
+  slot.q_WB = propagator_->state().q_WB;
+  slot.error = error_;
+}
+
 void AttitudeEngine::saveReplayed(FixHistoryEntry& entry) {
-  propagator_->save(entry.model);
-  entry.q_WB = propagator_->state().q_WB;
-  entry.error = error_;
+  fillEntry(entry);
   if (const std::optional<double> t = propagator_->savedTime()) entry.stamp = *stampAt(*t);
 }
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The core library includes only what it may: the C++ standard library, Eigen, Boost and its
-# own headers (include/attitude_propagator/*.h, not the ROS layer's); the config library
+# own headers (include/attitude_propagator/*.h and its estimation room, not the ROS layer's); the config library
 # (node parameters, src/config) may also include its own (attitude_propagator/config/*.h). An allow-list, because
 # on Debian the ROS headers sit in /usr/include next to Boost's, where a stray include would
 # compile. The ROS layer's headers live outside the core's include directory
@@ -24,6 +24,10 @@ allowed() {
   esac
   case "$header" in
     \<Eigen/*\> | \<unsupported/Eigen/*\> | \<boost/*\>) return 0 ;;
+    \"attitude_propagator/estimation/*.h\")
+      local path=${header//\"/}
+      [[ "$path" != attitude_propagator/estimation/*/* && -f "include/$path" ]]
+      return ;;
     \"attitude_propagator/*.h\")
       local path=${header//\"/}
       [[ "$path" != attitude_propagator/*/* && -f "include/$path" ]]
@@ -47,6 +51,7 @@ while IFS= read -r line; do
     echo "$file:$lineno: $header is not allowed in the core (std, Eigen, Boost, attitude_propagator/*.h)"
     status=1
   fi
-done < <(grep -nHE '^[[:space:]]*#[[:space:]]*include' src/core/*.cpp include/attitude_propagator/*.h \
+done < <(grep -nHE '^[[:space:]]*#[[:space:]]*include' src/core/*.cpp src/core/estimation/*.cpp \
+  include/attitude_propagator/*.h include/attitude_propagator/estimation/*.h \
   src/config/*.cpp include/attitude_propagator/config/*.h)
 exit $status

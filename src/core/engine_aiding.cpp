@@ -1,0 +1,236 @@
+// The engine's side of gravity and the magnetic field as measurements (docs/design.md §6.10):
+// where in time a sample acts (at its stamp, through the fix history), whether it is used, and
+// what is counted. What a sample does to the state is the estimation room's (estimation/).
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include "attitude_propagator/engine.h"
+#include "attitude_propagator/estimation/gravity_direction.h"
+#include "attitude_propagator/estimation/magnetic_heading.h"
+#include "attitude_propagator/limits.h"
+#include "attitude_propagator/orientation_covariance.h"
+
+namespace attitude_propagator {
+
+namespace {
+
+/// A sensor's covariance from a message: finite, symmetric, variances at least 0,
+/// correlations at most one (the rate covariance's rules); zero: none given.
+bool validSensorCovariance(const Eigen::Matrix3d& R) {
+  return checkRateCovariance(R) == RateCovarianceCheck::Ok;
+}
+
+Eigen::Matrix3d orDefault(const Eigen::Matrix3d& covariance, double stddev) {
+  if (!covariance.isZero(0.0)) return 0.5 * (covariance + covariance.transpose());
+  return stddev * stddev * Eigen::Matrix3d::Identity();
+}
+
+}  // namespace
+
+AidingOutcome AttitudeEngine::submitAcceleration(Stamp stamp, const Eigen::Vector3d& f_B,
+                                                 const Eigen::Matrix3d& covariance_B) {
+  if (!config_.aiding.use_accel) return AidingOutcome::Off;
+  AidingOutcome outcome = AidingOutcome::Waiting;
+  if (!f_B.allFinite() || !validSensorCovariance(covariance_B) || !(f_B.norm() > 0.0)) {
+    outcome = AidingOutcome::Invalid;
+  } else if (std::abs(f_B.norm() / kStandardGravity - 1.0) > kAccelMagnitudeTolerance) {
+    outcome = AidingOutcome::RejectedMagnitude;  // a bump, a launch, free fall
+  }
+  if (outcome != AidingOutcome::Waiting) {
+    counters_.accel.count(outcome);
+    return outcome;
+  }
+  auto measurement = std::make_shared<const GravityDirection>(
+      f_B, orDefault(covariance_B, config_.aiding.accel_stddev), config_.aiding.accel_gate);
+  // The IMU's accelerometer shares its gyro's filter and latency: moved back by rate_delay too.
+  return placeMeasurement({stamp - rate_delay_ns_, std::move(measurement), f_B});
+}
+
+AidingOutcome AttitudeEngine::submitMagneticField(Stamp stamp, const Eigen::Vector3d& m_B,
+                                                  const Eigen::Matrix3d& covariance_B) {
+  if (!config_.aiding.use_mag) return AidingOutcome::Off;
+  AidingOutcome outcome = AidingOutcome::Waiting;
+  if (!m_B.allFinite() || !validSensorCovariance(covariance_B) || !(m_B.norm() > 0.0)) {
+    outcome = AidingOutcome::Invalid;
+  } else if (!tilt_known_) {
+    outcome = AidingOutcome::NotAligned;  // a heading needs the vertical
+  } else if (!mag_reference_.matches(m_B, propagator_->state().q_WB)) {
+    // Off the learned field: a disturbance, unless it lasts; then the field is what changed
+    // (a new place, a calibration) and the reference starts again from it.
+    if (!mag_off_since_ || stamp < *mag_off_since_) mag_off_since_ = stamp;
+    if (static_cast<double>(stamp - *mag_off_since_) * 1e-9 < config_.aiding.recovery) {
+      outcome = AidingOutcome::RejectedMagnitude;
+    } else {
+      mag_reference_.restart(m_B, propagator_->state().q_WB);
+      mag_off_since_.reset();
+    }
+  } else {
+    mag_off_since_.reset();
+  }
+  if (outcome != AidingOutcome::Waiting) {
+    counters_.mag.count(outcome);
+    return outcome;
+  }
+  auto measurement = std::make_shared<const MagneticHeading>(
+      m_B, orDefault(covariance_B, config_.aiding.mag_stddev), config_.aiding.declination,
+      config_.aiding.mag_gate);
+  return placeMeasurement({stamp, std::move(measurement), m_B});
+}
+
+AidingOutcome AttitudeEngine::placeMeasurement(PendingMeasurement pm) {
+  AidingCounters& counters = aidingCounters(pm.measurement->kind());
+  if (tooFarAhead(pm.stamp)) {
+    counters.count(AidingOutcome::Future);  // it would wait for rates that may never come
+    return AidingOutcome::Future;
+  }
+  if (history_size_ > 0 && pm.stamp <= historyEntry(history_size_ - 1).stamp) {
+    const AidingOutcome outcome = applyMeasurement(pm);
+    counters.count(outcome);
+    return outcome;
+  }
+  // Ahead of the newest rate (or before the first): it waits for the rates to reach it.
+  auto later = [](Stamp t, const PendingMeasurement& other) { return t < other.stamp; };
+  auto at =
+      std::upper_bound(pending_measurements_.begin(), pending_measurements_.end(), pm.stamp, later);
+  if (pending_measurements_.size() >= kMaxPendingMeasurements) {
+    if (at == pending_measurements_.end()) {
+      counters.count(AidingOutcome::QueueFull);  // the furthest ahead
+      return AidingOutcome::QueueFull;
+    }
+    aidingCounters(pending_measurements_.back().measurement->kind())
+        .count(AidingOutcome::QueueFull);
+    pending_measurements_.pop_back();
+    at = std::upper_bound(pending_measurements_.begin(), pending_measurements_.end(), pm.stamp,
+                          later);
+  }
+  pending_measurements_.insert(at, std::move(pm));
+  return AidingOutcome::Waiting;
+}
+
+void AttitudeEngine::applyDueMeasurements() {
+  while (!pending_measurements_.empty() && history_size_ > 0 &&
+         pending_measurements_.front().stamp <= historyEntry(history_size_ - 1).stamp) {
+    const PendingMeasurement pm = std::move(pending_measurements_.front());
+    pending_measurements_.erase(pending_measurements_.begin());
+    aidingCounters(pm.measurement->kind()).count(applyMeasurement(pm));
+  }
+}
+
+AidingOutcome AttitudeEngine::decideMeasurement(const PendingMeasurement& pm, Eigen::Quaterniond& q,
+                                                ErrorState& e, bool& reset) {
+  const Measurement& m = *pm.measurement;
+  const bool gravity = m.kind() == MeasurementKind::Gravity;
+  RejectionRun& run = gravity ? accel_run_ : mag_run_;
+  reset = false;
+  if (gravity && !tilt_known_) {
+    m.reset(q, e);  // the first gravity sample: the tilt from it, the heading unknown
+    reset = true;
+    tilt_known_ = true;
+    run.clear();
+    return AidingOutcome::Aligned;
+  }
+  if (fuseMeasurement(m, q, e).accepted) {
+    run.accepted();
+    if (!gravity) mag_reference_.follow(pm.value, q);
+    return AidingOutcome::Accepted;
+  }
+  if (!run.rejected(pm.stamp, config_.aiding.recovery)) return AidingOutcome::RejectedGate;
+  m.reset(q, e);  // rejected this long: the estimate, not the sensor, is what is wrong
+  reset = true;
+  if (!gravity) mag_reference_.restart(pm.value, q);
+  return AidingOutcome::Recovered;
+}
+
+AidingOutcome AttitudeEngine::applyMeasurement(const PendingMeasurement& pm) {
+  const std::size_t n = history_size_;
+  if (n > 0 && historyEntry(n - 1).stamp == pm.stamp) {
+    // At the newest state (an IMU's gravity with its own rate): applied to it, nothing replayed.
+    Eigen::Quaterniond q = propagator_->state().q_WB;
+    ErrorState e = error_;
+    bool reset = false;
+    const AidingOutcome outcome = decideMeasurement(pm, q, e, reset);
+    if (outcome == AidingOutcome::RejectedGate) return outcome;
+    propagator_->correctOrientation(q);
+    error_ = e;
+    FixHistoryEntry& entry = nextHistorySlot();
+    entry.step = ModelStep{};
+    entry.measurement = pm.measurement;
+    entry.D = Eigen::Quaterniond::Identity();
+    entry.measurement_reset = reset;
+    entry.base = false;
+    fillEntry(entry);
+    entry.stamp = pm.stamp;
+    return outcome;
+  }
+  // Late: applied where it belongs, the steps since repeated, and the fixes applied after its
+  // stamp applied again after it (as a late fix does).
+  const std::optional<Located> at = locate(pm.stamp);
+  if (!at) return AidingOutcome::TooOld;
+  Eigen::Quaterniond q = at->q_k * at->D;
+  ErrorState e = moveErrorState(historyEntry(at->k).error, at->D);
+  bool reset = false;
+  const AidingOutcome outcome = decideMeasurement(pm, q, e, reset);
+  if (outcome == AidingOutcome::RejectedGate) {
+    propagator_->restore(live_);
+    return outcome;
+  }
+  const Stamp base_stamp = historyEntry(at->k).stamp;
+  propagator_->correctOrientation(q * at->D.conjugate());
+  error_ = moveErrorState(e, at->D.conjugate());
+  std::size_t pos = at->k + 1;
+  FixHistoryEntry& entry = insertHistoryEntry(pos);
+  entry.step = ModelStep{};
+  entry.measurement = pm.measurement;
+  entry.D = at->D;
+  entry.measurement_reset = reset;
+  entry.base = false;
+  fillEntry(entry);
+  entry.stamp = base_stamp;
+  replayFrom(pos + 1);
+  const auto later =
+      std::upper_bound(applied_fixes_.begin(), applied_fixes_.end(), pm.stamp,
+                       [](Stamp t, const PendingFix& other) { return t < other.stamp; });
+  const std::vector<PendingFix> again(later, applied_fixes_.end());
+  applied_fixes_.resize(applied_fixes_.size() - again.size());
+  const int rejected_in_a_row = rejected_in_a_row_;
+  for (const PendingFix& g : again) {
+    const FixOutcome o = applyFix(g);
+    if (o == FixOutcome::Accepted || o == FixOutcome::Reset) keepApplied(g);
+  }
+  rejected_in_a_row_ = rejected_in_a_row;
+  return outcome;
+}
+
+void AttitudeEngine::reapplyMeasurement(const FixHistoryEntry& entry) {
+  Eigen::Quaterniond q = propagator_->state().q_WB * entry.D;
+  ErrorState e = moveErrorState(error_, entry.D);
+  if (entry.measurement_reset) {
+    entry.measurement->reset(q, e);
+  } else {
+    fuseMeasurement(*entry.measurement, q, e, true);
+  }
+  propagator_->correctOrientation(q * entry.D.conjugate());
+  error_ = moveErrorState(e, entry.D.conjugate());
+}
+
+FixHistoryEntry& AttitudeEngine::insertHistoryEntry(std::size_t& pos) {
+  // Oldest first again; at the memory bound the oldest goes.
+  std::rotate(history_.begin(), history_.begin() + static_cast<std::ptrdiff_t>(history_head_),
+              history_.end());
+  history_head_ = 0;
+  if (history_size_ >= kMaxFixHistorySamples && pos > 0) {
+    std::move(history_.begin() + 1, history_.begin() + static_cast<std::ptrdiff_t>(history_size_),
+              history_.begin());
+    --history_size_;
+    --pos;
+  }
+  if (history_size_ == history_.size()) history_.emplace_back();
+  std::move_backward(history_.begin() + static_cast<std::ptrdiff_t>(pos),
+                     history_.begin() + static_cast<std::ptrdiff_t>(history_size_),
+                     history_.begin() + static_cast<std::ptrdiff_t>(history_size_) + 1);
+  ++history_size_;
+  return history_[pos];
+}
+
+}  // namespace attitude_propagator

@@ -1,0 +1,80 @@
+#include "attitude_propagator/estimation/aiding.h"
+
+namespace attitude_propagator {
+
+const char* aidingOutcomeName(AidingOutcome outcome) {
+  switch (outcome) {
+    case AidingOutcome::Accepted:
+      return "accepted";
+    case AidingOutcome::Aligned:
+      return "aligned";
+    case AidingOutcome::Recovered:
+      return "recovered";
+    case AidingOutcome::Waiting:
+      return "waiting";
+    case AidingOutcome::RejectedGate:
+      return "rejected_gate";
+    case AidingOutcome::RejectedMagnitude:
+      return "rejected_magnitude";
+    case AidingOutcome::NotAligned:
+      return "not_aligned";
+    case AidingOutcome::TooOld:
+      return "too_old";
+    case AidingOutcome::Invalid:
+      return "invalid";
+    case AidingOutcome::QueueFull:
+      return "queue_full";
+    case AidingOutcome::Future:
+      return "future";
+    case AidingOutcome::Off:
+      return "off";
+  }
+  return "unknown";
+}
+
+void AidingCounters::count(AidingOutcome outcome) {
+  switch (outcome) {
+    case AidingOutcome::Accepted:
+      ++accepted;
+      break;
+    case AidingOutcome::Aligned:
+      ++aligned;
+      break;
+    case AidingOutcome::Recovered:
+      ++recovered;
+      break;
+    case AidingOutcome::RejectedGate:
+      ++rejected_gate;
+      break;
+    case AidingOutcome::RejectedMagnitude:
+      ++rejected_magnitude;
+      break;
+    case AidingOutcome::NotAligned:
+      ++not_aligned;
+      break;
+    case AidingOutcome::TooOld:
+      ++too_old;
+      break;
+    case AidingOutcome::Invalid:
+      ++invalid;
+      break;
+    case AidingOutcome::QueueFull:
+      ++queue_full;
+      break;
+    case AidingOutcome::Future:
+      ++future;
+      break;
+    case AidingOutcome::Waiting:  // counted when the rates reach it
+    case AidingOutcome::Off:
+      break;
+  }
+}
+
+bool RejectionRun::rejected(Stamp stamp, double seconds) {
+  if (!since_ || stamp < *since_) since_ = stamp;
+  if (static_cast<double>(stamp - *since_) * 1e-9 < seconds) return false;
+  since_.reset();
+  return true;
+}
+
+}  // namespace attitude_propagator
