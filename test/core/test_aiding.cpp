@@ -147,6 +147,40 @@ TEST(AttitudeFix, AsAMeasurementItsResidualIsTheRotationVectorToTheFix) {
   expectJacobianMatchesResidual(m, kGeneric * ap::expMap(dtheta));
 }
 
+// The heading's noise is the field's across its horizontal part: a field noisy along the
+// horizontal field (and up) but quiet across it gives a quiet heading.
+TEST(MagneticHeading, ItsNoiseIsTheFieldsAcrossTheHorizontalFieldOverItsSquare) {
+  const double B = 50e-6, dip = 1.0;
+  const Eigen::Vector3d m_W = simulated_imu::earthField(B, dip, 0.0);  // north: +y
+  const double along = 4e-6, across = 0.5e-6, up = 3e-6;
+  const Eigen::Matrix3d R_W = Eigen::Vector3d(across * across, along * along, up * up).asDiagonal();
+  const Eigen::Matrix3d C = kGeneric.toRotationMatrix();
+  const ap::MagneticHeading m(kGeneric.conjugate() * m_W, C.transpose() * R_W * C, 0.0,
+                              ap::kMagGate);
+  const double h = B * std::cos(dip);
+  EXPECT_NEAR(m.linearize(kGeneric).R(0, 0), across * across / (h * h), 1e-12 * across * across / (h * h));
+}
+
+// The error state seen from a quarter turn further along: dtheta_f = C(D)^T dtheta_k, so a
+// covariance diag(1, 2, 3) about x, y, z is diag(2, 1, 3) after a quarter turn about z, the
+// cross-covariance turns alike, the bias's stays; and back with D^-1.
+TEST(ErrorState, MovingItAlongTheMotionTurnsItsAttitudeBlocksByTheMotion) {
+  ap::ErrorState e;
+  e.P_B = Eigen::Vector3d(1, 2, 3).asDiagonal();
+  e.P_Bb << 0.1, 0, 0, 0, 0.2, 0, 0, 0, 0.3;
+  e.P_bb = 0.5 * Eigen::Matrix3d::Identity();
+  const Eigen::Quaterniond D = engine_fixtures::aboutAxis({0, 0, 1}, M_PI / 2);
+  const ap::ErrorState f = ap::moveErrorState(e, D);
+  EXPECT_LE((f.P_B - Eigen::Matrix3d(Eigen::Vector3d(2, 1, 3).asDiagonal())).norm(), 1e-15);
+  Eigen::Matrix3d P_Bb;
+  P_Bb << 0, 0.2, 0, -0.1, 0, 0, 0, 0, 0.3;  // C^T P_Bb with C the quarter turn
+  EXPECT_LE((f.P_Bb - P_Bb).norm(), 1e-15);
+  EXPECT_EQ(f.P_bb, e.P_bb);
+  const ap::ErrorState back = ap::moveErrorState(f, D.conjugate());
+  EXPECT_LE((back.P_B - e.P_B).norm(), 1e-15);
+  EXPECT_LE((back.P_Bb - e.P_Bb).norm(), 1e-15);
+}
+
 // ---- the gates, on both sides ----------------------------------------------------------------
 
 // P = p^2 I and an isotropic force noise: S = (p^2 + (s/g)^2) I, and d2 = angle^2 / that.
@@ -364,6 +398,68 @@ TEST(Recovery, AfterTheRecoveryTimeOfRejectionsTheNextSampleResetsTheTilt) {
   EXPECT_EQ(engine.counters().accel.recovered, 1u);
 }
 
+// The IMU's accelerometer shares its gyro's delay: with rate_delay, a gravity sample stamped
+// with its rate acts at the rate's moved stamp, at once (not waiting for a later rate).
+TEST(RateDelay, AGravitySampleIsMovedBackWithItsRate) {
+  ap::EngineConfig c = aidedConfig();
+  c.rate_delay = 0.01;
+  Recorder sink;
+  ap::AttitudeEngine engine(c, sink);
+  engine.submit(imu(at(1.0), Eigen::Vector3d::Zero()));
+  EXPECT_EQ(engine.submitAcceleration(at(1.0), {0, 0, g}, Eigen::Matrix3d::Zero()),
+            ap::AidingOutcome::Aligned);
+  EXPECT_EQ(engine.pendingMeasurements(), 0u);
+}
+
+// A reset (or a clock jumping back) returns to the initial state: the tilt is unknown again and
+// the next gravity sample aligns it again.
+TEST(Alignment, AfterAResetTheNextGravitySampleAlignsAgain) {
+  Recorder sink;
+  ap::AttitudeEngine engine(aidedConfig(), sink);
+  const Eigen::Vector3d f = rpy(0.3, 0, 0).conjugate() * Eigen::Vector3d(0, 0, g);
+  engine.submit(imu(at(0.0), Eigen::Vector3d::Zero()));
+  ASSERT_EQ(engine.submitAcceleration(at(0.0), f, Eigen::Matrix3d::Zero()),
+            ap::AidingOutcome::Aligned);
+  engine.reset();
+  EXPECT_FALSE(engine.tiltKnown());
+  engine.submit(imu(at(0.1), Eigen::Vector3d::Zero()));
+  EXPECT_EQ(engine.submitAcceleration(at(0.1), f, Eigen::Matrix3d::Zero()),
+            ap::AidingOutcome::Aligned);
+  EXPECT_EQ(engine.counters().accel.aligned, 2u);
+}
+
+// A field off the one learned (a magnet near the sensor: 30 % stronger) is a disturbance: not
+// used, counted; once it has lasted kAidingRecovery seconds it is the field (a new place) and
+// the reference starts again from it.
+TEST(MagneticDisturbance, AFieldOffTheLearnedMagnitudeIsRejectedUntilItLasts) {
+  ap::EngineConfig c = aidedConfig();
+  c.aiding.align = false;
+  c.aiding.use_accel = false;
+  c.aiding.use_mag = true;
+  c.aiding.mag_stddev = 0.3e-6;
+  Recorder sink;
+  ap::AttitudeEngine engine(c, sink);
+  const Eigen::Vector3d m = simulated_imu::earthField(50e-6, 1.0, 0.0);
+  const double h = 0.1;
+  int k = 0;
+  for (; k < 10; ++k) {
+    engine.submit(imu(at(k * h), Eigen::Vector3d::Zero()));
+    engine.submitMagneticField(at(k * h), m, Eigen::Matrix3d::Zero());
+  }
+  EXPECT_EQ(engine.counters().mag.accepted, 10u);
+  const int n = static_cast<int>(std::lround(ap::kAidingRecovery / h));
+  for (int i = 0; i <= n; ++i, ++k) {
+    engine.submit(imu(at(k * h), Eigen::Vector3d::Zero()));
+    const ap::AidingOutcome o = engine.submitMagneticField(at(k * h), 1.3 * m, Eigen::Matrix3d::Zero());
+    EXPECT_EQ(o, i < n ? ap::AidingOutcome::RejectedMagnitude : ap::AidingOutcome::Accepted) << i;
+  }
+  EXPECT_EQ(engine.counters().mag.rejected_magnitude, static_cast<std::uint64_t>(n));
+  // Within the tolerance (10 % for 15 %) it is the field, and no disturbance.
+  engine.submit(imu(at(k * h), Eigen::Vector3d::Zero()));
+  EXPECT_EQ(engine.submitMagneticField(at(k * h), 1.3 * 1.1 * m, Eigen::Matrix3d::Zero()),
+            ap::AidingOutcome::Accepted);
+}
+
 // ---- the bias: what gravity makes observable ------------------------------------------------
 
 // Level and still, a bias on every axis: gravity makes the two horizontal components
@@ -455,6 +551,45 @@ TEST(Late, GravityAndFieldSamplesHandedInLateGiveTheStateTheyGiveOnTime) {
   const ap::EngineState between = runAided(0, 0.004, 1);
   const ap::EngineState between_late = runAided(0, 0.004, 6);
   EXPECT_LE(ap::rotationAngle(between.q_WB, between_late.q_WB), 1e-9);
+}
+
+// With absolute fixes at the same time: a late gravity sample is applied before the fixes
+// stamped after it, which are applied again after it, as on time.
+ap::EngineState runWithFixes(int accel_delay) {
+  ap::EngineConfig c = aidedConfig();
+  c.aiding.align = false;
+  c.kinematic.initial_q_WB = tumble().attitude(0.0);
+  c.initial_orientation_stddev = 0.01;
+  c.fixes.stddev = 0.01;
+  simulated_imu::Sensor sensor;
+  sensor.gyro_noise = 0.002;
+  sensor.accel_noise = 0.05;
+  const auto samples = simulated_imu::simulate(tumble(), sensor, 2.0);
+  Recorder sink;
+  ap::AttitudeEngine engine(c, sink);
+  const std::size_t n = samples.size();
+  for (std::size_t k = 0; k < n + accel_delay; ++k) {
+    if (k < n) {
+      engine.submit(imu(at(samples[k].t), samples[k].w_B));
+      if (k % 20 == 10) {
+        engine.submitFix(at(samples[k].t), samples[k].truth * ap::expMap({0.002, -0.001, 0.003}),
+                         Eigen::Matrix3d::Zero());
+      }
+    }
+    if (k >= static_cast<std::size_t>(accel_delay)) {
+      const auto& s = samples[k - accel_delay];
+      engine.submitAcceleration(at(s.t), s.f_B, Eigen::Matrix3d::Zero());
+    }
+  }
+  EXPECT_GT(engine.counters().fixes_accepted, 8u);
+  return engine.state();
+}
+
+TEST(Late, ALateGravitySampleGoesBeforeTheFixesStampedAfterIt) {
+  const ap::EngineState on_time = runWithFixes(0);
+  const ap::EngineState late = runWithFixes(4);
+  EXPECT_LE(ap::rotationAngle(on_time.q_WB, late.q_WB), 1e-9);
+  EXPECT_LE((on_time.P_B - late.P_B).cwiseAbs().maxCoeff(), 1e-12);
 }
 
 // ---- against a truth ------------------------------------------------------------------------
