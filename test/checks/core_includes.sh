@@ -16,8 +16,22 @@ scoped_allocator set shared_mutex sstream stack stdexcept streambuf string strin
 system_error thread tuple type_traits typeindex typeinfo unordered_map unordered_set utility \
 valarray variant vector "
 
+# The estimation room (the error state, the measurements) knows nothing of the engine, the
+# models or time beyond a stamp: it may include itself and these building blocks only.
+estimation_allows=" quaternion.h orientation_covariance.h limits.h source_timeline.h "
+
 allowed() {
   local header=$1 file=$2
+  case "$file" in
+    src/core/estimation/* | include/attitude_propagator/estimation/*)
+      case "$header" in
+        \"attitude_propagator/estimation/*.h\") ;;
+        \"attitude_propagator/*.h\")
+          local name=${header//\"/}
+          name=${name#attitude_propagator/}
+          [[ "$estimation_allows" == *" $name "* ]] || return 1 ;;
+      esac ;;
+  esac
   case "$file" in
     src/config/* | include/attitude_propagator/config/*)
       [[ "$header" == \"attitude_propagator/config/*.h\" && -f "include/${header//\"/}" ]] && return 0 ;;
