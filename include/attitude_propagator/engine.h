@@ -187,8 +187,10 @@ class AttitudeEngine : private PropagatorHost {
                        const Eigen::Matrix3d& covariance_B);
   /// A specific force f_B (m/s^2, body frame, gravity included: REP-145) measured at `stamp`,
   /// with its covariance (m^2/s^4; all zero: accel_stddev^2 I): a measurement of the gravity
-  /// direction, applied at its stamp (moved back by rate_delay, as the IMU's rates are) like a
-  /// fix (the rates since replayed) and counted in counters().accel. Off (ignored) without
+  /// direction, counted in counters().accel. Stamped as the last IMU rate submitted (the same
+  /// message, submitted after it), it acts where that rate took effect, whatever rate_delay or
+  /// the stamp filter did to its stamp, and nothing is kept for it; otherwise at its stamp
+  /// (moved back by rate_delay) like a fix (the rates since replayed). Off (ignored) without
   /// use_accel. Never throws. docs/design.md §6.10.
   AidingOutcome submitAcceleration(Stamp stamp, const Eigen::Vector3d& f_B,
                                    const Eigen::Matrix3d& covariance_B);
@@ -358,11 +360,15 @@ class AttitudeEngine : private PropagatorHost {
     Eigen::Vector3d value;
   };
   AidingOutcome placeMeasurement(PendingMeasurement pm);
+  /// Applies a measurement to the newest state; with the history kept (`kept` then holds it),
+  /// appends it as an entry of its own.
+  AidingOutcome applyAtNewest(const Measurement& m, Stamp stamp, const Eigen::Vector3d& value,
+                              std::shared_ptr<const Measurement> kept);
   AidingOutcome applyMeasurement(const PendingMeasurement& pm);
   /// Fuses, aligns to or recovers with a measurement at the attitude q and error state e of
   /// its stamp; `reset` says whether it was applied as a reset.
-  AidingOutcome decideMeasurement(const PendingMeasurement& pm, Eigen::Quaterniond& q,
-                                  ErrorState& e, bool& reset);
+  AidingOutcome decideMeasurement(const Measurement& m, Stamp stamp, const Eigen::Vector3d& value,
+                                  Eigen::Quaterniond& q, ErrorState& e, bool& reset);
   void applyDueMeasurements();
   AidingCounters& aidingCounters(MeasurementKind kind) {
     return kind == MeasurementKind::Gravity ? counters_.accel : counters_.mag;
@@ -419,8 +425,10 @@ class AttitudeEngine : private PropagatorHost {
 
   // Gravity and the magnetic field (docs/design.md §6.10).
   std::vector<PendingMeasurement> pending_measurements_;  // by stamp, kMaxPendingMeasurements
-  bool tilt_known_ = true;  // false with align until the first gravity sample
-  RejectionRun accel_run_;  // the gate's rejections in a row, per kind
+  bool tilt_known_ = true;                  // false with align until the first gravity sample
+  LinearAcceleration linear_acceleration_;  // seen lately in the gravity samples
+  std::optional<Stamp> last_imu_stamp_;     // as received, of the last IMU rate the model took
+  RejectionRun accel_run_;                  // the gate's rejections in a row, per kind
   RejectionRun mag_run_;
   MagneticReference mag_reference_;     // the field's magnitude and dip, learned
   std::optional<Stamp> mag_off_since_;  // the field off its reference since

@@ -142,9 +142,18 @@ constexpr double kMagMagnitudeTolerance = 0.15;
 constexpr double kMagDipTolerance = 0.1745329251994330;  // 10 degrees
 /// How fast the learned field follows the accepted samples (fraction per sample).
 constexpr double kMagReferenceFollow = 0.01;
-/// Seconds of gate rejections in a row after which the next sample the gate rejects is applied
-/// as a reset (counted *_recovered): by then the estimate, not the sensor, is what is wrong.
-constexpr double kAidingRecovery = 10.0;
+/// Seconds of gate rejections in a row after which the next gravity sample the gate rejects is
+/// applied as a reset (counted accel_recovered): by then the estimate, not the sensor, is what
+/// is wrong.
+constexpr double kAccelRecovery = 10.0;
+/// The same for the field (mag_recovered), and the time a field off its learned magnitude or
+/// dip takes to become the reference: longer, since a disturbance near a building, a vehicle
+/// or a motor lasts, and the gyro holds the heading meanwhile (its vertical bias estimated).
+constexpr double kMagRecovery = 30.0;
+/// Seconds over which the linear acceleration seen in the gravity samples is averaged (an
+/// exponential window): a turn or a braking lasts seconds, and while it lasts the gravity
+/// direction is trusted less. Chosen from that, not fitted to a stream.
+constexpr double kLinearAccelerationWindow = 1.0;
 /// Gravity and field samples stamped ahead of the newest rate wait for the rates to reach them,
 /// at most this many; past it the one stamped furthest ahead is dropped (*_queue_full).
 constexpr std::size_t kMaxPendingMeasurements = 64;

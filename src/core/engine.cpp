@@ -79,9 +79,12 @@ void checkAidingConfig(const EngineConfig& c) {
   require(std::isfinite(a.declination) && std::abs(a.declination) <= M_PI,
           "declination: accepted: -pi to pi rad (east of north positive), got " +
               std::to_string(a.declination));
+  require(std::isfinite(a.linear_window) && a.linear_window >= 0.0 && a.linear_window <= 3600.0,
+          "linear_window: accepted: 0 (none) to 3600 s, got " + std::to_string(a.linear_window));
   require(std::isfinite(a.accel_gate) && a.accel_gate > 0.0 && std::isfinite(a.mag_gate) &&
-              a.mag_gate > 0.0 && std::isfinite(a.recovery) && a.recovery > 0.0,
-          "accel_gate, mag_gate, recovery: accepted: finite numbers > 0");
+              a.mag_gate > 0.0 && std::isfinite(a.accel_recovery) && a.accel_recovery > 0.0 &&
+              std::isfinite(a.mag_recovery) && a.mag_recovery > 0.0,
+          "accel_gate, mag_gate, accel_recovery, mag_recovery: accepted: finite numbers > 0");
 }
 
 /// The rate noise per sample in force for inputs without a covariance: rate_stddev, or with
@@ -146,7 +149,8 @@ AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink)
   default_R_B_ = defaultRateCovariance(config_);
   checkFixConfig(config_.fixes);
   checkAidingConfig(config_);
-  keep_history_ = config_.aiding.any();  // measurements are applied at their stamps
+  // The field comes on a topic of its own, stamped between the rates: applied at its stamp.
+  keep_history_ = config_.aiding.use_mag;
   tilt_known_ = !config_.aiding.align;
   if (config_.fixes.estimate_gyro_bias && config_.model != Model::Kinematic) {
     throw std::invalid_argument("estimate_gyro_bias: accepted: true with the kinematic model only");
@@ -323,6 +327,7 @@ void AttitudeEngine::use(const ReceivedInput& received) {
   // A bias stamped at or before the message's own stamp applies to it.
   if (input.source != Source::Torque) input.value -= biasAt(received.received_stamp);
   submitToModel(input);
+  if (input.source == Source::Imu) last_imu_stamp_ = received.received_stamp;
   if (keep_history_) applyDueFixes();
 }
 
@@ -589,6 +594,8 @@ void AttitudeEngine::resetState(bool forget_time) {
     ++aidingCounters(pm.measurement->kind()).too_old;
   pending_measurements_.clear();
   tilt_known_ = !config_.aiding.align;  // the initial state again
+  last_imu_stamp_.reset();
+  linear_acceleration_.reset();
   accel_run_.clear();
   mag_run_.clear();
   if (forget_time) {
@@ -624,7 +631,7 @@ std::string AttitudeEngine::reconfigure(const EngineConfig& next) {
   config_.gyro_bias_B = bias_B;
   rate_delay_ns_ = rate_delay_ns;
   default_R_B_ = defaultRateCovariance(config_);
-  keep_history_ = keep_history_ || config_.aiding.any();
+  keep_history_ = keep_history_ || config_.aiding.use_mag;
   return {};  // P_B carries on: the new propagator starts from the current state
 }
 

@@ -41,10 +41,24 @@ AidingOutcome AttitudeEngine::submitAcceleration(Stamp stamp, const Eigen::Vecto
     counters_.accel.count(outcome);
     return outcome;
   }
-  auto measurement = std::make_shared<const GravityDirection>(
-      f_B, orDefault(covariance_B, config_.aiding.accel_stddev), config_.aiding.accel_gate);
+  const Eigen::Matrix3d R = orDefault(covariance_B, config_.aiding.accel_stddev);
+  const double linear_variance = linear_acceleration_.observe(
+      stamp, f_B - kStandardGravity * bodyUp(propagator_->state().q_WB), R.trace(),
+      config_.aiding.linear_window);
+  const GravityDirection measurement(f_B, R, config_.aiding.accel_gate,
+                                     tilt_known_ ? linear_variance : 0.0);
+  if (last_imu_stamp_ && stamp == *last_imu_stamp_) {
+    // With its own rate (the same message): where that rate took effect. Nothing to keep unless
+    // the history is on (fixes, the field, a late sample started it).
+    const AidingOutcome o = applyAtNewest(
+        measurement, stamp, f_B,
+        keep_history_ ? std::make_shared<const GravityDirection>(measurement) : nullptr);
+    counters_.accel.count(o);
+    return o;
+  }
   // The IMU's accelerometer shares its gyro's filter and latency: moved back by rate_delay too.
-  return placeMeasurement({stamp - rate_delay_ns_, std::move(measurement), f_B});
+  return placeMeasurement(
+      {stamp - rate_delay_ns_, std::make_shared<const GravityDirection>(measurement), f_B});
 }
 
 AidingOutcome AttitudeEngine::submitMagneticField(Stamp stamp, const Eigen::Vector3d& m_B,
@@ -59,7 +73,7 @@ AidingOutcome AttitudeEngine::submitMagneticField(Stamp stamp, const Eigen::Vect
     // Off the learned field: a disturbance, unless it lasts; then the field is what changed
     // (a new place, a calibration) and the reference starts again from it.
     if (!mag_off_since_ || stamp < *mag_off_since_) mag_off_since_ = stamp;
-    if (static_cast<double>(stamp - *mag_off_since_) * 1e-9 < config_.aiding.recovery) {
+    if (static_cast<double>(stamp - *mag_off_since_) * 1e-9 < config_.aiding.mag_recovery) {
       outcome = AidingOutcome::RejectedMagnitude;
     } else {
       mag_reference_.restart(m_B, propagator_->state().q_WB);
@@ -83,6 +97,12 @@ AidingOutcome AttitudeEngine::placeMeasurement(PendingMeasurement pm) {
   if (tooFarAhead(pm.stamp)) {
     counters.count(AidingOutcome::Future);  // it would wait for rates that may never come
     return AidingOutcome::Future;
+  }
+  if (!keep_history_) {
+    // Nothing is kept until a sample needs it (as for fixes): the history starts at the newest
+    // state.
+    keep_history_ = true;
+    recordHistory(ModelStep{}, true);
   }
   if (history_size_ > 0 && pm.stamp <= historyEntry(history_size_ - 1).stamp) {
     const AidingOutcome outcome = applyMeasurement(pm);
@@ -117,9 +137,9 @@ void AttitudeEngine::applyDueMeasurements() {
   }
 }
 
-AidingOutcome AttitudeEngine::decideMeasurement(const PendingMeasurement& pm, Eigen::Quaterniond& q,
+AidingOutcome AttitudeEngine::decideMeasurement(const Measurement& m, Stamp stamp,
+                                                const Eigen::Vector3d& value, Eigen::Quaterniond& q,
                                                 ErrorState& e, bool& reset) {
-  const Measurement& m = *pm.measurement;
   const bool gravity = m.kind() == MeasurementKind::Gravity;
   RejectionRun& run = gravity ? accel_run_ : mag_run_;
   reset = false;
@@ -132,36 +152,45 @@ AidingOutcome AttitudeEngine::decideMeasurement(const PendingMeasurement& pm, Ei
   }
   if (fuseMeasurement(m, q, e).accepted) {
     run.accepted();
-    if (!gravity) mag_reference_.follow(pm.value, q);
+    if (!gravity) mag_reference_.follow(value, q);
     return AidingOutcome::Accepted;
   }
-  if (!run.rejected(pm.stamp, config_.aiding.recovery)) return AidingOutcome::RejectedGate;
+  const double recovery = gravity ? config_.aiding.accel_recovery : config_.aiding.mag_recovery;
+  if (!run.rejected(stamp, recovery)) return AidingOutcome::RejectedGate;
   m.reset(q, e);  // rejected this long: the estimate, not the sensor, is what is wrong
   reset = true;
-  if (!gravity) mag_reference_.restart(pm.value, q);
+  if (!gravity) mag_reference_.restart(value, q);
   return AidingOutcome::Recovered;
+}
+
+AidingOutcome AttitudeEngine::applyAtNewest(const Measurement& m, Stamp stamp,
+                                            const Eigen::Vector3d& value,
+                                            std::shared_ptr<const Measurement> kept) {
+  Eigen::Quaterniond q = propagator_->state().q_WB;
+  ErrorState e = error_;
+  bool reset = false;
+  const AidingOutcome outcome = decideMeasurement(m, stamp, value, q, e, reset);
+  if (outcome == AidingOutcome::RejectedGate) return outcome;
+  propagator_->correctOrientation(q);
+  error_ = e;
+  if (!keep_history_ || history_size_ == 0) return outcome;
+  const Stamp state_stamp = historyEntry(history_size_ - 1).stamp;
+  FixHistoryEntry& entry = nextHistorySlot();
+  entry.step = ModelStep{};
+  entry.measurement = std::move(kept);
+  entry.D = Eigen::Quaterniond::Identity();
+  entry.measurement_reset = reset;
+  entry.base = false;
+  fillEntry(entry);
+  entry.stamp = state_stamp;
+  return outcome;
 }
 
 AidingOutcome AttitudeEngine::applyMeasurement(const PendingMeasurement& pm) {
   const std::size_t n = history_size_;
   if (n > 0 && historyEntry(n - 1).stamp == pm.stamp) {
-    // At the newest state (an IMU's gravity with its own rate): applied to it, nothing replayed.
-    Eigen::Quaterniond q = propagator_->state().q_WB;
-    ErrorState e = error_;
-    bool reset = false;
-    const AidingOutcome outcome = decideMeasurement(pm, q, e, reset);
-    if (outcome == AidingOutcome::RejectedGate) return outcome;
-    propagator_->correctOrientation(q);
-    error_ = e;
-    FixHistoryEntry& entry = nextHistorySlot();
-    entry.step = ModelStep{};
-    entry.measurement = pm.measurement;
-    entry.D = Eigen::Quaterniond::Identity();
-    entry.measurement_reset = reset;
-    entry.base = false;
-    fillEntry(entry);
-    entry.stamp = pm.stamp;
-    return outcome;
+    // At the newest state: applied to it, nothing replayed.
+    return applyAtNewest(*pm.measurement, pm.stamp, pm.value, pm.measurement);
   }
   // Late: applied where it belongs, the steps since repeated, and the fixes applied after its
   // stamp applied again after it (as a late fix does).
@@ -170,7 +199,7 @@ AidingOutcome AttitudeEngine::applyMeasurement(const PendingMeasurement& pm) {
   Eigen::Quaterniond q = at->q_k * at->D;
   ErrorState e = moveErrorState(historyEntry(at->k).error, at->D);
   bool reset = false;
-  const AidingOutcome outcome = decideMeasurement(pm, q, e, reset);
+  const AidingOutcome outcome = decideMeasurement(*pm.measurement, pm.stamp, pm.value, q, e, reset);
   if (outcome == AidingOutcome::RejectedGate) {
     propagator_->restore(live_);
     return outcome;

@@ -38,6 +38,8 @@ Eigen::Quaterniond rpy(double roll, double pitch, double yaw) {
                             Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()));
 }
 
+simulated_imu::Motion tumble();  // below, with the late samples
+
 // A generic attitude: no axis lines up with the world's.
 const Eigen::Quaterniond kGeneric = rpy(0.4, -0.7, 2.1);
 
@@ -81,32 +83,23 @@ TEST(GravityDirection, ItsNoiseIsTheForcesOverGSquaredInflatedByTheMagnitudesOff
               1e-15);
 }
 
-// H = u^T models the heading alone: an error about the body's up (the world's vertical) moves the
-// residual by itself; a tilt error moves it by tan(dip) times its part across the field (the
-// coupling the model leaves to gravity, docs/numerics.md §7.3) and H says nothing of it.
-TEST(MagneticHeading, TheResidualIsZeroAtTheTruthAndItsJacobianIsTheHeadingsSlope) {
+// The heading's Jacobian is the residual's slope about every axis: 1 about the body's up (the
+// heading itself), tan(dip) times a tilt about the field's horizontal direction, nothing about
+// the axis across it.
+TEST(MagneticHeading, TheResidualIsZeroAtTheTruthAndItsJacobianIsTheResidualsSlope) {
   const double declination = 0.2;
   const Eigen::Vector3d m_W = simulated_imu::earthField(48e-6, 1.1, declination);
   const Eigen::Vector3d m_B = kGeneric.conjugate() * m_W;
   const ap::MagneticHeading m(m_B, 1e-14 * Eigen::Matrix3d::Identity(), declination, ap::kMagGate);
   EXPECT_LE(std::abs(m.linearize(kGeneric).r(0)), 1e-12);
-  const double d = 1e-6;
-  const Eigen::Vector3d u = ap::bodyUp(kGeneric);
-  const Eigen::Quaterniond turned = kGeneric * ap::expMap(-d * u);
-  const ap::Linearized l = m.linearize(turned);
-  EXPECT_LE(std::abs(l.r(0) - (l.H * (d * u))(0)), 1e-12);
-  EXPECT_NEAR(l.r(0), d, 1e-12);
-  // A tilt about the horizontal axis across the field leaves the heading as it is, to first
-  // order; one about the field's own horizontal direction turns the dip into heading, tan(dip)
-  // times the tilt, which H leaves out.
+  expectJacobianMatchesResidual(m, kGeneric);
+  const ap::Linearized l = m.linearize(kGeneric);
   const Eigen::Vector3d along_W = Eigen::Vector3d(m_W.x(), m_W.y(), 0).normalized();
-  const Eigen::Vector3d across = kGeneric.conjugate() * Eigen::Vector3d::UnitZ().cross(along_W);
   const Eigen::Vector3d along = kGeneric.conjugate() * along_W;
-  EXPECT_LE(std::abs(m.linearize(kGeneric * ap::expMap(-d * across)).r(0)), 1e-11);
-  EXPECT_NEAR(std::abs(m.linearize(kGeneric * ap::expMap(-d * along)).r(0)), std::tan(1.1) * d,
-              1e-11);
-  EXPECT_LE(std::abs((l.H * across)(0)), 1e-15);
-  EXPECT_LE(std::abs((l.H * along)(0)), 1e-15);
+  const Eigen::Vector3d across = kGeneric.conjugate() * Eigen::Vector3d::UnitZ().cross(along_W);
+  EXPECT_NEAR((l.H * ap::bodyUp(kGeneric))(0), 1.0, 1e-12);
+  EXPECT_NEAR(std::abs((l.H * along)(0)), std::tan(1.1), 1e-12);
+  EXPECT_LE(std::abs((l.H * across)(0)), 1e-12);
 }
 
 TEST(MagneticHeading, TheResidualIsTheHeadingErrorAboutTheWorldsUp) {
@@ -158,7 +151,8 @@ TEST(MagneticHeading, ItsNoiseIsTheFieldsAcrossTheHorizontalFieldOverItsSquare) 
   const ap::MagneticHeading m(kGeneric.conjugate() * m_W, C.transpose() * R_W * C, 0.0,
                               ap::kMagGate);
   const double h = B * std::cos(dip);
-  EXPECT_NEAR(m.linearize(kGeneric).R(0, 0), across * across / (h * h), 1e-12 * across * across / (h * h));
+  EXPECT_NEAR(m.linearize(kGeneric).R(0, 0), across * across / (h * h),
+              1e-12 * across * across / (h * h));
 }
 
 // The error state seen from a quarter turn further along: dtheta_f = C(D)^T dtheta_k, so a
@@ -208,7 +202,9 @@ TEST(Gates, AHeadingJustInsideTheGateIsFusedJustOutsideItIsNot) {
   const double s = 1e-6;
   const double dip = 1.0;
   const double p = 0.01;
-  const double sigma = std::hypot(p, s / (B * std::cos(dip)));  // across the horizontal field
+  // S = H P H^T + R: |H|^2 = 1 + tan^2(dip) (the heading and a tilt about the field's
+  // horizontal direction), R across the horizontal field.
+  const double sigma = std::hypot(p / std::cos(dip), s / (B * std::cos(dip)));
   for (double ratio : {0.999, 1.001}) {
     const double angle = std::sqrt(ratio * ap::kMagGate) * sigma;
     const Eigen::Quaterniond truth = engine_fixtures::aboutAxis({0, 0, 1}, angle);
@@ -373,33 +369,64 @@ TEST(Configuration, TheDynamicModelAndAbsurdValuesAreRefusedNamingTheSetting) {
   EXPECT_THROW(ap::AttitudeEngine(d, sink), std::invalid_argument);
 }
 
-// A gate that rejects for kAidingRecovery seconds ends in one sample applied as a reset: a tilt
-// that was wrong (here: the estimate pinned 30 degrees off, with a tiny covariance) is set
+// A gate that rejects for kMagRecovery seconds ends in one sample applied as a reset: a heading
+// that was wrong (here: the estimate pinned 40 degrees off, with a tiny covariance) is set
 // right; before that time, nothing is.
-TEST(Recovery, AfterTheRecoveryTimeOfRejectionsTheNextSampleResetsTheTilt) {
+TEST(Recovery, AfterTheRecoveryTimeOfRejectionsTheNextSampleResetsTheHeading) {
   ap::EngineConfig c = aidedConfig();
   c.aiding.align = false;
+  c.aiding.use_accel = false;
+  c.aiding.use_mag = true;
+  c.aiding.mag_stddev = 0.3e-6;
   c.rate_stddev = 1e-9;
   Recorder sink;
   ap::AttitudeEngine engine(c, sink);
-  const Eigen::Quaterniond wrong = rpy(30 * kDeg, 0, 0);
+  const Eigen::Quaterniond wrong = rpy(0, 0, 40 * kDeg);
   ASSERT_EQ(engine.setState(at(0.0), wrong, Eigen::Vector3d::Zero()), "");
+  const Eigen::Vector3d m = simulated_imu::earthField(50e-6, 1.0, 0.0);
   const double h = 0.1;
-  const int n = static_cast<int>(std::lround(ap::kAidingRecovery / h));
+  const int n = static_cast<int>(std::lround(ap::kMagRecovery / h));
   for (int k = 1; k <= n + 1; ++k) {
     engine.submit(imu(at(k * h), Eigen::Vector3d::Zero()));
-    const ap::AidingOutcome o =
-        engine.submitAcceleration(at(k * h), {0, 0, g}, Eigen::Matrix3d::Zero());
-    // The first rejection at k = 1; kAidingRecovery s later, at k = n + 1, the reset.
+    const ap::AidingOutcome o = engine.submitMagneticField(at(k * h), m, Eigen::Matrix3d::Zero());
+    // The first rejection at k = 1; kMagRecovery s later, at k = n + 1, the reset.
     EXPECT_EQ(o, k <= n ? ap::AidingOutcome::RejectedGate : ap::AidingOutcome::Recovered) << k;
   }
-  EXPECT_LE(simulated_imu::tiltError(engine.state().q_WB, Eigen::Quaterniond::Identity()), 1e-12);
-  EXPECT_EQ(engine.counters().accel.rejected_gate, static_cast<std::uint64_t>(n));
-  EXPECT_EQ(engine.counters().accel.recovered, 1u);
+  EXPECT_LE(ap::rotationAngle(engine.state().q_WB, Eigen::Quaterniond::Identity()), 1e-9);
+  EXPECT_EQ(engine.counters().mag.rejected_gate, static_cast<std::uint64_t>(n));
+  EXPECT_EQ(engine.counters().mag.recovered, 1u);
 }
 
-// The IMU's accelerometer shares its gyro's delay: with rate_delay, a gravity sample stamped
-// with its rate acts at the rate's moved stamp, at once (not waiting for a later rate).
+TEST(Recovery, ARunEndsAfterItsTimeExactlyAndAnAcceptanceStartsItAgain) {
+  ap::RejectionRun run;
+  EXPECT_FALSE(run.rejected(at(1.0), 10.0));
+  EXPECT_FALSE(run.rejected(at(11.0) - 1, 10.0));
+  EXPECT_TRUE(run.rejected(at(11.0), 10.0));
+  EXPECT_FALSE(run.rejected(at(12.0), 10.0));  // a new run
+  run.accepted();
+  EXPECT_FALSE(run.rejected(at(21.0), 10.0));
+  EXPECT_FALSE(run.rejected(at(30.0), 10.0));
+}
+
+// Linear acceleration that lasts (a turn, a braking) is noise on the gravity direction while it
+// lasts: the average of the unexplained part over the window, less the sensor's noise, per
+// axis; a single sample far off moves the average by its share of the window only.
+TEST(LinearAcceleration, ALastingAccelerationIsAveragedOverTheWindowASingleOneIsNot) {
+  ap::LinearAcceleration seen;
+  const Eigen::Vector3d a(3.0, 0.0, 0.0);  // 3 m/s^2 unexplained
+  double v = 0.0;
+  for (int k = 0; k <= 500; ++k) v = seen.observe(at(0.01 * k), a, 0.0);
+  EXPECT_NEAR(v, 9.0 / 3.0 * (1.0 - std::exp(-5.0 / ap::kLinearAccelerationWindow)), 1e-6);
+  ap::LinearAcceleration once;
+  for (int k = 0; k < 100; ++k) once.observe(at(0.01 * k), Eigen::Vector3d::Zero(), 0.0);
+  const double bump = once.observe(at(1.0), Eigen::Vector3d(30.0, 0, 0), 0.0);
+  EXPECT_NEAR(bump, 900.0 / 3.0 * (1.0 - std::exp(-0.01 / ap::kLinearAccelerationWindow)), 1e-9);
+  // The sensor's own noise is no acceleration.
+  ap::LinearAcceleration noise;
+  for (int k = 0; k <= 500; ++k) v = noise.observe(at(0.01 * k), Eigen::Vector3d(0.1, 0, 0), 0.03);
+  EXPECT_EQ(v, 0.0);
+}
+
 TEST(RateDelay, AGravitySampleIsMovedBackWithItsRate) {
   ap::EngineConfig c = aidedConfig();
   c.rate_delay = 0.01;
@@ -429,7 +456,7 @@ TEST(Alignment, AfterAResetTheNextGravitySampleAlignsAgain) {
 }
 
 // A field off the one learned (a magnet near the sensor: 30 % stronger) is a disturbance: not
-// used, counted; once it has lasted kAidingRecovery seconds it is the field (a new place) and
+// used, counted; once it has lasted kMagRecovery seconds it is the field (a new place) and
 // the reference starts again from it.
 TEST(MagneticDisturbance, AFieldOffTheLearnedMagnitudeIsRejectedUntilItLasts) {
   ap::EngineConfig c = aidedConfig();
@@ -447,10 +474,11 @@ TEST(MagneticDisturbance, AFieldOffTheLearnedMagnitudeIsRejectedUntilItLasts) {
     engine.submitMagneticField(at(k * h), m, Eigen::Matrix3d::Zero());
   }
   EXPECT_EQ(engine.counters().mag.accepted, 10u);
-  const int n = static_cast<int>(std::lround(ap::kAidingRecovery / h));
+  const int n = static_cast<int>(std::lround(ap::kMagRecovery / h));
   for (int i = 0; i <= n; ++i, ++k) {
     engine.submit(imu(at(k * h), Eigen::Vector3d::Zero()));
-    const ap::AidingOutcome o = engine.submitMagneticField(at(k * h), 1.3 * m, Eigen::Matrix3d::Zero());
+    const ap::AidingOutcome o =
+        engine.submitMagneticField(at(k * h), 1.3 * m, Eigen::Matrix3d::Zero());
     EXPECT_EQ(o, i < n ? ap::AidingOutcome::RejectedMagnitude : ap::AidingOutcome::Accepted) << i;
   }
   EXPECT_EQ(engine.counters().mag.rejected_magnitude, static_cast<std::uint64_t>(n));
@@ -458,6 +486,31 @@ TEST(MagneticDisturbance, AFieldOffTheLearnedMagnitudeIsRejectedUntilItLasts) {
   engine.submit(imu(at(k * h), Eigen::Vector3d::Zero()));
   EXPECT_EQ(engine.submitMagneticField(at(k * h), 1.3 * 1.1 * m, Eigen::Matrix3d::Zero()),
             ap::AidingOutcome::Accepted);
+}
+
+// A gravity sample handed in apart from its rate (late) is moved back by rate_delay as its
+// rate was: the same as the stream stamped rate_delay earlier without it.
+TEST(RateDelay, ALateGravitySampleIsMovedBackAsItsRateWas) {
+  auto run = [](double delay, double shift) {
+    ap::EngineConfig c = aidedConfig();
+    c.aiding.use_mag = true;  // the history from the start
+    c.rate_delay = delay;
+    Recorder sink;
+    ap::AttitudeEngine engine(c, sink);
+    const auto samples = simulated_imu::simulate(tumble(), simulated_imu::Sensor{}, 1.0);
+    for (std::size_t k = 0; k < samples.size(); ++k) {
+      engine.submit(imu(at(samples[k].t + shift), samples[k].w_B));
+      if (k >= 2) {
+        engine.submitAcceleration(at(samples[k - 2].t + shift), samples[k - 2].f_B,
+                                  Eigen::Matrix3d::Zero());
+      }
+    }
+    return engine.state();
+  };
+  const ap::EngineState delayed = run(0.004, 0.0);
+  const ap::EngineState shifted = run(0.0, -0.004);
+  EXPECT_LE(ap::rotationAngle(delayed.q_WB, shifted.q_WB), 1e-12);
+  EXPECT_LE((delayed.P_B - shifted.P_B).cwiseAbs().maxCoeff(), 1e-15);
 }
 
 // ---- the bias: what gravity makes observable ------------------------------------------------
@@ -497,15 +550,18 @@ TEST(Bias, GravityMakesTheHorizontalBiasObservableAndNeverTheVertical) {
 // A tumbling body sampled at 100 Hz with gravity and field samples: handed in on time, or each
 // 30 ms late (after three more rates), or the field samples stamped between rates, the newest
 // state is the same to round-off, since a late sample is applied at its stamp and the steps
-// since repeated.
+// since repeated. With the linear acceleration's average on, a sample's noise is taken from the
+// state it arrives at, which a late one finds a little different: the same to that difference.
 simulated_imu::Motion tumble() {
   return {
       [](double t) { return rpy(0.5 * std::sin(0.7 * t), 0.4 * std::sin(0.5 * t + 1.0), 0.8 * t); },
       nullptr};
 }
 
-ap::EngineState runAided(int accel_delay, double mag_offset, int mag_delay) {
+ap::EngineState runAided(int accel_delay, double mag_offset, int mag_delay,
+                         double linear_window = 0.0) {
   ap::EngineConfig c = aidedConfig();
+  c.aiding.linear_window = linear_window;
   c.aiding.use_mag = true;
   c.aiding.mag_stddev = 0.3e-6;
   c.fixes.estimate_gyro_bias = true;
@@ -551,12 +607,18 @@ TEST(Late, GravityAndFieldSamplesHandedInLateGiveTheStateTheyGiveOnTime) {
   const ap::EngineState between = runAided(0, 0.004, 1);
   const ap::EngineState between_late = runAided(0, 0.004, 6);
   EXPECT_LE(ap::rotationAngle(between.q_WB, between_late.q_WB), 1e-9);
+  // The average on: the noise of a late sample from the state it arrives at.
+  const ap::EngineState adaptive = runAided(0, 0.0, 0, ap::kLinearAccelerationWindow);
+  const ap::EngineState adaptive_late = runAided(3, 0.0, 5, ap::kLinearAccelerationWindow);
+  EXPECT_LE(ap::rotationAngle(adaptive.q_WB, adaptive_late.q_WB), 2e-3);
 }
 
 // With absolute fixes at the same time: a late gravity sample is applied before the fixes
 // stamped after it, which are applied again after it, as on time.
 ap::EngineState runWithFixes(int accel_delay) {
   ap::EngineConfig c = aidedConfig();
+  c.aiding.linear_window = 0.0;  // the noise fixed (see above)
+  c.aiding.use_mag = true;       // the history from the start
   c.aiding.align = false;
   c.kinematic.initial_q_WB = tumble().attitude(0.0);
   c.initial_orientation_stddev = 0.01;

@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <optional>
 
+#include <Eigen/Core>
+
 #include "attitude_propagator/limits.h"
 #include "attitude_propagator/source_timeline.h"
 
@@ -24,7 +26,11 @@ struct AidingConfig {
   bool align = false;
   double accel_gate = kAccelGate;
   double mag_gate = kMagGate;
-  double recovery = kAidingRecovery;  ///< s of gate rejections in a row, then a reset
+  /// s over which the linear acceleration seen is averaged (LinearAcceleration); 0: none taken
+  /// (the direction's noise is the sensor's alone).
+  double linear_window = kLinearAccelerationWindow;
+  double accel_recovery = kAccelRecovery;  ///< s of gate rejections in a row, then a reset
+  double mag_recovery = kMagRecovery;      ///< the same for the field
   bool any() const { return use_accel || use_mag; }
 };
 
@@ -32,7 +38,7 @@ struct AidingConfig {
 enum class AidingOutcome {
   Accepted,           ///< fused at its stamp (the rates since replayed when it was late)
   Aligned,            ///< gravity: the first sample, the tilt set from it (align)
-  Recovered,          ///< applied as a reset after kAidingRecovery s of rejections
+  Recovered,          ///< applied as a reset after a long run of rejections (limits.h)
   Waiting,            ///< stamped ahead of the newest rate: applied when the rates reach it
   RejectedGate,       ///< the innovation beyond the chi-square gate
   RejectedMagnitude,  ///< gravity: |f| off g; field: |m| or the dip off the learned field
@@ -73,6 +79,30 @@ struct AidingCounters {
     f("queue_full", queue_full);
     f("future", future);
   }
+};
+
+/// The linear acceleration seen lately in the gravity samples: the part of each sample the
+/// estimate does not explain, f_B - g C_BW e_up, its squared size averaged over
+/// kLinearAccelerationWindow seconds (exponentially, by the samples' stamps, from zero). A sample
+/// is taken to carry that average, less the sensor's noise, as the variance of a linear
+/// acceleration per axis (GravityDirection): while a vehicle turns or brakes, or a hand shakes,
+/// the gravity direction is trusted less, and as much again once it stops; a single sample far
+/// off (a bump) is left to the gate.
+class LinearAcceleration {
+ public:
+  /// The variance (m^2/s^4 per axis) for the sample at `stamp` whose unexplained part is
+  /// `residual` (m/s^2), with the sensor's noise `noise_trace` (m^2/s^4, the covariance's trace),
+  /// averaged over `window` seconds.
+  double observe(Stamp stamp, const Eigen::Vector3d& residual, double noise_trace,
+                 double window = kLinearAccelerationWindow);
+  void reset() {
+    mean_ = 0.0;
+    last_.reset();
+  }
+
+ private:
+  double mean_ = 0.0;
+  std::optional<Stamp> last_;
 };
 
 /// The run of gate rejections of one kind: once it has lasted `seconds`, the next rejected

@@ -4,7 +4,8 @@
 // u onto z = f_B / |f_B|, in a basis B = [e1 e2] of the plane normal to u: r = B^T phi (2 rows: a
 // rotation about u is not observed). To first order u(q (x) Exp(dtheta)) = u + [u]x dtheta, so
 // phi = -(I - u u^T) dtheta and H = -B^T. The noise is the force's covariance over |f|^2 in that
-// plane, inflated by ((|f| - g) / g)^2 per axis: linear acceleration shows as |f| != g.
+// plane, inflated by the linear acceleration seen lately (the engine's estimate of it, over g^2)
+// and by ((|f| - g) / g)^2 per axis.
 #pragma once
 
 #include "attitude_propagator/estimation/measurement.h"
@@ -28,8 +29,10 @@ Eigen::Matrix<double, 3, 2> normalPlane(const Eigen::Vector3d& u);
 class GravityDirection final : public Measurement {
  public:
   /// f_B: the specific force (m/s^2, body frame), not zero; covariance_B its noise (m^2/s^4);
-  /// gate: chi-square with 2 degrees of freedom.
-  GravityDirection(const Eigen::Vector3d& f_B, const Eigen::Matrix3d& covariance_B, double gate);
+  /// linear_variance: the linear acceleration's variance per axis (m^2/s^4) the sample is taken
+  /// to carry; gate: chi-square with 2 degrees of freedom.
+  GravityDirection(const Eigen::Vector3d& f_B, const Eigen::Matrix3d& covariance_B, double gate,
+                   double linear_variance = 0.0);
   MeasurementKind kind() const override { return MeasurementKind::Gravity; }
   Linearized linearize(const Eigen::Quaterniond& q_WB) const override;
   double gate() const override { return gate_; }

@@ -3,10 +3,11 @@
 // compared with magnetic north: in ENU the field points to (sin D, cos D) east and north, D the
 // declination (east of true north positive), so the reference heading is pi/2 - D from east. The
 // residual is the signed angle r = wrap(pi/2 - D - atan2(h_y, h_x)) about the world's up; a body
-// error dtheta_B turns the world by C_WB dtheta_B, whose vertical part is u^T dtheta_B with u the
-// body's up, so H = u^T (1 row), and the gain's attitude rows are kept to u: the field never
-// moves roll and pitch, whatever its dip or a tilted disturbance. The noise is the field's
-// covariance across h over |h|^2.
+// error dtheta_B turns the measured field by C_WB (dtheta_B x m_B), so H = -n^T C_WB [m_B]x / |h|
+// (1 row, n across h): u^T about the body's up u, plus tan(dip) times a tilt about h's
+// direction, so the innovation's covariance holds the tilt's uncertainty too. The gain's
+// attitude rows are kept to u: the field never moves roll and pitch, whatever its dip or a
+// tilted disturbance. The noise is the field's covariance across h over |h|^2.
 #pragma once
 
 #include <optional>

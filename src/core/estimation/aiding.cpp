@@ -1,5 +1,8 @@
 #include "attitude_propagator/estimation/aiding.h"
 
+#include <algorithm>
+#include <cmath>
+
 namespace attitude_propagator {
 
 const char* aidingOutcomeName(AidingOutcome outcome) {
@@ -68,6 +71,19 @@ void AidingCounters::count(AidingOutcome outcome) {
     case AidingOutcome::Off:
       break;
   }
+}
+
+double LinearAcceleration::observe(Stamp stamp, const Eigen::Vector3d& residual, double noise_trace,
+                                   double window) {
+  if (!(window > 0.0)) return 0.0;
+  // Exponential window over the stamps, a = 1 - exp(-dt / window), from nothing seen: a sample
+  // far off the average (a bump) is the gate's to judge, a lasting acceleration (a turn) is
+  // the average's.
+  const double dt = last_ ? std::max(0.0, static_cast<double>(stamp - *last_) * 1e-9) : 0.0;
+  mean_ += (1.0 - std::exp(-dt / window)) * (residual.squaredNorm() - mean_);
+  if (!last_ || stamp > *last_) last_ = stamp;
+  // The three axes' sum, less the noise the sensor has anyway, spread over the three axes.
+  return std::max(0.0, mean_ - noise_trace) / 3.0;
 }
 
 bool RejectionRun::rejected(Stamp stamp, double seconds) {

@@ -32,13 +32,15 @@ Eigen::Vector3d rotationBetween(const Eigen::Vector3d& from, const Eigen::Vector
 }
 
 GravityDirection::GravityDirection(const Eigen::Vector3d& f_B, const Eigen::Matrix3d& covariance_B,
-                                   double gate)
+                                   double gate, double linear_variance)
     : z_B_(f_B.normalized()), gate_(gate) {
   const double f = f_B.norm();
   const double off = (f - kStandardGravity) / kStandardGravity;
-  // A unit vector's noise is the force's across it over |f|^2; linear acceleration (|f| != g)
-  // inflates it.
-  direction_covariance_ = covariance_B / (f * f) + off * off * Eigen::Matrix3d::Identity();
+  // A unit vector's noise is the force's across it over |f|^2; linear acceleration (|f| != g,
+  // or the acceleration seen lately) inflates it.
+  direction_covariance_ = covariance_B / (f * f) +
+                          (off * off + linear_variance / (kStandardGravity * kStandardGravity)) *
+                              Eigen::Matrix3d::Identity();
 }
 
 Linearized GravityDirection::linearize(const Eigen::Quaterniond& q_WB) const {

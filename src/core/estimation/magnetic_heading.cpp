@@ -33,7 +33,14 @@ Linearized MagneticHeading::linearize(const Eigen::Quaterniond& q_WB) const {
   const Eigen::Matrix3d C = q_WB.toRotationMatrix();
   Linearized m;
   m.r = MeasurementResidual::Constant(1, wrapAngle(reference_heading_ - std::atan2(h.y(), h.x())));
-  m.H = bodyUp(q_WB).transpose();
+  // A body error dtheta turns the measured field in the world by C (dtheta x m_B), and h's
+  // direction by its part across h over |h|: H = -n^T C [m_B]x / |h|. About the body's up this
+  // is 1 (the heading itself); across it, tan(dip) times a tilt about h's direction, which the
+  // innovation's covariance then holds, while the correction stays on the vertical.
+  const Eigen::Matrix3d m_cross = (Eigen::Matrix3d() << 0.0, -m_B_.z(), m_B_.y(), m_B_.z(), 0.0,
+                                   -m_B_.x(), -m_B_.y(), m_B_.x(), 0.0)
+                                      .finished();
+  m.H = -(across.transpose() * C * m_cross) / std::sqrt(h2);
   m.R =
       MeasurementNoise::Constant(1, 1, across.dot(C * covariance_B_ * C.transpose() * across) / h2);
   return m;
