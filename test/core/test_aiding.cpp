@@ -170,6 +170,16 @@ TEST(ErrorState, MovingItAlongTheMotionTurnsItsAttitudeBlocksByTheMotion) {
   P_Bb << 0, 0.2, 0, -0.1, 0, 0, 0, 0, 0.3;  // C^T P_Bb with C the quarter turn
   EXPECT_LE((f.P_Bb - P_Bb).norm(), 1e-15);
   EXPECT_EQ(f.P_bb, e.P_bb);
+  // From first principles, at a generic motion: an error v at t_k (the truth q_k (x) Exp(v))
+  // moved along D is the error Log((q_k D)^-1 (q_k Exp(v) D)) at t_f; a covariance v v^T moves
+  // to that error's outer product.
+  const Eigen::Quaterniond Dg = engine_fixtures::aboutAxis({0.3, -0.5, 0.8}, 1.1);
+  const Eigen::Vector3d v(1e-4, -2e-4, 0.5e-4);
+  const Eigen::Vector3d v_f =
+      ap::logMap((kGeneric * Dg).conjugate() * (kGeneric * ap::expMap(v) * Dg));
+  ap::ErrorState single;
+  single.P_B = v * v.transpose();
+  EXPECT_LE((ap::moveErrorState(single, Dg).P_B - v_f * v_f.transpose()).norm(), 1e-15);
   const ap::ErrorState back = ap::moveErrorState(f, D.conjugate());
   EXPECT_LE((back.P_B - e.P_B).norm(), 1e-15);
   EXPECT_LE((back.P_Bb - e.P_Bb).norm(), 1e-15);
