@@ -6,7 +6,8 @@
 //   handheld       130 s tumble, tilt up to ~55 deg, linear acceleration up to ~2 m/s^2
 //   vehicle_mag    the vehicle with the magnetometer and, from 150 s, a 10 s disturbance that
 //                  turns the horizontal field by 30 deg (an added field vector)
-//   handheld_control  the handheld rotation without linear acceleration: a control, in no target
+//   handheld_control, vehicle_mag_control  the same rotations (and field) without linear
+//                  acceleration: controls, in no target
 // The engine runs with parameters that say what the simulated sensor is (rate_stddev,
 // accel_stddev, mag_stddev) and a MEMS bias prior, nothing tuned on the streams; Madgwick runs at
 // beta in {0.01, 0.03, 0.1, 0.3} and the gain with the lowest attitude RMS is kept per stream.
@@ -328,12 +329,16 @@ int main(int argc, char** argv) {
                        mems(false).gyro_bias, true});
     streams.push_back({"vehicle_mag", sim::simulate(vehicle(), mems(true), 300.0), true,
                        mems(true).gyro_bias, true});
-    // A control, in no target: the handheld rotation with no linear acceleration, so the force
-    // is gravity and noise alone, as the EKF's model says.
+    // Controls, in no target: the rotations with no linear acceleration, so the force is gravity
+    // and noise alone, as the EKF's model says.
     sim::Motion still = handheld();
     still.acceleration_W = [](double) { return Eigen::Vector3d::Zero().eval(); };
     streams.push_back({"handheld_control", sim::simulate(still, mems(false), 130.0), false,
                        mems(false).gyro_bias, false});
+    sim::Motion level = vehicle();
+    level.acceleration_W = [](double) { return Eigen::Vector3d::Zero().eval(); };
+    streams.push_back({"vehicle_mag_control", sim::simulate(level, mems(true), 300.0), true,
+                       mems(true).gyro_bias, false});
     const std::vector<double> gains = {0.01, 0.03, 0.1, 0.3};
 
     // accel_stddev chosen on the handheld stream alone.
@@ -362,9 +367,10 @@ int main(int argc, char** argv) {
     for (const Stream& s : streams) {
       // The scene's own extremes, so the table says what the filters faced.
       double max_horizontal = 0, max_tilt = 0;
-      const sim::Motion motion = s.name == "handheld_control" ? still
-                                 : s.name == "handheld"       ? handheld()
-                                                              : vehicle();
+      const sim::Motion motion = s.name == "handheld_control"      ? still
+                                 : s.name == "vehicle_mag_control" ? level
+                                 : s.name == "handheld"            ? handheld()
+                                                                   : vehicle();
       for (const sim::Sample& x : s.samples) {
         const Eigen::Vector3d a = motion.acceleration_W(x.t);
         max_horizontal = std::max(max_horizontal, std::hypot(a.x(), a.y()));
@@ -390,9 +396,10 @@ int main(int argc, char** argv) {
           best = i;
         }
       }
-      const std::string label = s.name + (s.held_out                     ? " (held out)"
-                                          : s.name == "handheld_control" ? " (control)"
-                                                                         : "");
+      const std::string label =
+          s.name + (s.held_out                                     ? " (held out)"
+                    : s.name.find("_control") != std::string::npos ? " (control)"
+                                                                   : "");
       auto row = [&](const std::string& filter, const Metrics& m) {
         std::printf("| %s | %s | %s | %s | %s | %s | %s |\n", label.c_str(), filter.c_str(),
                     fmt(m.tilt_rms / kDeg).c_str(), fmt(m.tilt_max / kDeg).c_str(),
