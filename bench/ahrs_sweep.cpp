@@ -1,16 +1,17 @@
 // bench_ahrs: the engine with gravity (and the field) as measurements side by side with a
 // Madgwick gradient-descent filter (bench/madgwick.h, imu_filter_madgwick's algorithm) on the
 // same simulated IMU streams (test/core/simulated_imu.h), 100 Hz, a MEMS gyro:
-//   vehicle        300 s drive: turns, braking and accelerating, centripetal up to ~3 m/s^2,
+//   vehicle        300 s drive: turns, braking and accelerating, centripetal up to 2.6 m/s^2,
 //                  roll and pitch from the suspension and the road within 10 deg
-//   handheld       130 s tumble, tilt up to ~55 deg, linear acceleration up to ~2 m/s^2
+//   handheld       130 s tumble, tilt up to 52 deg, linear acceleration up to ~2 m/s^2
 //   vehicle_mag    the vehicle with the magnetometer and, from 150 s, a 10 s disturbance that
 //                  turns the horizontal field by 30 deg (an added field vector)
 //   handheld_control, vehicle_mag_control  the same rotations (and field) without linear
 //                  acceleration: controls, in no target
 // The engine runs with parameters that say what the simulated sensor is (rate_stddev,
-// accel_stddev, mag_stddev) and a MEMS bias prior, nothing tuned on the streams; Madgwick runs at
-// beta in {0.01, 0.03, 0.1, 0.3} and the gain with the lowest attitude RMS is kept per stream.
+// accel_stddev, mag_stddev) and a MEMS bias prior, and once more with an accel_stddev chosen on
+// the handheld stream alone (the vehicle streams held out); Madgwick runs at beta in
+// {0.01, 0.03, 0.1, 0.3} and the gain with the lowest attitude RMS is kept per stream.
 // Prints a markdown table; writes the tilt (and heading) error of the engine and of the kept
 // gain every 0.2 s to the CSV given (for bench/plot.py, docs/ahrs.png).
 // Usage: bench_ahrs [out.csv]
@@ -265,14 +266,14 @@ Errors runMadgwick(const Stream& s, double beta) {
 void checkGradient() {
   const Eigen::Vector4d q = Eigen::Vector4d(0.8, -0.3, 0.4, 0.33).normalized();
   const Eigen::Vector3d d(0.2, 0.5, -0.84), s = Eigen::Vector3d(0.1, -0.7, 0.6).normalized();
+  // |R(p)^T d - s|^2 / 2 for a unit p: eq. 20's f wherever |q| = 1.
   auto cost = [&](const Eigen::Vector4d& p) {
-    const Eigen::Quaterniond r(p(0), p(1), p(2), p(3));  // unnormalised: R(q)^T d as eq. 20
-    const Eigen::Matrix3d R = r.toRotationMatrix();      // Eigen normalises: compare at |q| = 1
+    const Eigen::Matrix3d R = Eigen::Quaterniond(p(0), p(1), p(2), p(3)).toRotationMatrix();
     return 0.5 * (R.transpose() * d - s).squaredNorm();
   };
   const Eigen::Vector4d g = bench::Madgwick::gradient(q, d, s);
   for (int i = 0; i < 4; ++i) {
-    // Along the sphere's tangent only (cost() is on unit quaternions): project the difference.
+    // Along the sphere's tangent only: eq. 20 holds on |q| = 1, so its radial slope is not R's.
     Eigen::Vector4d e = Eigen::Vector4d::Unit(i);
     e -= q.dot(e) * q;
     const double h = 1e-6;
