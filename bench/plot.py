@@ -3,11 +3,13 @@
 
 Usage: plot.py DATA_DIR DOCS_DIR [PAGE]
        plot.py --fixes DATA_DIR DOCS_DIR   (only the late fixes' chart, DOCS_DIR/fixes.png)
+       plot.py --ahrs DATA_DIR DOCS_DIR    (only the chart against Madgwick, DOCS_DIR/ahrs.png)
 
 Reads DATA_DIR/sweep.csv, stability.csv, invariants.csv, step_costs.json and, when present,
-node_bench.csv, real_streams.csv and fixes.csv; writes DOCS_DIR/*.png and DOCS_DIR/results.md, and, given
-PAGE (docs/benchmarks.md), replaces the text between its `<!-- >>> results -->` and
-`<!-- <<< results -->` markers, with the charts' paths relative to PAGE's folder.
+node_bench.csv, real_streams.csv, fixes.csv and ahrs.csv; writes DOCS_DIR/*.png and
+DOCS_DIR/results.md, and, given PAGE (docs/benchmarks.md), replaces the text between its
+`<!-- >>> results -->` and `<!-- <<< results -->` markers, with the charts' paths relative to
+PAGE's folder.
 
 Runs with Debian's /usr/bin/python3 and python3-matplotlib; no other dependency.
 """
@@ -1137,10 +1139,81 @@ def fixes_chart(rows, path):
     plt.close(fig)
 
 
+AHRS_STREAMS = [("handheld", "handheld tumble (tilt to 52 deg, 2 m/s^2; accel_stddev chosen here)"),
+                ("vehicle", "vehicle, held out (turns to 2.6 m/s^2, braking)"),
+                ("vehicle_mag", "vehicle + magnetometer, held out (field turned 30 deg at 150 s)")]
+
+
+def rms_of(values):
+    values = [v for v in values if not math.isnan(v)]
+    return math.sqrt(sum(v * v for v in values) / len(values)) if values else float("nan")
+
+
+def ahrs_label(name, stream):
+    """engine_accel_stddev_2 -> the engine and its setting; madgwick_beta_0.01 -> the peer."""
+    if name.startswith("engine_accel_stddev_"):
+        value = name[len("engine_accel_stddev_"):]
+        aids = "use_accel" + (", use_mag" if stream == "vehicle_mag" else "")
+        which = "the sensor's" if value == "0.05" else "chosen on handheld"
+        return f"engine ({aids}, accel_stddev {value}: {which})"
+    return "Madgwick beta " + name[len("madgwick_beta_"):] + " (best of 4 gains)"
+
+
+def ahrs_chart(rows, path, settle=10.0):
+    """The engine (use_accel, use_mag on the field's stream, the bias estimated; accel_stddev at
+    the sensor's value and at the one chosen on the handheld stream) against the best-gain
+    Madgwick filter (ahrs.csv, bench_ahrs): the tilt error per stream over time and the heading
+    error on the magnetometer's stream, each series' RMS after `settle` s in its label; the title
+    says which filter had the lower RMS on how many panels."""
+    panels = [(stream, "tilt_deg", title + ": tilt") for stream, title in AHRS_STREAMS]
+    panels.append(("vehicle_mag", "heading_deg", "vehicle + magnetometer, held out: heading"))
+    fig, axes = plt.subplots(len(panels), 1, figsize=(11, 13.5))
+    wins = []
+    for ax, (stream, column, title) in zip(axes, panels):
+        short = stream.replace("_mag", " + mag") + (" heading" if column == "heading_deg" else
+                                                    " tilt")
+        mine = [r for r in rows if r["stream"] == stream]
+        scores = {}
+        for name in dict.fromkeys(r["filter"] for r in mine):
+            series = [r for r in mine if r["filter"] == name]
+            t = [num(r, "t") for r in series]
+            y = [num(r, column) for r in series]
+            scores[name] = rms_of([v for v, tt in zip(y, t) if tt >= settle])
+            colour, width = (("tab:orange", 0.8) if name.startswith("madgwick") else
+                             ("tab:gray", 0.5) if name.endswith("_0.05") else ("tab:blue", 0.8))
+            ax.plot(t, y, color=colour, linewidth=width,
+                    label=f"{ahrs_label(name, stream)}: RMS {scores[name]:.3g} deg")
+        if stream == "vehicle_mag":
+            ax.axvspan(150.0, 161.0, color="tab:red", alpha=0.12, label="field disturbance")
+        if scores:
+            wins.append((min(scores, key=scores.get), short))
+        ax.set_title(title, fontsize=10)
+        ax.set_ylabel("deg")
+        ax.set_xlim(left=0)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8, loc="upper right")
+    axes[-1].set_xlabel("time (s)")
+    # The title names, per filter, the panels where its RMS is the lowest.
+    by_filter = defaultdict(list)
+    for name, short in wins:
+        by_filter[name].append(short)
+    verdict = "Which filter? The lowest RMS error:\n" + "\n".join(
+        f"{ahrs_label(name, '').split(' (')[0]}"
+        f"{' (accel_stddev ' + name.rsplit('_', 1)[1] + ')' if name.startswith('engine') else ''}"
+        f" on {', '.join(panels_won)}" for name, panels_won in by_filter.items())
+    fig.suptitle(verdict, fontsize=11)
+    fig.tight_layout()
+    fig.savefig(path, dpi=70)
+    plt.close(fig)
+
+
 def main(argv):
     if len(argv) > 1 and argv[1] == "--fixes":
         fixes_chart(read_csv(os.path.join(argv[2], "fixes.csv")),
                     os.path.join(argv[3], "fixes.png"))
+        return
+    if len(argv) > 1 and argv[1] == "--ahrs":
+        ahrs_chart(read_csv(os.path.join(argv[2], "ahrs.csv")), os.path.join(argv[3], "ahrs.png"))
         return
     data_dir, docs_dir = argv[1], argv[2]
     page = argv[3] if len(argv) > 3 else None
@@ -1162,6 +1235,9 @@ def main(argv):
     fixes_path = os.path.join(data_dir, "fixes.csv")
     if os.path.exists(fixes_path):
         fixes_chart(read_csv(fixes_path), os.path.join(docs_dir, "fixes.png"))
+    ahrs_path = os.path.join(data_dir, "ahrs.csv")
+    if os.path.exists(ahrs_path):
+        ahrs_chart(read_csv(ahrs_path), os.path.join(docs_dir, "ahrs.png"))
     costs_path = os.path.join(data_dir, "step_costs.json")
     medians = gbench_medians(costs_path) if os.path.exists(costs_path) else {}
     spreads = gbench_spreads(costs_path) if os.path.exists(costs_path) else {}

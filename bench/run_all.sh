@@ -4,6 +4,8 @@
 # 1. builds the package in Release (scripts/build.sh, workspace $AP_WORKSPACE as elsewhere),
 # 2. runs bench_sweep (work-precision sweep, stability map, invariants -> docs/data/*.csv),
 # 3. runs bench_step_costs (Google Benchmark -> docs/data/step_costs.json),
+# 3b. runs bench_ahrs (the engine against a Madgwick filter -> docs/data/ahrs.csv, its table in
+#    docs/data/ahrs.md),
 # 4. runs the node benchmark (bench/node_bench.sh -> docs/data/node_bench.csv) unless --no-node,
 # 5. draws the charts and the results table with Debian's python3-matplotlib (bench/plot.py ->
 #    docs/*.png, docs/results.md, and the section of docs/benchmarks.md between the results
@@ -45,6 +47,9 @@ if [ -x "$BIN/bench_step_costs" ]; then
 else
   echo "== Google Benchmark not found: no step costs" >&2
 fi
+
+echo "== bench_ahrs (the engine against a Madgwick filter)"
+"$BIN/bench_ahrs" "$DATA/ahrs.csv" | tee "$DATA/ahrs.md"
 
 if [ "$run_node" = 1 ]; then
   echo "== node benchmark"
