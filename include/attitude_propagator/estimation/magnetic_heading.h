@@ -19,9 +19,11 @@ namespace attitude_propagator {
 class MagneticHeading final : public Measurement {
  public:
   /// m_B: the field (tesla, body frame); covariance_B its noise (T^2); declination (rad);
-  /// gate: chi-square with 1 degree of freedom.
+  /// gate: chi-square with 1 degree of freedom; tilt_variance: rad^2 per axis the tilt may be
+  /// off beyond what the covariance says (gravity's linear acceleration seen lately, over g^2),
+  /// passed into the heading through the dip.
   MagneticHeading(const Eigen::Vector3d& m_B, const Eigen::Matrix3d& covariance_B,
-                  double declination, double gate);
+                  double declination, double gate, double tilt_variance = 0.0);
   MeasurementKind kind() const override { return MeasurementKind::MagneticField; }
   Linearized linearize(const Eigen::Quaterniond& q_WB) const override;
   double gate() const override { return gate_; }
@@ -35,6 +37,7 @@ class MagneticHeading final : public Measurement {
   Eigen::Matrix3d covariance_B_;
   double reference_heading_;  // pi/2 - declination, from east about up
   double gate_;
+  double tilt_variance_;
 };
 
 /// The field's own signature, learned from the samples: its magnitude and its dip (rad, positive

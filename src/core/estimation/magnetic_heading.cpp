@@ -17,11 +17,12 @@ double wrapAngle(double a) { return std::remainder(a, 2.0 * M_PI); }
 }  // namespace
 
 MagneticHeading::MagneticHeading(const Eigen::Vector3d& m_B, const Eigen::Matrix3d& covariance_B,
-                                 double declination, double gate)
+                                 double declination, double gate, double tilt_variance)
     : m_B_(m_B),
       covariance_B_(covariance_B),
       reference_heading_(M_PI / 2.0 - declination),
-      gate_(gate) {}
+      gate_(gate),
+      tilt_variance_(tilt_variance) {}
 
 Linearized MagneticHeading::linearize(const Eigen::Quaterniond& q_WB) const {
   const Eigen::Vector3d m_W = q_WB * m_B_;
@@ -43,6 +44,10 @@ Linearized MagneticHeading::linearize(const Eigen::Quaterniond& q_WB) const {
   m.H = -(across.transpose() * C * m_cross) / std::sqrt(h2);
   m.R =
       MeasurementNoise::Constant(1, 1, across.dot(C * covariance_B_ * C.transpose() * across) / h2);
+  // A tilt off by more than P says (linear acceleration) turns into heading alike.
+  const Eigen::Vector3d u = bodyUp(q_WB);
+  m.R(0, 0) +=
+      tilt_variance_ * (m.H * (Eigen::Matrix3d::Identity() - u * u.transpose())).squaredNorm();
   return m;
 }
 
