@@ -242,7 +242,7 @@ void AttitudePropagatorRos::onMag(
           logText(decoders_->magFrame()).c_str(), config_.parameters.body_frame.c_str(), q.x(),
           q.y(), q.z(), q.w());
     }
-    releaseTfListener(decoders_->mountFrame().empty() || !decoders_->magFrame().empty());
+    releaseTfListener(rates_settled_);
     engine_->submitMagneticField(field->stamp, field->value_B, field->covariance_B);
   });
 }
@@ -311,6 +311,8 @@ void AttitudePropagatorRos::warnFrames() {
 bool AttitudePropagatorRos::taken(const DecodedInput& in, const char* topic) {
   warnFrames();
   if (in.refusal) {
+    // Rates waiting for their mount keep the listener (the field's callback may not drop it).
+    if (in.refusal->why == Refused::NoTransform) rates_settled_ = false;
     refused(*in.refusal, topic);
     return false;
   }
@@ -318,6 +320,7 @@ bool AttitudePropagatorRos::taken(const DecodedInput& in, const char* topic) {
     ROS_INFO("%s",
              mountText(decoders_->mountFrame(), config_.parameters.body_frame, in.q_BS).c_str());
   }
+  rates_settled_ = true;
   releaseTfListener(in.new_mount || decoders_->mountFrame().empty());
   return true;
 }

@@ -1,11 +1,13 @@
 // The parameter struct, its validator, and the places its defaults are written down (the
 // table in docs/parameters.md, config/default.yaml): they must agree with the struct.
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -379,6 +381,24 @@ TEST(Parameters, AidingRefusedWhereItCannotWork) {
     p.mag_stddev = 1e-2;
     p.declination = -M_PI;
   })));
+}
+
+// docs/node.md's table of the accel_*/mag_* counters names AidingCounters::forEach's counters,
+// in its order: the diagnostics and the bag tools' summaries take the names from there.
+TEST(Parameters, AidingCounterTableFollowsTheCore) {
+  const std::string text = readFile(packageRoot() / "docs" / "node.md");
+  const auto start = text.find("## Gravity and north");
+  ASSERT_NE(start, std::string::npos) << "docs/node.md: no section Gravity and north";
+  std::istringstream lines(text.substr(start, text.find("\n## ", start + 1) - start));
+  std::vector<std::string> documented;
+  std::string line;
+  while (std::getline(lines, line)) {
+    if (line.rfind("| `", 0) == 0) documented.push_back(line.substr(3, line.find('`', 3) - 3));
+  }
+  std::vector<std::string> names;
+  ap::AidingCounters{}.forEach(
+      [&names](const char* name, std::uint64_t) { names.push_back(name); });
+  EXPECT_EQ(documented, names);
 }
 
 TEST(Parameters, FormatsAsYaml) {

@@ -168,6 +168,7 @@ class AttitudePropagatorRos : public EngineSink {
     AttitudePropagatorRos& node_;
   } tf_frames_{*this};
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
+  bool rates_settled_ = false;  // the latest rate was taken: its mount kept, or none needed
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
 
   ros::Subscriber rate_sub_;
