@@ -95,6 +95,14 @@ BodyVector intoBody(const Reading& r, const Eigen::Quaterniond& q_BS, bool in_bo
   return out;
 }
 
+// A frame tf has no transform to the body for, with tf's error.
+Refusal noTransform(const std::string& frame, std::string error) {
+  Refusal r = refusal(Refused::NoTransform);
+  r.frame = frame;
+  r.detail = std::move(error);
+  return r;
+}
+
 // A frame id refused by the frame id rule (frame_ids.h), as `why`.
 Refusal badFrame(Refused why, const std::string& frame) {
   Refusal r = refusal(why);
@@ -222,10 +230,7 @@ DecodedField InputDecoders::magneticField(const sensor_msgs::MagneticField& msg,
     const auto q =
         frames ? frames->rotation(frames_.body, frame, ros::Time(), &error) : std::nullopt;
     if (!q) {
-      Refusal refused = refusal(Refused::NoTransform);
-      refused.frame = frame;
-      refused.detail = error;
-      out.refusal = std::move(refused);
+      out.refusal = noTransform(frame, std::move(error));
       return out;
     }
     mag_frame_ = frame;
