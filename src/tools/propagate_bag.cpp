@@ -1077,6 +1077,7 @@ int BagPropagator::dryRun(std::FILE* out) {
                                            {clock_, "clock: drives the engine"},
                                            {bias_, "gyro bias"},
                                            {fixes_, "fixes"},
+                                           {mag_, "magnetometer"},
                                            {o_.static_tf_topic, "static transforms (mounts)"},
                                            {tf_, "transforms (mounts, torque frames)"}};
   for (std::size_t i = 0; i < bags_.size(); ++i) {
