@@ -13,7 +13,7 @@ import unittest
 import rospy
 import rostest
 from geometry_msgs.msg import Vector3
-from sensor_msgs.msg import Imu
+from sensor_msgs.msg import Imu, MagneticField
 
 from ap_test_util import (Diagnostics, Node, as_tuple, axis_angle, make_imu, qconj, qmul,
                           wait_connected)
@@ -22,6 +22,9 @@ NS_PER_S = 10 ** 9
 H = 0.01  # sample spacing (s)
 G = 9.80665
 ROLL, PITCH = 0.3, -0.2
+DECLINATION = 0.1  # rad, magnetic north east of true north
+# The earth's field in ENU: 20 uT horizontal towards magnetic north, 40 uT down.
+FIELD_W = (2e-5 * math.sin(DECLINATION), 2e-5 * math.cos(DECLINATION), -4e-5)
 # Within 1e-3 rad: the tilt is set from the first sample (exact data) and fused since; the
 # rates are zero, so nothing but round-off moves it.
 TOLERANCE = 1e-3
@@ -30,6 +33,11 @@ TOLERANCE = 1e-3
 def rotate(q, v):
     """C(q) v for q = (x, y, z, w)."""
     return qmul(qmul(q, (v[0], v[1], v[2], 0.0)), qconj(q))[:3]
+
+
+def yaw(q):
+    x, y, z, w = q
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
 def roll_pitch(q):
@@ -55,12 +63,13 @@ class GravityTest(unittest.TestCase):
     def setUpClass(cls):
         rospy.init_node("test_gravity")
         cls.diag = Diagnostics()
-        cls.nodes = {ns: Node(ns) for ns in ("ga", "gn")}
+        cls.nodes = {ns: Node(ns) for ns in ("ga", "gn", "gm")}
+        cls.mag = rospy.Publisher("/gm/imu/mag", MagneticField, queue_size=10000)
         cls.imu = {ns: rospy.Publisher("/%s/imu/data_raw" % ns, Imu, queue_size=10000)
                    for ns in cls.nodes}
         for node in cls.nodes.values():
             node.wait_ready()
-        for pub in cls.imu.values():
+        for pub in list(cls.imu.values()) + [cls.mag]:
             wait_connected(pub)
 
     def static_imu(self, ns, count=50):
@@ -73,6 +82,12 @@ class GravityTest(unittest.TestCase):
             msg = make_imu(stamp, (0.0, 0.0, 0.0), "body_" + ns)
             msg.linear_acceleration = Vector3(*f)
             self.imu[ns].publish(msg)
+            if ns == "gm":
+                field = MagneticField()
+                field.header.stamp = stamp
+                field.header.frame_id = "body_" + ns
+                field.magnetic_field = Vector3(*rotate(qconj(Q_WB), FIELD_W))
+                self.mag.publish(field)
         return self.nodes[ns].state.wait_at(stamp, timeout=30.0)
 
     def check_tilt(self, q, expected):
@@ -97,6 +112,15 @@ class GravityTest(unittest.TestCase):
         state = self.static_imu("gn")
         self.check_tilt(as_tuple(state.orientation), qmul(qmul(Q_NE, Q_WB), Q_FB))
         self.diag.wait_counter(self.nodes["gn"].name, "accel_aligned", 1, timeout=10.0)
+
+    def test_static_tilt_and_north(self):
+        """With the field, the heading too: the body's x points east (yaw 0 in ENU) once
+        declination turns magnetic north into true north."""
+        state = self.static_imu("gm")
+        q = as_tuple(state.orientation)
+        self.check_tilt(q, Q_WB)
+        self.assertLess(abs(yaw(q)), TOLERANCE, "yaw %.6f, expected 0" % yaw(q))
+        self.diag.wait_counter(self.nodes["gm"].name, "mag_accepted", 1, timeout=10.0)
 
 
 if __name__ == "__main__":
