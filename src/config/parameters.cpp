@@ -7,6 +7,7 @@
 #include <limits>
 #include <stdexcept>
 #include <type_traits>
+#include <utility>
 
 #include "attitude_propagator/quaternion.h"
 #include "attitude_propagator/quoted_text.h"
@@ -119,7 +120,8 @@ RigidBody makeBody(const std::vector<double>& inertia) {
 }
 
 Eigen::Quaterniond initialOrientation(const std::vector<double>& v) {
-  const std::string accepted = "[x, y, z, w], finite, not all zero (any scale)";
+  const std::string accepted = "[] (none given) or [x, y, z, w], finite, not all zero (any scale)";
+  if (v.empty()) return Eigen::Quaterniond::Identity();  // none given
   requireVector("initial_orientation", v, 4, accepted);
   const std::optional<Eigen::Quaterniond> q =
       safeNormalized(Eigen::Quaterniond(v[3], v[0], v[1], v[2]));
@@ -169,6 +171,12 @@ void checkScalars(const Parameters& p) {
                 "a finite number >= 0 and at most 1000 (rad/s/sqrt(s))");
   requireFinite("gyro_bias_stddev", p.gyro_bias_stddev, 0.0, true, kMaxGyroBiasStddev,
                 "a finite number >= 0 and at most 10 (rad/s)");
+  // The engine's bounds (checkAidingConfig), refused here first in the parameters' words.
+  requireFinite("accel_stddev", p.accel_stddev, 0.0, false, 100.0,
+                "a number > 0 and at most 100 (m/s^2)");
+  requireFinite("mag_stddev", p.mag_stddev, 0.0, false, 1e-2, "a number > 0 and at most 0.01 (T)");
+  requireFinite("declination", p.declination, -M_PI, true, M_PI,
+                "a number in [-pi, pi] (rad, east of true north positive)");
   const std::string rate_range = "[x, y, z], finite, |w| <= 1e5 (rad/s)";
   const auto& w = p.initial_angular_velocity;
   requireVector("initial_angular_velocity", w, 3, rate_range);
@@ -206,6 +214,23 @@ void applyStreamParameters(const Parameters& p, KinematicConfig& kinematic) {
   kinematic.average_stamp = averageStampFromName(p.average_stamp);
   kinematic.stamp_filter = stampFilterFromName(p.stamp_filter);
   kinematic.gyro_bias_B = Eigen::Vector3d(p.gyro_bias[0], p.gyro_bias[1], p.gyro_bias[2]);
+}
+
+// Gravity and the field are measurements of the kinematic model only (the dynamic model's
+// attitude follows its torques); the accelerometer comes in the IMU's messages.
+void checkAiding(const Parameters& p, Model model) {
+  for (const auto& [name, on] : {std::pair<const char*, bool>{"use_accel", p.use_accel},
+                                 std::pair<const char*, bool>{"use_mag", p.use_mag}}) {
+    if (on && model != Model::Kinematic) {
+      fail(name, "true needs the kinematic model; accepted with model dynamic: false");
+    }
+  }
+  if (p.use_accel && p.rate_input != "imu") {
+    fail("use_accel",
+         "true needs rate_input imu (the accelerometer comes in the IMU's "
+         "messages); accepted with rate_input " +
+             logText(p.rate_input) + ": false");
+  }
 }
 
 }  // namespace
@@ -298,6 +323,7 @@ NodeConfig validateParameters(const Parameters& p) {
     fail("estimate_gyro_bias",
          "true needs the kinematic model; accepted with model dynamic: false");
   }
+  checkAiding(p, config.model);
 
   if (config.model == Model::Kinematic) {
     if (p.torque_input) {
@@ -378,6 +404,13 @@ EngineConfig engineConfig(const NodeConfig& node) {
   config.fixes.estimate_gyro_bias = p.estimate_gyro_bias;
   config.fixes.gyro_bias_random_walk = p.gyro_bias_random_walk;
   config.fixes.gyro_bias_stddev = p.gyro_bias_stddev;
+  config.aiding.use_accel = p.use_accel;
+  config.aiding.accel_stddev = p.accel_stddev;
+  config.aiding.use_mag = p.use_mag;
+  config.aiding.mag_stddev = p.mag_stddev;
+  config.aiding.declination = p.declination;
+  // Without an initial attitude the tilt is the first gravity sample's (the heading unknown).
+  config.aiding.align = p.use_accel && p.initial_orientation.empty();
   return config;
 }
 

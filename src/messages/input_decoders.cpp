@@ -82,6 +82,27 @@ Decoded<Reading> reading(Source source, const ros::Time& header, const ros::Time
 
 const std::string kNoFrame;
 
+// A reading taken into the body by q_BS (identity when `in_body`). A covariance of zeros (none
+// given) or a non-finite one goes on as it is: the engine takes its default or rejects it.
+BodyVector intoBody(const Reading& r, const Eigen::Quaterniond& q_BS, bool in_body) {
+  BodyVector out;
+  out.stamp = r.stamp;
+  out.value_B = q_BS * r.value;
+  const Eigen::Matrix3d& R_S = r.covariance;
+  out.covariance_B = in_body || R_S.isZero(0.0) || !R_S.allFinite()
+                         ? R_S
+                         : rotateCovariance(R_S, q_BS.toRotationMatrix());
+  return out;
+}
+
+// A frame tf has no transform to the body for, with tf's error.
+Refusal noTransform(const std::string& frame, std::string error) {
+  Refusal r = refusal(Refused::NoTransform);
+  r.frame = frame;
+  r.detail = std::move(error);
+  return r;
+}
+
 // A frame id refused by the frame id rule (frame_ids.h), as `why`.
 Refusal badFrame(Refused why, const std::string& frame) {
   Refusal r = refusal(why);
@@ -102,6 +123,24 @@ Decoded<Reading> readImu(const sensor_msgs::Imu& msg, const ros::Time& arrival) 
   auto read =
       reading(Source::Imu, msg.header.stamp, arrival, msg.angular_velocity, msg.header.frame_id);
   if (read) read.value->covariance = covarianceFromMsg(msg.angular_velocity_covariance);
+  return read;
+}
+
+std::optional<Reading> readImuAcceleration(const sensor_msgs::Imu& msg, const ros::Time& arrival) {
+  // REP-145: linear_acceleration_covariance[0] == -1 says the message carries no acceleration.
+  if (msg.linear_acceleration_covariance[0] == -1.0) return std::nullopt;
+  auto read =
+      reading(Source::Imu, msg.header.stamp, arrival, msg.linear_acceleration, msg.header.frame_id);
+  if (!read) return std::nullopt;
+  read.value->covariance = covarianceFromMsg(msg.linear_acceleration_covariance);
+  return read.value;
+}
+
+Decoded<Reading> readMagneticField(const sensor_msgs::MagneticField& msg,
+                                   const ros::Time& arrival) {
+  auto read =
+      reading(Source::Imu, msg.header.stamp, arrival, msg.magnetic_field, msg.header.frame_id);
+  if (read) read.value->covariance = covarianceFromMsg(msg.magnetic_field_covariance);
   return read;
 }
 
@@ -157,7 +196,53 @@ DecodedInput InputDecoders::refuse(Refusal refusal) {
 
 DecodedInput InputDecoders::imu(const sensor_msgs::Imu& msg, const ros::Time& arrival,
                                 FrameSource* frames) {
-  return rate(readImu(msg, arrival), frames);
+  DecodedInput out = rate(readImu(msg, arrival), frames);
+  if (out) out.acceleration = acceleration(readImuAcceleration(msg, arrival), out);
+  return out;
+}
+
+std::optional<BodyVector> InputDecoders::acceleration(const std::optional<Reading>& f_S,
+                                                      const DecodedInput& rate) {
+  if (!f_S) return std::nullopt;
+  // The rate's frame, so the rate's mount (the identity for the body's own frame).
+  const bool in_body = rate.q_BS.coeffs() == Eigen::Quaterniond::Identity().coeffs();
+  return intoBody(*f_S, rate.q_BS, in_body);
+}
+
+DecodedField InputDecoders::magneticField(const sensor_msgs::MagneticField& msg,
+                                          const ros::Time& arrival, FrameSource* frames) {
+  DecodedField out;
+  const Decoded<Reading> read = readMagneticField(msg, arrival);
+  if (!read) {
+    out.refusal = read.refusal;
+    return out;
+  }
+  const auto frame_id = frame_ids_.admit(read->frame_id);
+  if (!frame_id) {
+    out.refusal = badFrame(Refused::NoTransform, read->frame_id);
+    return out;
+  }
+  const std::string& frame = *frame_id;
+  const bool in_body = frame.empty() || frame == frames_.body;
+  if (!in_body && frame != mount_frame_ && frame != mag_frame_) {
+    // A magnetometer on a frame of its own: its mount looked up once, as the rates' is.
+    std::string error = "no frame source";
+    const auto q =
+        frames ? frames->rotation(frames_.body, frame, ros::Time(), &error) : std::nullopt;
+    if (!q) {
+      out.refusal = noTransform(frame, std::move(error));
+      return out;
+    }
+    mag_frame_ = frame;
+    q_BM_ = *q;
+    out.new_mount = true;
+  }
+  const Eigen::Quaterniond q_BM = in_body                 ? Eigen::Quaterniond::Identity()
+                                  : frame == mount_frame_ ? q_BS_
+                                                          : q_BM_;
+  mag_settled_ = true;
+  out.value = intoBody(*read, q_BM, in_body);
+  return out;
 }
 
 DecodedInput InputDecoders::twist(const geometry_msgs::Twist& msg, const ros::Time& arrival) {

@@ -7,6 +7,7 @@
 #include <boost/make_shared.hpp>
 
 #include "attitude_propagator/AttitudeState.h"
+#include "attitude_propagator/messages/aiding_counters.h"
 #include "attitude_propagator/messages/conversions.h"
 #include "attitude_propagator/messages/outputs.h"
 #include "attitude_propagator/messages/set_state_request.h"
@@ -81,6 +82,7 @@ void AttitudePropagatorRos::refuseFeedbackLoops() const {
     inputs.push_back({"body_twist", nh_.resolveName("body_twist")});
   }
   if (config_.torque_input) inputs.push_back({"torque", nh_.resolveName("torque")});
+  if (config_.parameters.use_mag) inputs.push_back({"imu/mag", imu_nh_.resolveName("mag")});
   if (const auto loop = feedbackLoop(outputs, inputs)) throw std::invalid_argument(*loop);
 }
 
@@ -105,6 +107,10 @@ void AttitudePropagatorRos::subscribe() {
   } else if (config_.rate_input == RateInput::Twist) {
     rate_sub_ =
         nh_.subscribe("body_twist", kInputQueueSize, &AttitudePropagatorRos::onTwist, this, hints);
+  }
+  if (config_.parameters.use_mag) {
+    mag_sub_ =
+        imu_nh_.subscribe("mag", kInputQueueSize, &AttitudePropagatorRos::onMag, this, hints);
   }
   if (engine_->dynamicModel() && config_.torque_input) {
     torque_sub_ =
@@ -211,6 +217,33 @@ void AttitudePropagatorRos::onImu(const ros::MessageEvent<const sensor_msgs::Imu
       in.value->payload = std::make_shared<ImuPayload>(ImuPayload{msg, in.q_BS});
     }
     submit(*in.value);
+    // The accelerometer after the rate of its own message, at the same stamp: the rates have
+    // reached it, so it is applied now (counted in accel_*).
+    if (config_.parameters.use_accel && in.acceleration) {
+      engine_->submitAcceleration(in.acceleration->stamp, in.acceleration->value_B,
+                                  in.acceleration->covariance_B);
+    }
+  });
+}
+
+void AttitudePropagatorRos::onMag(
+    const ros::MessageEvent<const sensor_msgs::MagneticField>& event) {
+  guarded("imu/mag", [&] {
+    pollClock();
+    const DecodedField field =
+        decoders_->magneticField(*event.getConstMessage(), event.getReceiptTime(), &tf_frames_);
+    warnFrames();
+    if (field.refusal) return refused(*field.refusal, "imu/mag");
+    if (field.new_mount) {
+      const Eigen::Quaterniond& q = decoders_->magMount();
+      ROS_INFO(
+          "imu/mag: the field in frame '%s' is rotated into '%s' by q = [%g, %g, %g, %g] "
+          "(x y z w)",
+          logText(decoders_->magFrame()).c_str(), config_.parameters.body_frame.c_str(), q.x(),
+          q.y(), q.z(), q.w());
+    }
+    releaseTfListener(rates_settled_);
+    engine_->submitMagneticField(field->stamp, field->value_B, field->covariance_B);
   });
 }
 
@@ -278,6 +311,8 @@ void AttitudePropagatorRos::warnFrames() {
 bool AttitudePropagatorRos::taken(const DecodedInput& in, const char* topic) {
   warnFrames();
   if (in.refusal) {
+    // Rates waiting for their mount keep the listener (the field's callback may not drop it).
+    if (in.refusal->why == Refused::NoTransform) rates_settled_ = false;
     refused(*in.refusal, topic);
     return false;
   }
@@ -285,14 +320,20 @@ bool AttitudePropagatorRos::taken(const DecodedInput& in, const char* topic) {
     ROS_INFO("%s",
              mountText(decoders_->mountFrame(), config_.parameters.body_frame, in.q_BS).c_str());
   }
-  const bool mount_settled = in.new_mount || decoders_->mountFrame().empty();
-  if (tf_buffer_ && mount_settled && !config_.torque_input && !fixes_->usesTf()) {
-    // The mount is cached (or the rates need none): stop listening, or the listener would keep
-    // digesting our own /tf. Rates in a new frame later start it again (ensureTfListener).
+  rates_settled_ = true;
+  releaseTfListener(in.new_mount || decoders_->mountFrame().empty());
+  return true;
+}
+
+void AttitudePropagatorRos::releaseTfListener(bool mount_settled) {
+  // The mount is cached (or the rates need none), and the field's too when it comes: stop
+  // listening, or the listener would keep digesting our own /tf. Rates or a field in a new
+  // frame later start it again (ensureTfListener).
+  const bool mag_settled = !config_.parameters.use_mag || decoders_->magSettled();
+  if (tf_buffer_ && mount_settled && mag_settled && !config_.torque_input && !fixes_->usesTf()) {
     tf_listener_.reset();
     tf_buffer_.reset();
   }
-  return true;
 }
 
 void AttitudePropagatorRos::refused(const Refusal& r, const char* topic) {
@@ -300,7 +341,7 @@ void AttitudePropagatorRos::refused(const Refusal& r, const char* topic) {
   const auto line =
       refusalText(r, topic, engine_->counters(), config_.parameters.body_frame, *decoders_);
   const std::string name = topic;
-  if (line && name != "gyro_bias" && name != "torque") {
+  if (line && name != "gyro_bias" && name != "torque" && name != "imu/mag") {
     // Named in the diagnostics while no rate gets through (node_diagnostics.h).
     diagnostics_.inputRefused(ros::WallTime::now(), line->text);
   }

@@ -37,6 +37,14 @@ std::string refusalText(const Refusal& r, const char* topic, bool torque, const 
                          logText(r.frame).c_str(), body.c_str(),
                          logText(r.detail, 4 * kLogTextBytes).c_str());
       }
+      if (std::string(topic) == "imu/mag") {
+        // The field's own mount: the rates' advice (body_frame:=) would not be the fix.
+        return formatted(
+            "imu/mag: no transform from the field's frame '%s' to body_frame '%s': "
+            "publish the mount on /tf_static; dropped (%lu so far; %s)",
+            logText(r.frame).c_str(), body.c_str(), c.dropped_no_tf,
+            logText(r.detail, 4 * kLogTextBytes).c_str());
+      }
       return formatted("%s: %s; dropped %lu messages so far (%s)", topic,
                        noMountText(r.frame, body, "body_frame:=").c_str(), c.dropped_no_tf,
                        logText(r.detail, 4 * kLogTextBytes).c_str());

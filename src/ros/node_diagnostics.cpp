@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "attitude_propagator/messages/aiding_counters.h"
+
 namespace attitude_propagator {
 
 std::optional<double> lagBeyondWarning(std::initializer_list<std::optional<double>> lags) {
@@ -108,6 +110,10 @@ void NodeDiagnostics::diagnose(const ros::WallTime& now, const NodeConfig& confi
   const Eigen::Vector3d& b = engine.gyroBias();
   status.addf("gyro_bias", "[%g, %g, %g]", b.x(), b.y(), b.z());
   fixes.diagnose(status, engine);
+  // Gravity and the field (use_accel, use_mag): accel_* and mag_*, the core's one list.
+  forEachAidingCounter(
+      c, [&status](const std::string& name, std::uint64_t value) { status.add(name, value); });
+  status.add("tilt_known", engine.tiltKnown());
   if (const KinematicPropagator* k = engine.kinematic()) {
     status.add("rate_samples", config.parameters.rate_samples);
     status.add("filled_samples", k->filledSamples());

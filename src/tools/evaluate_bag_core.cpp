@@ -15,12 +15,14 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <deque>
 #include <iostream>
 #include <limits>
 #include <memory>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <geometry_msgs/PoseStamped.h>
@@ -31,8 +33,10 @@
 #include <geometry_msgs/TwistStamped.h>
 #include <nav_msgs/Odometry.h>
 #include <sensor_msgs/Imu.h>
+#include <sensor_msgs/MagneticField.h>
 #include <tf2_msgs/TFMessage.h>
 
+#include "aiding_summary.h"
 #include "alignment.h"
 #include "attitude_propagator/engine.h"
 #include "attitude_propagator/messages/conversions.h"
@@ -72,6 +76,10 @@ time, in whatever order they are given.
   --fixes TOPIC        absolute attitude fixes (the node's orientation_fix types), given to every
                        method between the rates they were recorded between; the truth must be
                        another topic, in the fixes' fixed frame (no world alignment then)
+  --mag TOPIC          magnetometer (sensor_msgs/MagneticField, the node's imu/mag), given to
+                       every method like the fixes, with use_mag (default /imu/mag); in the
+                       rates' own frame, as the rates are read. With use_accel the rates' Imu
+                       messages give the accelerometer, in their frame too
   --mount X Y Z W      q_ST, the truth body's orientation in the rate sensor's frame
                        (default: estimated from the data)
   --truth-clock same|separate
@@ -161,6 +169,7 @@ struct Options {
   std::string rates_topic = "/imu/data_raw";
   std::string truth_topic;
   std::string fixes_topic;  // empty: no fixes
+  std::string mag_topic;    // empty: /imu/mag with use_mag
   std::string tf_topic = "/tf";
   std::string tf_parent, tf_child;
   std::optional<Eigen::Quaterniond> mount;
@@ -206,6 +215,8 @@ Options parseOptions(int argc, char** argv) {
       o.truth_topic = optionValue(argc, argv, i);
     } else if (a == "--fixes") {
       o.fixes_topic = optionValue(argc, argv, i);
+    } else if (a == "--mag") {
+      o.mag_topic = optionValue(argc, argv, i);
     } else if (a == "--truth-tf") {
       o.tf_parent = optionValue(argc, argv, i);
       o.tf_child = optionValue(argc, argv, i);
@@ -272,6 +283,11 @@ Options parseOptions(int argc, char** argv) {
   }
   for (const auto& c : configs) loadConfigFile(c, o.parameters);
   for (const auto& s : sets) applySetting(s, o.parameters);
+  if (o.mag_topic.empty()) o.mag_topic = "/imu/mag";
+  if (o.parameters.use_mag && (sameTopic(o.mag_topic, o.rates_topic) ||
+                               (!o.fixes_topic.empty() && sameTopic(o.mag_topic, o.fixes_topic)))) {
+    throw UsageError("--mag " + o.mag_topic + ": the topic of another input");
+  }
   // tf1's leading '/' in a frame parameter is read without it (frame_ids.h), with a warning.
   for (const auto& w : tf2FrameParameters(o.parameters)) {
     std::fprintf(stderr, "warning: %s\n", w.c_str());
@@ -314,13 +330,17 @@ struct RateSample {
   Stamp stamp;
   Eigen::Vector3d w;
   std::uint64_t seq = 0;  ///< usable rate samples read before this one
+  /// use_accel: the Imu's specific force in the rates' frame, at their stamp (none: REP-145)
+  std::optional<BodyVector> f;
 };
 
-/// A decoded fix and where it was recorded in the rate stream: after `after` usable rate
-/// samples (it goes to the engines before the rate sample whose seq is `after`).
+/// A decoded fix, or a magnetometer sample (`field` set), and where it was recorded in the rate
+/// stream: after `after` usable rate samples (it goes to the engines before the rate sample
+/// whose seq is `after`).
 struct FixSample {
   std::uint64_t after;
   Fix fix;
+  std::optional<BodyVector> field;
 };
 
 struct TruthSample {
@@ -438,6 +458,7 @@ class Method : public EngineSink {
         input.stamp = s->stamp;
         input.value = s->w;
         engine_->submit(input);
+        if (s->f) engine_->submitAcceleration(s->f->stamp, s->f->value_B, s->f->covariance_B);
       }
       const double ns =
           std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - start)
@@ -457,7 +478,11 @@ class Method : public EngineSink {
     for (; next_fix_ < fixes_base + fixes.size(); ++next_fix_) {
       const FixSample& f = fixes[next_fix_ - fixes_base];
       if (f.after > seq) return;
-      engine_->submitFix(f.fix.stamp, f.fix.q_WB, f.fix.R_B);  // counted in fixes_*
+      if (f.field) {
+        engine_->submitMagneticField(f.field->stamp, f.field->value_B, f.field->covariance_B);
+      } else {
+        engine_->submitFix(f.fix.stamp, f.fix.q_WB, f.fix.R_B);  // counted in fixes_*
+      }
     }
   }
   /// The first fix (numbered from the stream's first) not yet submitted.
@@ -759,6 +784,10 @@ class Evaluation {
   /// A fix by the node's rules (FixDecoder), kept for the engines; no tf here, as for the
   /// rates: only fixed_frame and body_frame (the rate sensor's frame) are known.
   void addFix(const rosbag::MessageInstance& m);
+  /// use_mag: a field sample read in its own frame (taken as the rates'), queued as a fix is.
+  void addMag(const rosbag::MessageInstance& m);
+  /// use_accel, use_mag: per method, the accel_* and mag_* counters.
+  void reportAiding(std::FILE* out) const;
   /// The fixes' line of the report.
   void reportFixes(std::FILE* out) const;
   void addTruth(const TruthSample& s);
@@ -801,6 +830,9 @@ class Evaluation {
   const Options& o_;
   std::vector<std::unique_ptr<Method>> methods_;
   std::string rates_topic_, truth_topic_, rates_type_, truth_type_, fixes_topic_, fixes_type_;
+  std::string mag_topic_;  // empty: not read
+  sensor_msgs::MagneticField mag_;
+  std::uint64_t mag_count_ = 0, accel_count_ = 0;
   std::vector<std::uint8_t> buffer_;
   // Decoding, reused.
   sensor_msgs::Imu imu_;
@@ -870,6 +902,10 @@ void Evaluation::checkTopics(BagSet& bag) {
   if (sameTopic(truth_topic_, rates_topic_) &&
       !(truth_type_ == typeOf<sensor_msgs::Imu>().first && rates_type_ == truth_type_))
     throw UsageError("the rate and truth topics are the same");
+  if (o_.parameters.use_mag) {
+    requireTopic(bag, o_.mag_topic, "magnetometer", {typeOf<sensor_msgs::MagneticField>()});
+    mag_topic_ = o_.mag_topic;
+  }
   if (!o_.fixes_topic.empty()) {
     fixes_type_ = requireTopic(
         bag, o_.fixes_topic, "fix",
@@ -883,6 +919,7 @@ void Evaluation::run(BagSet& bag) {
   checkTopics(bag);
   std::vector<std::string> topics{rates_topic_, truth_topic_};
   if (!fixes_topic_.empty()) topics.push_back(fixes_topic_);
+  if (!mag_topic_.empty()) topics.push_back(mag_topic_);
   for (const std::string& overlap : bag.overlaps(topics)) {
     std::fprintf(stderr,
                  "evaluate_bag: %s of record time: their messages are interleaved by record "
@@ -971,6 +1008,7 @@ void Evaluation::checkTruthTurn() const {
 
 void Evaluation::handle(const rosbag::MessageInstance& m) {
   if (!fixes_topic_.empty() && sameTopic(m.getTopic(), fixes_topic_)) return addFix(m);
+  if (!mag_topic_.empty() && sameTopic(m.getTopic(), mag_topic_)) return addMag(m);
   const bool rate = sameTopic(m.getTopic(), rates_topic_);
   if (rate) handleRate(m);
   // An Imu topic may be both (rates_topic_ == truth_topic_: an AHRS's orientation as truth).
@@ -1025,6 +1063,13 @@ bool Evaluation::decodeRate(const rosbag::MessageInstance& m, RateSample& out) {
   }
   if (!read) return false;
   out = {read->stamp, read->value};
+  if (o_.parameters.use_accel && isType<sensor_msgs::Imu>(m)) {
+    // The accelerometer in the rates' own frame, as the rates (the mount is this tool's).
+    if (const std::optional<Reading> f = readImuAcceleration(imu_, record_)) {
+      out.f = BodyVector{f->stamp, f->value, f->covariance};
+      ++accel_count_;
+    }
+  }
   return true;
 }
 
@@ -1075,6 +1120,31 @@ void Evaluation::addFix(const rosbag::MessageInstance& m) {
   ++fix_count_;
   const Decoded<Fix> fix = fix_decoder_->topic(m, record_, nullptr);  // refusals counted there
   if (fix) fixes_.push_back({rate_count_, *fix});
+}
+
+void Evaluation::addMag(const rosbag::MessageInstance& m) {
+  ++mag_count_;
+  decodeInto(m, buffer_, mag_);
+  const Decoded<Reading> read = readMagneticField(mag_, record_);
+  if (!read) return;  // no time: as the node drops it
+  fixes_.push_back({rate_count_, Fix{}, BodyVector{read->stamp, read->value, read->covariance}});
+}
+
+void Evaluation::reportAiding(std::FILE* out) const {
+  const Parameters& p = o_.parameters;
+  for (const auto& [on, prefix, read] :
+       {std::tuple<bool, const char*, std::uint64_t>{p.use_accel, "accel_", accel_count_},
+        std::tuple<bool, const char*, std::uint64_t>{p.use_mag, "mag_", mag_count_}}) {
+    if (!on) continue;
+    std::fprintf(out, "  %.*s: %llu read; per method:", static_cast<int>(std::strlen(prefix) - 1),
+                 prefix, static_cast<unsigned long long>(read));
+    for (const auto& m : methods_) {
+      if (!m->started()) continue;
+      std::fprintf(out, " %s (%s);", m->name().c_str(),
+                   aidingCountersText(m->counters(), prefix).c_str());
+    }
+    std::fputc('\n', out);
+  }
 }
 
 void Evaluation::addTruth(const TruthSample& s) {
@@ -1396,6 +1466,7 @@ void Evaluation::report(std::FILE* out) const {
                static_cast<unsigned long long>(first.outside),
                static_cast<unsigned long long>(before_truth_));
   if (fix_decoder_) reportFixes(out);
+  reportAiding(out);
   const auto refused = noRecommendation();
   const double floor = resolutionFloor();
   std::string unresolved;

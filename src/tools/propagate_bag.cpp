@@ -34,9 +34,11 @@
 #include <ros/names.h>
 #include <rosgraph_msgs/Clock.h>
 #include <sensor_msgs/Imu.h>
+#include <sensor_msgs/MagneticField.h>
 #include <tf2/buffer_core.h>
 #include <tf2_msgs/TFMessage.h>
 
+#include "aiding_summary.h"
 #include "attitude_propagator/AttitudeState.h"
 #include "attitude_propagator/engine.h"
 #include "attitude_propagator/messages/conversions.h"
@@ -81,6 +83,9 @@ the next, as over the unsplit recording.
                          (PoseWithCovarianceStamped, PoseStamped, QuaternionStamped, or Imu with
                          an orientation), each submitted at its record time as the node does at
                          receipt (fix_mode, fix_frame, estimate_gyro_bias, ...); default: none
+  --mag TOPIC            magnetometer (sensor_msgs/MagneticField), as the node's imu/mag: read
+                         with use_mag (default /imu/mag); the accelerometer comes in the rate
+                         topic's Imu messages with use_accel
 
 Output topics, named as the node's would be (relative names resolved in --ns, as ROS does):
   --ns NS                namespace of the relative output topics (default /): with --ns r1,
@@ -113,7 +118,8 @@ output's estimated size. Every input bag is checked before any is read.
 The summary accounts for every rate and torque message: accepted, dropped for a named reason
 (stale, future, no-tf, ...) or still pending at the end (dynamic model: stamped after the
 last clock tick); with --fixes, for every fix: accepted, rejected for a named reason (gate,
-too old, ...), waiting at the end, or refused before the engine (frames, type, ...).
+too old, ...), waiting at the end, or refused before the engine (frames, type, ...); with
+use_accel and use_mag, the accel_* and mag_* counters under the names of the node's diagnostics.
 
 Exit codes:
   0    the output is complete and holds the states of the accepted inputs
@@ -135,6 +141,7 @@ struct Options {
   std::string clock_topic = "/clock";
   std::string bias_topic = "/gyro_bias";
   std::string fixes_topic;  // empty: no fixes read
+  std::string mag_topic;    // empty: /imu/mag with use_mag
   std::string static_tf_topic = "/tf_static";
   std::string tf_topic = "/tf";  // input transforms, heard in record order as the node hears them
   bool use_clock = true;
@@ -199,6 +206,8 @@ Options parseOptions(int argc, char** argv) {
       o.clock_topic = optionValue(argc, argv, i);
     } else if (a == "--fixes") {
       o.fixes_topic = optionValue(argc, argv, i);
+    } else if (a == "--mag") {
+      o.mag_topic = optionValue(argc, argv, i);
     } else if (a == "--no-clock") {
       o.use_clock = false;
     } else if (a == "--ns") {
@@ -267,6 +276,13 @@ Options parseOptions(int argc, char** argv) {
   for (const std::string* input : {&o.rates_topic, &o.torque_topic, &o.clock_topic}) {
     if (!o.fixes_topic.empty() && sameTopic(o.fixes_topic, *input)) {
       throw UsageError("--fixes " + o.fixes_topic + ": the topic of another input");
+    }
+  }
+  if (o.mag_topic.empty()) o.mag_topic = "/imu/mag";
+  for (const std::string* input :
+       {&o.rates_topic, &o.torque_topic, &o.clock_topic, &o.fixes_topic}) {
+    if (o.parameters.use_mag && sameTopic(o.mag_topic, *input)) {
+      throw UsageError("--mag " + o.mag_topic + ": the topic of another input");
     }
   }
   return o;
@@ -486,6 +502,8 @@ class BagPropagator : public EngineSink {
   void dispatch(const rosbag::MessageInstance& m);
   void onImu(const rosbag::MessageInstance& m);
   void onBias(const rosbag::MessageInstance& m);
+  /// use_mag: a field, decoded by the node's rules and submitted as the node does at receipt.
+  void onMag(const rosbag::MessageInstance& m);
   /// A fix: decoded by the node's rules (FixDecoder, the bag's frames), submitted at once as the
   /// node submits it at receipt; the corrected state goes out with the next output.
   void onFix(const rosbag::MessageInstance& m);
@@ -526,7 +544,7 @@ class BagPropagator : public EngineSink {
   NodeConfig config_;
   std::unique_ptr<AttitudeEngine> engine_;
   std::unique_ptr<Writer> writer_;
-  std::string rates_, torque_, clock_, bias_, tf_, fixes_;  // as recorded; empty: not read
+  std::string rates_, torque_, clock_, bias_, tf_, fixes_, mag_;  // as recorded; empty: not read
   bool clock_driven_ = false;
   ros::Time record_;  // record time of the message being handled
   std::optional<Stamp> last_tick_;
@@ -535,6 +553,8 @@ class BagPropagator : public EngineSink {
   FixDecoder fix_decoder_{FixFrames::of(config_)};
   ImuPayload imu_;
   geometry_msgs::Vector3Stamped bias_msg_;
+  sensor_msgs::MagneticField mag_msg_;
+  std::uint64_t accel_read_ = 0;  // Imu messages whose acceleration was submitted
   tf2_msgs::TFMessage tf_msg_;
   std::uint64_t tf_read_ = 0;  // /tf messages heard (not inputs: not in the summary's count)
   rosgraph_msgs::Clock clock_msg_;
@@ -591,6 +611,11 @@ std::vector<std::string> BagPropagator::checkTopics() {
          typeOf<geometry_msgs::QuaternionStamped>(), typeOf<sensor_msgs::Imu>()});
     fixes_ = o_.fixes_topic;
     topics.push_back(fixes_);
+  }
+  if (config_.parameters.use_mag) {
+    requireTopic(bags_, o_.mag_topic, "magnetometer", {typeOf<sensor_msgs::MagneticField>()});
+    mag_ = o_.mag_topic;
+    topics.push_back(mag_);
   }
   if (config_.rate_input != RateInput::None && topicType(bags_, o_.bias_topic)) {
     requireTopic(bags_, o_.bias_topic, "gyro bias", {typeOf<geometry_msgs::Vector3Stamped>()});
@@ -689,6 +714,8 @@ void BagPropagator::dispatch(const rosbag::MessageInstance& m) {
     onBias(m);
   } else if (!fixes_.empty() && sameTopic(topic, fixes_)) {
     onFix(m);
+  } else if (!mag_.empty() && sameTopic(topic, mag_)) {
+    onMag(m);
   }
 }
 
@@ -705,6 +732,20 @@ void BagPropagator::onImu(const rosbag::MessageInstance& m) {
     in.value->payload = std::shared_ptr<const void>(std::shared_ptr<const void>(), &imu_);
   }
   take(in);
+  // The accelerometer after its message's rate, at the same stamp, as the node submits it.
+  if (config_.parameters.use_accel && in.acceleration && !o_.io_floor) {
+    ++accel_read_;
+    engine_->submitAcceleration(in.acceleration->stamp, in.acceleration->value_B,
+                                in.acceleration->covariance_B);  // counted in accel_*
+  }
+}
+
+void BagPropagator::onMag(const rosbag::MessageInstance& m) {
+  decodeInto(m, buffer_, mag_msg_);
+  const DecodedField field = decoders_.magneticField(mag_msg_, record_, &frames_);
+  warnFrames();
+  if (!field) return countRefusal(*engine_, field.refusal->why);
+  if (!o_.io_floor) engine_->submitMagneticField(field->stamp, field->value_B, field->covariance_B);
 }
 
 void BagPropagator::onBias(const rosbag::MessageInstance& m) {
@@ -934,6 +975,10 @@ void BagPropagator::summary(std::FILE* out, bool written) const {
                  static_cast<unsigned long long>(c.bias_queue_full));
   }
   if (!fixes_.empty()) fixSummary(out);
+  std::uint64_t mag_read = 0;
+  for (const auto& [topic, count] : read_) mag_read += sameTopic(topic, mag_) ? count : 0;
+  printAidingSummary(out, c, config_.parameters.use_accel, config_.parameters.use_mag, accel_read_,
+                     mag_read);
 }
 
 void BagPropagator::fixSummary(std::FILE* out) const {
@@ -1032,6 +1077,7 @@ int BagPropagator::dryRun(std::FILE* out) {
                                            {clock_, "clock: drives the engine"},
                                            {bias_, "gyro bias"},
                                            {fixes_, "fixes"},
+                                           {mag_, "magnetometer"},
                                            {o_.static_tf_topic, "static transforms (mounts)"},
                                            {tf_, "transforms (mounts, torque frames)"}};
   for (std::size_t i = 0; i < bags_.size(); ++i) {

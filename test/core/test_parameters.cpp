@@ -1,11 +1,13 @@
 // The parameter struct, its validator, and the places its defaults are written down (the
 // table in docs/parameters.md, config/default.yaml): they must agree with the struct.
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -303,6 +305,100 @@ TEST(Parameters, RejectsEachBadValueNamingTheParameter) {
   expectRefused(with([](auto& p) { p.fixed_frame = ""; }), "fixed_frame");
   expectRefused(with([](auto& p) { p.body_frame = "/base_link"; }), "body_frame");
   expectRefused(with([](auto& p) { p.body_frame = "world"; }), "body_frame");
+}
+
+// Gravity and the field: the values reach EngineConfig::aiding unchanged; the start-up
+// alignment is on exactly when use_accel is set and no initial_orientation is given.
+TEST(Parameters, AidingValuesReachTheEngineUnchanged) {
+  ap::Parameters p;
+  p.use_accel = true;
+  p.accel_stddev = 0.25;
+  p.use_mag = true;
+  p.mag_stddev = 3e-7;
+  p.declination = -0.125;
+  const ap::Parameters defaults;
+  ASSERT_TRUE(defaults.initial_orientation.empty());  // none given by default
+  ASSERT_NE(p.accel_stddev, defaults.accel_stddev);
+  ASSERT_NE(p.mag_stddev, defaults.mag_stddev);
+  const ap::AidingConfig a = ap::engineConfig(ap::validateParameters(p)).aiding;
+  EXPECT_TRUE(a.use_accel);
+  EXPECT_EQ(a.accel_stddev, 0.25);
+  EXPECT_TRUE(a.use_mag);
+  EXPECT_EQ(a.mag_stddev, 3e-7);
+  EXPECT_EQ(a.declination, -0.125);
+  EXPECT_TRUE(a.align);
+  p.initial_orientation = {0.0, 0.0, 0.0, 1.0};  // given: the attitude starts there
+  EXPECT_FALSE(ap::engineConfig(ap::validateParameters(p)).aiding.align);
+  p.initial_orientation.clear();
+  p.use_accel = false;  // no gravity: nothing to align to
+  EXPECT_FALSE(ap::engineConfig(ap::validateParameters(p)).aiding.align);
+  const ap::AidingConfig off = ap::engineConfig(ap::validateParameters(defaults)).aiding;
+  EXPECT_FALSE(off.any());
+  EXPECT_FALSE(off.align);
+  EXPECT_EQ(off.accel_stddev, 0.1);
+  EXPECT_EQ(off.mag_stddev, 1e-6);
+  EXPECT_EQ(off.declination, 0.0);
+}
+
+// No initial_orientation: the identity, in every world_frame (its axes' own identity).
+TEST(Parameters, InitialOrientationNotGivenIsTheIdentity) {
+  const ap::NodeConfig node = ap::validateParameters(ap::Parameters{});
+  EXPECT_EQ(node.kinematic.initial_q_WB.coeffs(), Eigen::Vector4d(0.0, 0.0, 0.0, 1.0));
+}
+
+// use_accel and use_mag are the kinematic model's; the accelerometer comes in Imu messages.
+// Each refusal names the setting and what is accepted, before the engine would throw.
+TEST(Parameters, AidingRefusedWhereItCannotWork) {
+  auto with = [](auto change) {
+    ap::Parameters p;
+    change(p);
+    return p;
+  };
+  expectRefused(with([](auto& p) {
+                  p.inertia = {1.0, 2.0, 2.5};
+                  p.use_accel = true;
+                }),
+                "use_accel");
+  expectRefused(with([](auto& p) {
+                  p.inertia = {1.0, 2.0, 2.5};
+                  p.use_mag = true;
+                }),
+                "use_mag");
+  expectRefused(with([](auto& p) {
+                  p.rate_input = "twist";
+                  p.use_accel = true;
+                }),
+                "use_accel");
+  expectRefused(with([](auto& p) { p.accel_stddev = 0.0; }), "accel_stddev");
+  expectRefused(with([](auto& p) { p.accel_stddev = 100.5; }), "accel_stddev");
+  expectRefused(with([](auto& p) { p.mag_stddev = NAN; }), "mag_stddev");
+  expectRefused(with([](auto& p) { p.mag_stddev = 0.02; }), "mag_stddev");
+  expectRefused(with([](auto& p) { p.declination = 3.2; }), "declination");
+  EXPECT_NO_THROW(ap::validateParameters(with([](auto& p) {
+    p.rate_input = "twist";
+    p.use_mag = true;  // a field needs no accelerometer message
+    p.accel_stddev = 100.0;
+    p.mag_stddev = 1e-2;
+    p.declination = -M_PI;
+  })));
+}
+
+// docs/node.md's table of the accel_*/mag_* counters names AidingCounters::forEach's counters,
+// in its order: the diagnostics and the bag tools' summaries take the names from there.
+TEST(Parameters, AidingCounterTableFollowsTheCore) {
+  const std::string text = readFile(packageRoot() / "docs" / "node.md");
+  const auto start = text.find("## Gravity and north");
+  ASSERT_NE(start, std::string::npos) << "docs/node.md: no section Gravity and north";
+  std::istringstream lines(text.substr(start, text.find("\n## ", start + 1) - start));
+  std::vector<std::string> documented;
+  std::string line;
+  while (std::getline(lines, line)) {
+    if (line.rfind("| `", 0) == 0) documented.push_back(line.substr(3, line.find('`', 3) - 3));
+  }
+  std::vector<std::string> names;
+  ap::AidingCounters{}.forEach(
+      [&names](const char* name, std::uint64_t) { names.push_back(name); });
+  EXPECT_EQ(documented, names);
 }
 
 TEST(Parameters, FormatsAsYaml) {

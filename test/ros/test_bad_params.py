@@ -49,6 +49,7 @@ CASES = [
     ("max_dt", yaml.safe_load("1e-3"), "max_dt: '1e-3' is a string to YAML; write 1.0e-3"),
     ("max_dt", "0.5", "max_dt: '0.5' is a string to YAML; write 0.5 without quotes"),
     ("initial_orientation", [0, 0, 0, 0], "initial_orientation: zero quaternion"),
+    ("accel_stddev", 0.0, "accel_stddev: invalid value 0.0; accepted: a number > 0"),
     ("body_frame", "world", "body_frame: equals fixed_frame"),
     ("body_frame", "base link", "body_frame: frame id 'base link' refused"),
 ]

@@ -34,8 +34,8 @@ struct Parameters {
   bool torque_input = false;
   std::string torque_frame = "body";
   double torque_timeout = 0.0;
-  std::vector<double> inertia;  // empty: no inertia given
-  std::vector<double> initial_orientation{0.0, 0.0, 0.0, 1.0};
+  std::vector<double> inertia;              // empty: no inertia given
+  std::vector<double> initial_orientation;  // empty: none given (identity, or use_accel aligns)
   std::vector<double> initial_angular_velocity{0.0, 0.0, 0.0};
   std::string fixed_frame = "world";
   std::string body_frame = "base_link";
@@ -63,6 +63,11 @@ struct Parameters {
   bool estimate_gyro_bias = false;
   double gyro_bias_random_walk = 1e-6;
   double gyro_bias_stddev = 2.424e-5;  // 5 deg/h
+  bool use_accel = false;
+  double accel_stddev = 0.1;
+  bool use_mag = false;
+  double mag_stddev = 1e-6;
+  double declination = 0.0;
 };
 
 /// The `integrator` parameter's description, from the integrator table: the methods of each
@@ -88,7 +93,8 @@ void forEachParameter(P& p, F&& f) {
     "empty: none");
   f("initial_orientation", p.initial_orientation, "",
     "q_WB at the first stamp and after a reset, [x, y, z, w] in `world_frame`'s axes "
-    "(normalised; any finite scale)");
+    "(normalised; any finite scale); empty: none given, the identity, or with `use_accel` the "
+    "tilt from the first accelerometer sample");
   f("initial_angular_velocity", p.initial_angular_velocity, "rad/s",
     "body rate at the first stamp (dynamic model), [x, y, z] in `world_frame`'s body axes; "
     "magnitude at most 1e5");
@@ -156,6 +162,19 @@ void forEachParameter(P& p, F&& f) {
     "`estimate_gyro_bias`: prior standard deviation of the bias per axis (5 °/h), and the ceiling "
     "of its estimate's; "
     "in [0, 10]");
+  f("use_accel", p.use_accel, "",
+    "kinematic model, `rate_input: imu`: the IMU's `linear_acceleration` measures the gravity "
+    "direction (roll and pitch); start-up only");
+  f("accel_stddev", p.accel_stddev, "m/s²",
+    "`use_accel`: accelerometer noise per axis for messages whose covariance is all zero; in "
+    "(0, 100]");
+  f("use_mag", p.use_mag, "",
+    "kinematic model: `imu/mag` (sensor_msgs/MagneticField) measures the heading; start-up only");
+  f("mag_stddev", p.mag_stddev, "T",
+    "`use_mag`: magnetometer noise per axis for messages whose covariance is all zero; in "
+    "(0, 1e-2]");
+  f("declination", p.declination, "rad",
+    "`use_mag`: magnetic north east of true north positive; in [-π, π]");
 }
 
 /// All parameter names, for rejecting unknown ones.

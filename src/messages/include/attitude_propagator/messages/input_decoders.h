@@ -20,6 +20,15 @@
 // - frame ids (frame_ids.h): a leading '/' is removed (tf1's `/imu` is `imu`), warned once per
 //   frame (takeFrameWarnings); a frame id with a space or line break is refused: NoTransform
 //   (rates, torques) or BiasFrame, naming the rule in `detail`;
+// - accelerometer (Imu, with its rate): REP-145's linear_acceleration_covariance[0] == -1 means
+//   none (nothing to submit, not a refusal); otherwise the specific force f_S is taken into the
+//   body by the rate's own mount, f_B = q_BS f_S, its covariance C_BS R_S C_BSᵀ (all zero: none
+//   given, the engine's accel_stddev), with the rate's stamp; a refused rate's is not taken;
+// - magnetic field (MagneticField, imu/mag): the stamp rule, then the rates' frame rule with a
+//   mount of its own (the rates' mount when it is the same frame): m_B = q_BM m_M, covariance
+//   C_BM R_M C_BMᵀ (all zero: mag_stddev); unknown frame: NoTransform;
+// - world_frame changes nothing here: inputs are in REP-103's axes (FLU bodies, docs/
+//   conventions.md §2.2); an FRD sensor gives its frame a mount of its own on tf;
 // - types: a topic that takes a plain and a stamped type (body_twist, torque) takes the type of
 //   its first message of either; a message of another type is refused, WrongType.
 #pragma once
@@ -39,6 +48,7 @@
 #include <ros/serialization.h>
 #include <ros/time.h>
 #include <sensor_msgs/Imu.h>
+#include <sensor_msgs/MagneticField.h>
 
 #include <Eigen/Geometry>
 
@@ -104,10 +114,26 @@ struct Reading {
   std::string frame_id;                                  ///< empty: none or unstamped
 };
 
+/// A vector measured in the body frame at `stamp`, for the engine's gravity or field
+/// measurements (submitAcceleration, submitMagneticField).
+struct BodyVector {
+  Stamp stamp = 0;
+  Eigen::Vector3d value_B = Eigen::Vector3d::Zero();       ///< f_B (m/s^2) or m_B (T)
+  Eigen::Matrix3d covariance_B = Eigen::Matrix3d::Zero();  ///< zero: none given
+};
+
 /// A rate or torque decoded for the engine.
 struct DecodedInput : Decoded<Input> {
   Eigen::Quaterniond q_BS = Eigen::Quaterniond::Identity();  ///< rates: the mount applied
   bool new_mount = false;  ///< rates: q_BS was looked up for this message (a new mount frame)
+  /// Imu: the accelerometer's specific force in the body, at the rate's stamp; none when
+  /// REP-145 says there is none (linear_acceleration_covariance[0] == -1).
+  std::optional<BodyVector> acceleration;
+};
+
+/// A magnetic field decoded for the engine, and whether its mount was looked up for it.
+struct DecodedField : Decoded<BodyVector> {
+  bool new_mount = false;
 };
 
 /// A gyro bias in the body frame, in force from `stamp`.
@@ -121,6 +147,11 @@ std::optional<Stamp> stampOf(const ros::Time& header, const ros::Time& arrival);
 
 /// An Imu's rate in its own frame, or NoRate (REP-145), BadCovariance, NoTime.
 Decoded<Reading> readImu(const sensor_msgs::Imu& msg, const ros::Time& arrival);
+/// An Imu's specific force f_S (m/s^2) in its own frame with the stamp rule; none when REP-145
+/// says there is none (linear_acceleration_covariance[0] == -1) or there is no time.
+std::optional<Reading> readImuAcceleration(const sensor_msgs::Imu& msg, const ros::Time& arrival);
+/// A MagneticField's m_S (T) in its own frame, or NoTime.
+Decoded<Reading> readMagneticField(const sensor_msgs::MagneticField& msg, const ros::Time& arrival);
 Decoded<Reading> readTwist(const geometry_msgs::Twist& msg, const ros::Time& arrival);
 Decoded<Reading> readTwist(const geometry_msgs::TwistStamped& msg, const ros::Time& arrival);
 Decoded<Reading> readWrench(const geometry_msgs::Wrench& msg, const ros::Time& arrival);
@@ -189,6 +220,9 @@ class InputDecoders {
   DecodedInput torque(const geometry_msgs::Wrench& msg, const ros::Time& arrival);
   DecodedInput torque(const geometry_msgs::WrenchStamped& msg, const ros::Time& arrival,
                       FrameSource* frames);
+  /// imu/mag: the field in the body frame (the rates' frame rule, a mount of its own).
+  DecodedField magneticField(const sensor_msgs::MagneticField& msg, const ros::Time& arrival,
+                             FrameSource* frames);
   /// `now`: the time an unstamped bias takes effect from (ROS time in the node, zero before
   /// the first /clock: from the start; the record time in a bag).
   Decoded<BiasSample> bias(const geometry_msgs::Vector3Stamped& msg, const ros::Time& now);
@@ -235,6 +269,11 @@ class InputDecoders {
   /// The rates' mount: its frame (empty until one is looked up) and q_BS.
   const std::string& mountFrame() const { return mount_frame_; }
   const Eigen::Quaterniond& mount() const { return q_BS_; }
+  /// The field's mount: its frame (empty until one is looked up, or when it is the rates') and
+  /// q_BM; magSettled(): a field has been taken, so its frame needs no further lookup.
+  const std::string& magFrame() const { return mag_frame_; }
+  const Eigen::Quaterniond& magMount() const { return q_BM_; }
+  bool magSettled() const { return mag_settled_; }
   /// The warnings of frame ids with a leading '/' met since the last call (one per frame).
   std::vector<std::string> takeFrameWarnings() { return frame_ids_.takeWarnings(); }
 
@@ -244,11 +283,17 @@ class InputDecoders {
   DecodedInput rate(const Decoded<Reading>& read, FrameSource* frames);
   /// The torque rule.
   DecodedInput torque(const Decoded<Reading>& read, FrameSource* frames);
+  /// The rates' accelerometer, through the mount the rate took.
+  static std::optional<BodyVector> acceleration(const std::optional<Reading>& f_S,
+                                                const DecodedInput& rate);
 
   DecoderFrames frames_;
   FrameIds frame_ids_;
   std::string mount_frame_;  // empty: no mount looked up yet
   Eigen::Quaterniond q_BS_ = Eigen::Quaterniond::Identity();
+  std::string mag_frame_;  // empty: no mount of the field's own looked up yet
+  Eigen::Quaterniond q_BM_ = Eigen::Quaterniond::Identity();
+  bool mag_settled_ = false;
   TopicType twist_type_;
   TopicType torque_type_;
   std::vector<std::uint8_t> buffer_;

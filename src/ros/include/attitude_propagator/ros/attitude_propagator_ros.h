@@ -30,6 +30,7 @@
 #include <ros/ros.h>
 #include <rosgraph_msgs/Clock.h>
 #include <sensor_msgs/Imu.h>
+#include <sensor_msgs/MagneticField.h>
 #include <std_srvs/Empty.h>
 #include <tf2_msgs/TFMessage.h>
 #include <tf2_ros/buffer.h>
@@ -96,6 +97,8 @@ class AttitudePropagatorRos : public EngineSink {
   void onTwist(const ros::MessageEvent<const topic_tools::ShapeShifter>& event);
   void onTorque(const ros::MessageEvent<const topic_tools::ShapeShifter>& event);
   void onClock(const ros::MessageEvent<const rosgraph_msgs::Clock>& event);
+  /// use_mag: a magnetometer sample on imu/mag, a measurement of the heading.
+  void onMag(const ros::MessageEvent<const sensor_msgs::MagneticField>& event);
   /// A gyro bias, in force for rates stamped at or after its stamp.
   void onGyroBias(const geometry_msgs::Vector3Stamped::ConstPtr& msg);
   /// An absolute attitude fix (fix_input.h).
@@ -108,6 +111,9 @@ class AttitudePropagatorRos : public EngineSink {
   /// Counts a refusal once and logs it, throttled per kind.
   void refused(const Refusal& refusal, const char* topic);
   void ensureTfListener();
+  /// Stops listening to tf once no input needs a lookup any more (`mount_settled`: the rates'
+  /// mount is kept, or they need none), or the listener would digest our own /tf.
+  void releaseTfListener(bool mount_settled);
   /// Hands an input to the engine and notes when input last arrived (diagnostics).
   void submit(const Input& input);
 
@@ -162,11 +168,13 @@ class AttitudePropagatorRos : public EngineSink {
     AttitudePropagatorRos& node_;
   } tf_frames_{*this};
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
+  bool rates_settled_ = false;  // the latest rate was taken: its mount kept, or none needed
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
 
   ros::Subscriber rate_sub_;
   ros::Subscriber torque_sub_;
   ros::Subscriber clock_sub_;
+  ros::Subscriber mag_sub_;
   ros::Subscriber bias_sub_;
   ros::Subscriber fix_sub_;
   ros::Subscriber tf_watch_sub_;
