@@ -4,6 +4,7 @@
 // state at a grid stamp includes exactly the inputs stamped up to it.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -43,6 +44,7 @@ class DynamicScheduler final : public Propagator {
   bool advanceForFix(double t) override;
   void correctOrientation(const Eigen::Quaterniond& q_WB) override {
     dynamic_.correctOrientation(q_WB);
+    recent_.clear();  // the states before it are no longer the estimate's
   }
   void replay(const ModelStep& step) override;
 
@@ -53,6 +55,29 @@ class DynamicScheduler final : public Propagator {
   void applyPendingUpTo(Stamp stamp);
   void publishGridStamp(Stamp stamp);
 
+  /// The states at the newest grid stamps, so that a late input (placed at the last grid point)
+  /// is handed on with the state at its own stamp: interpolated between the two grid states
+  /// around it, along the geodesic (exact for a constant rate). Empty after a reset, a pinned
+  /// state, a reconfiguration or a fix.
+  class RecentStates {
+   public:
+    void push(double t, const DynamicState& state);
+    void clear() { size_ = 0; }
+    /// The state at t, or empty when t is not between two states kept.
+    std::optional<DynamicState> at(double t) const;
+
+   private:
+    static constexpr std::size_t kKept = 64;
+    struct Entry {
+      double t = 0.0;
+      DynamicState state;
+    };
+    const Entry& entry(std::size_t i) const { return ring_[(head_ + i) % kKept]; }
+    std::array<Entry, kKept> ring_{};
+    std::size_t head_ = 0;
+    std::size_t size_ = 0;
+  };
+
   PropagatorHost& host_;
   DynamicPropagator dynamic_;
   std::string model_name_;
@@ -62,6 +87,7 @@ class DynamicScheduler final : public Propagator {
   std::uint64_t work_budget_;         // integrator work per call at most
   std::vector<Input> pending_;        // sorted by stamp
   std::optional<Input> held_torque_;  // the last torque applied, for reconfigure()
+  RecentStates recent_;
 };
 
 }  // namespace attitude_propagator

@@ -274,6 +274,7 @@ class AttitudeEngine : private PropagatorHost {
   bool handleOutcome(StampOutcome outcome, std::optional<Source> source, Stamp stamp) override;
   void emitState(Stamp stamp) override;
   void inputApplied(const Input& input, Stamp stamp) override;
+  void inputAppliedAt(const Input& input, Stamp stamp, const DynamicState& at) override;
   void note(const EngineNote& note) override { sink_.note(note); }
   EngineCounters& mutableCounters() override { return counters_; }
   std::optional<Stamp> clock() const override { return clock_; }

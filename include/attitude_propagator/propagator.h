@@ -174,6 +174,9 @@ class PropagatorHost {
   virtual void emitState(Stamp stamp) = 0;
   /// Hands an applied input on with the state at `stamp`.
   virtual void inputApplied(const Input& input, Stamp stamp) = 0;
+  /// Hands an applied input on with the state it took effect at, `at` (an input placed before
+  /// the model's time: the state at its own stamp, not the model's newest).
+  virtual void inputAppliedAt(const Input& input, Stamp stamp, const DynamicState& at) = 0;
   virtual void note(const EngineNote& note) = 0;
   virtual EngineCounters& mutableCounters() = 0;
   /// The latest ROS time seen; empty before the first.

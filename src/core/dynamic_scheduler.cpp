@@ -67,10 +67,16 @@ void DynamicScheduler::applyDynamic(const Input& input) {
   // The core places an input that arrives after the clock passed its stamp (transport
   // latency) at the last grid point, and drops one not newer than the stream's previous one.
   const bool late = dynamic_.anchored() && t < dynamic_.time();
+  // Before it acts: the state at its own stamp, where the clock had already passed.
+  const std::optional<DynamicState> at_stamp = late ? recent_.at(t) : std::nullopt;
   const StampOutcome outcome = applyToModel(input);
   if (late && outcome == StampOutcome::Advanced) ++host_.mutableCounters().late;
   if (host_.handleOutcome(outcome, input.source, input.stamp)) {
-    host_.inputApplied(input, input.stamp);
+    if (at_stamp) {
+      host_.inputAppliedAt(input, input.stamp, *at_stamp);
+    } else {
+      host_.inputApplied(input, input.stamp);
+    }
   }
   host_.stepTaken(ModelStep{input, false});
 }
@@ -153,7 +159,32 @@ void DynamicScheduler::publishGridStamp(Stamp stamp) {
     host_.stepTaken(ModelStep{grid, true});
     if (!holds) return;
   }
+  recent_.push(dynamic_.time(), dynamic_.state());
   host_.emitState(stamp);  // also when an input stamped exactly here brought the state to it
+}
+
+void DynamicScheduler::RecentStates::push(double t, const DynamicState& state) {
+  if (size_ > 0 && !(t > entry(size_ - 1).t)) return;  // one per time, increasing
+  if (size_ < kKept) {
+    ring_[(head_ + size_++) % kKept] = {t, state};
+  } else {
+    ring_[head_] = {t, state};
+    head_ = (head_ + 1) % kKept;
+  }
+}
+
+std::optional<DynamicState> DynamicScheduler::RecentStates::at(double t) const {
+  for (std::size_t i = 1; i < size_; ++i) {
+    const Entry& a = entry(i - 1);
+    const Entry& b = entry(i);
+    if (t < a.t || t > b.t) continue;
+    const double s = (t - a.t) / (b.t - a.t);
+    DynamicState x;
+    x.q_WB = a.state.q_WB.slerp(s, b.state.q_WB);
+    x.w_B = (1.0 - s) * a.state.w_B + s * b.state.w_B;
+    return x;
+  }
+  return std::nullopt;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -163,6 +194,7 @@ void DynamicScheduler::publishGridStamp(Stamp stamp) {
 void DynamicScheduler::setState(double t, const Eigen::Quaterniond& q_WB,
                                 const Eigen::Vector3d& w_B) {
   dynamic_.setState(t, DynamicState{q_WB, w_B});
+  recent_.clear();
 }
 
 void DynamicScheduler::reset() {
@@ -170,6 +202,7 @@ void DynamicScheduler::reset() {
   dynamic_.reset();
   pending_.clear();
   held_torque_.reset();
+  recent_.clear();
 }
 
 void DynamicScheduler::reconfigure(const EngineConfig& next) {
@@ -185,6 +218,7 @@ void DynamicScheduler::reconfigure(const EngineConfig& next) {
     }
   }
   dynamic_ = std::move(d);
+  recent_.clear();
   model_name_ = dynamic_.modelName();
   publish_rate_ = next.publish_rate;
   max_pending_ = next.max_pending;
@@ -216,6 +250,7 @@ void DynamicScheduler::restore(const ModelSnapshot& from) {
   if (const auto* saved = std::get_if<DynamicReplayState>(&from)) {
     dynamic_ = saved->dynamic;
     held_torque_ = saved->held_torque;
+    recent_.clear();
   }
 }
 

@@ -534,6 +534,14 @@ void AttitudeEngine::emitState(Stamp stamp) {
   sink_.publishState(s);
 }
 
+void AttitudeEngine::inputAppliedAt(const Input& input, Stamp stamp, const DynamicState& at) {
+  if (replaying_) return;
+  EngineState s = stateAt(stamp);
+  s.q_WB = at.q_WB;
+  s.w_B = at.w_B;
+  sink_.inputApplied(input, s);
+}
+
 void AttitudeEngine::inputApplied(const Input& input, Stamp stamp) {
   if (replaying_) return;
   sink_.inputApplied(input, stateAt(stamp));

@@ -29,11 +29,13 @@ inline Eigen::Quaterniond aboutAxis(const Eigen::Vector3d& axis, double angle) {
 struct Recorder : ap::EngineSink {
   std::vector<ap::EngineState> states;
   std::vector<ap::Input> applied;
+  std::vector<ap::EngineState> applied_states;  ///< the state handed on with each applied input
   std::vector<ap::EngineNote> notes;
 
   void publishState(const ap::EngineState& s) override { states.push_back(s); }
-  void inputApplied(const ap::Input& input, const ap::EngineState&) override {
+  void inputApplied(const ap::Input& input, const ap::EngineState& s) override {
     applied.push_back(input);
+    applied_states.push_back(s);
   }
   void note(const ap::EngineNote& n) override { notes.push_back(n); }
 

@@ -421,6 +421,33 @@ TEST(EngineDynamic, ALateInputActsFromTheLastGridPointAndIsCounted) {
   EXPECT_NEAR(s->w_B.x(), 0.2, 4 * DBL_EPSILON);  // from the grid point 1.0 (measured 2.8e-17)
 }
 
+// A late input acts from the last grid point, but is handed on (the node republishes an IMU
+// message with it) with the state at its own stamp: spinning at 1 rad/s about z, the grid at
+// 0.1 s, a rate stamped 0.05 s goes out with 0.05 rad (the closed form), not the 0.1 rad of the
+// model's time. Between two grid states the orientation is interpolated along the geodesic,
+// exact for a constant rate.
+TEST(EngineDynamic, ALateInputIsHandedOnWithTheStateAtItsOwnStamp) {
+  ap::EngineConfig config = spinningSphereConfig();
+  config.dynamic->initial.w_B = Eigen::Vector3d(0.0, 0.0, 1.0);
+  config.publish_rate = 100.0;
+  Recorder sink;
+  ap::AttitudeEngine engine(config, sink);
+  engine.clockTick(at(0.0));  // the anchor: the state at 0 is the identity
+  runClock(engine, 0.0, 0.1, 0.01);
+  ASSERT_EQ(sink.states.back().stamp, at(0.1));
+  for (double t : {0.05, 0.073}) {
+    engine.submit(rate(at(t), Eigen::Vector3d(0.0, 0.0, 1.0)));
+    ASSERT_FALSE(sink.applied_states.empty());
+    EXPECT_EQ(sink.applied_states.back().stamp, at(t));
+    EXPECT_ROTATION_NEAR(sink.applied_states.back().q_WB, aboutAxis(Eigen::Vector3d::UnitZ(), t),
+                         1e-12);
+  }
+  EXPECT_EQ(engine.counters().late, 2u);
+  // The state published goes on from the grid point, as before.
+  runClock(engine, 0.1, 0.2, 0.01);
+  EXPECT_ROTATION_NEAR(sink.states.back().q_WB, aboutAxis(Eigen::Vector3d::UnitZ(), 0.2), 1e-12);
+}
+
 TEST(EngineDynamic, TheClockGoingBackResetsAndPublishesTheInitialStateAtOnce) {
   Recorder sink;
   ap::AttitudeEngine engine(spinningSphereConfig(), sink);
