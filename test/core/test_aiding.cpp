@@ -2,6 +2,7 @@
 // the measurement models against closed forms and finite differences, the gates on both sides
 // of their thresholds, the alignment against the published tilt formulas, the observability of
 // the bias, late samples against on-time ones, and the filter against a truth.
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -39,6 +40,7 @@ Eigen::Quaterniond rpy(double roll, double pitch, double yaw) {
 }
 
 simulated_imu::Motion tumble();  // below, with the late samples
+ap::EngineConfig aidedConfig();  // below, with the engine's tests
 
 // A generic attitude: no axis lines up with the world's.
 const Eigen::Quaterniond kGeneric = rpy(0.4, -0.7, 2.1);
@@ -100,6 +102,41 @@ TEST(MagneticHeading, TheResidualIsZeroAtTheTruthAndItsJacobianIsTheResidualsSlo
   EXPECT_NEAR((l.H * ap::bodyUp(kGeneric))(0), 1.0, 1e-12);
   EXPECT_NEAR(std::abs((l.H * along)(0)), std::tan(1.1), 1e-12);
   EXPECT_LE(std::abs((l.H * across)(0)), 1e-12);
+}
+
+TEST(GravityDirection, ItsNoiseHoldsTheLinearAccelerationGivenPerAxisOverGSquared) {
+  const double s = 0.05, lv = 1.5;  // m/s^2, (m/s^2)^2
+  const ap::GravityDirection m(g * Eigen::Vector3d::UnitZ(), s * s * Eigen::Matrix3d::Identity(),
+                               ap::kAccelGate, lv);
+  const ap::Linearized l = m.linearize(Eigen::Quaterniond::Identity());
+  EXPECT_NEAR(l.R(0, 0), s * s / (g * g) + lv / (g * g), 1e-15);
+  EXPECT_NEAR(l.R(1, 1), s * s / (g * g) + lv / (g * g), 1e-15);
+}
+
+// A level body in a long turn: the centripetal acceleration grows to 3 m/s^2 over 2 s and lasts
+// 12 s, so the accelerometer's direction leans 17 degrees for longer than kAccelRecovery.
+// Without the linear acceleration's average the gate refuses the leaning samples until the
+// recovery takes one as the truth: the tilt then is the lean. With it they count for little
+// while the turn lasts, none is refused for long, and the gyro holds the tilt.
+TEST(LinearAcceleration, WhileALongTurnLastsTheTiltStaysWithTheGyro) {
+  auto run = [](double window) {
+    ap::EngineConfig c = aidedConfig();
+    c.aiding.linear_window = window;
+    c.rate_stddev = 0.002;
+    Recorder sink;
+    ap::AttitudeEngine engine(c, sink);
+    for (int k = 0; k <= 1600; ++k) {  // 2 s still, 2 s turning harder, 12 s held
+      const double t = 0.01 * k;
+      const Eigen::Vector3d f(3.0 * std::clamp((t - 2.0) / 2.0, 0.0, 1.0), 0.0, g);
+      engine.submit(imu(at(t), Eigen::Vector3d::Zero()));
+      engine.submitAcceleration(at(t), f, Eigen::Matrix3d::Zero());
+    }
+    return simulated_imu::tiltError(engine.state().q_WB, Eigen::Quaterniond::Identity());
+  };
+  const double with = run(ap::kLinearAccelerationWindow);
+  const double without = run(0.0);
+  EXPECT_GT(without, 5.0 * kDeg);
+  EXPECT_LT(with, 0.25 * without);
 }
 
 TEST(MagneticHeading, TheResidualIsTheHeadingErrorAboutTheWorldsUp) {
