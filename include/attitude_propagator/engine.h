@@ -336,6 +336,10 @@ class AttitudeEngine : private PropagatorHost {
   FixOutcome applyInStampOrder(const PendingFix& fix);
   /// Applies a fix stamped at or before the newest entry.
   FixOutcome applyFix(const PendingFix& fix);
+  /// The applied fixes stamped after `stamp`, taken out of those kept, in stamp order.
+  std::vector<PendingFix> takeAppliedAfter(Stamp stamp);
+  /// Applies fixes again after an earlier fix or measurement, keeping those applied.
+  void applyAgain(const std::vector<PendingFix>& fixes);
   /// Keeps an applied fix (stamped at or after those kept) to be applied again.
   void keepApplied(const PendingFix& fix);
   /// Saves the model's state after a replayed step into its entry.

@@ -813,21 +813,35 @@ FixHistoryEntry& AttitudeEngine::nextHistorySlot() {
 // rejects is dropped, and the gate's run of rejections is the arrivals'.
 FixOutcome AttitudeEngine::applyInStampOrder(const PendingFix& fix) {
   if (forgotten_fix_ && fix.stamp < *forgotten_fix_) return FixOutcome::TooOld;
-  const auto later =
-      std::upper_bound(applied_fixes_.begin(), applied_fixes_.end(), fix.stamp,
-                       [](Stamp t, const PendingFix& other) { return t < other.stamp; });
-  const std::vector<PendingFix> again(later, applied_fixes_.end());
+  std::vector<PendingFix> again = takeAppliedAfter(fix.stamp);
   const FixOutcome outcome = applyFix(fix);
-  if (outcome != FixOutcome::Accepted && outcome != FixOutcome::Reset) return outcome;
-  applied_fixes_.resize(applied_fixes_.size() - again.size());
+  if (outcome != FixOutcome::Accepted && outcome != FixOutcome::Reset) {
+    applied_fixes_.insert(applied_fixes_.end(), again.begin(), again.end());  // untouched
+    return outcome;
+  }
   keepApplied(fix);
+  applyAgain(again);
+  return outcome;
+}
+
+std::vector<AttitudeEngine::PendingFix> AttitudeEngine::takeAppliedAfter(Stamp stamp) {
+  const auto later =
+      std::upper_bound(applied_fixes_.begin(), applied_fixes_.end(), stamp,
+                       [](Stamp t, const PendingFix& other) { return t < other.stamp; });
+  std::vector<PendingFix> taken(later, applied_fixes_.end());
+  applied_fixes_.erase(later, applied_fixes_.end());
+  return taken;
+}
+
+void AttitudeEngine::applyAgain(const std::vector<PendingFix>& fixes) {
+  // Not counted again; one the gate now rejects is dropped; the gate's run of rejections is the
+  // arrivals'.
   const int rejected_in_a_row = rejected_in_a_row_;
-  for (const PendingFix& g : again) {
+  for (const PendingFix& g : fixes) {
     const FixOutcome o = applyFix(g);
     if (o == FixOutcome::Accepted || o == FixOutcome::Reset) keepApplied(g);
   }
   rejected_in_a_row_ = rejected_in_a_row;
-  return outcome;
 }
 
 void AttitudeEngine::keepApplied(const PendingFix& fix) {

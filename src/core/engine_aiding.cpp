@@ -217,17 +217,7 @@ AidingOutcome AttitudeEngine::applyMeasurement(const PendingMeasurement& pm) {
   fillEntry(entry);
   entry.stamp = base_stamp;
   replayFrom(pos + 1);
-  const auto later =
-      std::upper_bound(applied_fixes_.begin(), applied_fixes_.end(), pm.stamp,
-                       [](Stamp t, const PendingFix& other) { return t < other.stamp; });
-  const std::vector<PendingFix> again(later, applied_fixes_.end());
-  applied_fixes_.resize(applied_fixes_.size() - again.size());
-  const int rejected_in_a_row = rejected_in_a_row_;
-  for (const PendingFix& g : again) {
-    const FixOutcome o = applyFix(g);
-    if (o == FixOutcome::Accepted || o == FixOutcome::Reset) keepApplied(g);
-  }
-  rejected_in_a_row_ = rejected_in_a_row;
+  applyAgain(takeAppliedAfter(pm.stamp));
   return outcome;
 }
 

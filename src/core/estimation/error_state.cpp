@@ -35,8 +35,8 @@ namespace {
 /// the sensor's rate, and Eigen's fixed sizes are unrolled where its dynamic ones loop
 /// (measured: the gravity update took 1.2 us with dynamic sizes, bench_step_costs).
 template <int N>
-UpdateResult fuseRows(const Measurement& measurement, const Linearized& m,
-                      Eigen::Quaterniond& q_WB, ErrorState& e, bool force) {
+UpdateResult fuseRows(const Measurement& measurement, const Linearized& m, Eigen::Quaterniond& q_WB,
+                      ErrorState& e, bool force) {
   using Matrix6 = Eigen::Matrix<double, 6, 6>;
   const Eigen::Matrix<double, N, 1> r = m.r;
   const Eigen::Matrix<double, N, 3> H_theta = m.H;
