@@ -64,15 +64,6 @@ void writeStaticTilt(const std::string& path, int n, bool mag) {
   bag.close();
 }
 
-std::vector<ap::AttitudeState> readStates(const std::string& path) {
-  rosbag::Bag bag(path, rosbag::bagmode::Read);
-  std::vector<ap::AttitudeState> states;
-  for (const rosbag::MessageInstance& m : rosbag::View(bag)) {
-    if (auto s = m.instantiate<ap::AttitudeState>()) states.push_back(*s);
-  }
-  return states;
-}
-
 }  // namespace
 
 // No initial_orientation: the tilt starts from the first accelerometer sample; the last state's
@@ -83,7 +74,7 @@ TEST(BagAiding, StaticTiltedImuGivesTheClosedFormTilt) {
   const RunResult r = run(kPropagate + " " + dir.file("in.bag") + " --set use_accel=true -o " +
                           dir.file("out.bag") + " --no-progress");
   ASSERT_EQ(r.status, 0) << r.output;
-  const auto states = readStates(dir.file("out.bag"));
+  const auto states = readOutputBag(dir.file("out.bag")).states;
   ASSERT_EQ(states.size(), 200u);
   const Eigen::Vector2d rp = rollPitch(toEigen(states.back().orientation));
   EXPECT_NEAR(rp.x(), kRoll, 1e-3);
@@ -104,7 +95,7 @@ TEST(BagAiding, MagTopicIsReadAndCounted) {
   EXPECT_NE(r.output.find("/compass 200"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("mag: 200 read: mag_accepted "), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("mag_invalid 0,"), r.output.find("mag_invalid")) << r.output;
-  const auto states = readStates(dir.file("out.bag"));
+  const auto states = readOutputBag(dir.file("out.bag")).states;
   ASSERT_FALSE(states.empty());
   const Eigen::Vector2d rp = rollPitch(toEigen(states.back().orientation));
   EXPECT_NEAR(rp.x(), kRoll, 1e-3);

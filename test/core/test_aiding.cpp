@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+
 #include "attitude_propagator/engine.h"
 #include "attitude_propagator/estimation/attitude_fix.h"
 #include "attitude_propagator/estimation/gravity_direction.h"
@@ -102,6 +104,23 @@ TEST(MagneticHeading, TheResidualIsZeroAtTheTruthAndItsJacobianIsTheResidualsSlo
   EXPECT_NEAR((l.H * ap::bodyUp(kGeneric))(0), 1.0, 1e-12);
   EXPECT_NEAR(std::abs((l.H * along)(0)), std::tan(1.1), 1e-12);
   EXPECT_LE(std::abs((l.H * across)(0)), 1e-12);
+}
+
+// An anisotropic force noise at a tilted estimate: the direction's noise is the force's across
+// the predicted up, over |f|^2. With u = C_BW e_up and the force quiet across one horizontal axis,
+// noisy across the other and very noisy along u, R's eigenvalues are the two across u only.
+TEST(GravityDirection, AnAnisotropicNoiseCountsOnlyAcrossThePredictedUp) {
+  const Eigen::Vector3d u = ap::bodyUp(kGeneric);
+  const Eigen::Matrix<double, 3, 2> B = ap::normalPlane(u);
+  const double a = 0.01, b = 0.09, along = 25.0;  // (m/s^2)^2
+  const Eigen::Matrix3d cov = a * B.col(0) * B.col(0).transpose() +
+                              b * B.col(1) * B.col(1).transpose() + along * u * u.transpose();
+  // The sample 0.05 rad off the prediction: the noise is taken across u, not across f.
+  const ap::GravityDirection m(g * (ap::expMap(0.05 * B.col(0)) * u), cov, ap::kAccelGate);
+  const Eigen::Matrix2d R = m.linearize(kGeneric).R;
+  const Eigen::Vector2d eig = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(R).eigenvalues();
+  EXPECT_NEAR(eig(0), a / (g * g), 1e-15);
+  EXPECT_NEAR(eig(1), b / (g * g), 1e-15);
 }
 
 TEST(GravityDirection, ItsNoiseHoldsTheLinearAccelerationGivenPerAxisOverGSquared) {
