@@ -45,6 +45,12 @@ void requireOneOf(const std::string& name, const std::string& value,
   fail(name, "unknown value '" + logText(value) + "'; accepted: " + list);
 }
 
+void requireCount(const std::string& name, int value, int max, const std::string& accepted) {
+  if (value < 1 || value > max) {
+    fail(name, "invalid value " + formatParameter(value) + "; accepted: " + accepted);
+  }
+}
+
 void requireFrameName(const std::string& name, const std::string& frame) {
   // tf2 refuses frame ids with a leading slash (tf1 style) and empty ones.
   if (frame.empty() || frame.front() == '/') {
@@ -149,6 +155,8 @@ void checkScalars(const Parameters& p) {
   requireFinite("max_dt", p.max_dt, kMinMaxDt, true, kMaxMaxDt, "a number in [1e-6, 60] (s)");
   requireFinite("max_future", p.max_future, 0.0, false, kMaxFuture,
                 "a number > 0 and at most 3600 (s)");
+  requireFinite("time_jump_threshold", p.time_jump_threshold, kMinTimeJumpThreshold, true,
+                kMaxFuture, "a number in [1e-3, 3600] (s)");
   requireFinite("rate_delay", p.rate_delay, 0.0, true, p.max_dt,
                 "a finite number >= 0 and at most max_dt (s)");
   requireFinite("tolerance", p.tolerance, kMinTolerance, true, kMaxTolerance,
@@ -159,6 +167,9 @@ void checkScalars(const Parameters& p) {
   requireFinite("initial_orientation_stddev", p.initial_orientation_stddev, 0.0, true, M_PI,
                 "a finite number in [0, pi] (rad)");
   requireOneOf("tf_conflict", p.tf_conflict, {"warn", "stop", "ignore"});
+  requireCount("input_queue_size", p.input_queue_size, kMaxQueueSize, "an integer in [1, 1000000]");
+  requireCount("output_queue_size", p.output_queue_size, kMaxQueueSize,
+               "an integer in [1, 1000000]");
   // Late fixes (docs/design.md §6.9): the history's memory bound is kMaxFixHistory seconds and
   // kMaxFixHistorySamples inputs (limits.h).
   requireOneOf("fix_mode", p.fix_mode, {"fuse", "reset"});
@@ -258,6 +269,8 @@ std::string formatParameter(const std::string& value) { return value; }
 
 std::string formatParameter(bool value) { return value ? "true" : "false"; }
 
+std::string formatParameter(int value) { return std::to_string(value); }
+
 std::string formatParameter(double value) {
   // Shortest text that reads back to the same double, with a dot so YAML reads a double.
   char text[32];
@@ -318,6 +331,7 @@ NodeConfig validateParameters(const Parameters& p) {
 
   TimePolicy policy;
   policy.max_dt = p.max_dt;
+  policy.backward_jump = p.time_jump_threshold;
 
   if (p.estimate_gyro_bias && config.model != Model::Kinematic) {
     fail("estimate_gyro_bias",

@@ -17,7 +17,7 @@ class AttitudePropagatorNodelet : public nodelet::Nodelet {
       // getNodeHandle(): a single-threaded queue per nodelet, which the wrapper relies on.
       wrapper_ = std::make_unique<AttitudePropagatorRos>(getNodeHandle(), getPrivateNodeHandle());
     } catch (const std::exception& e) {
-      NODELET_FATAL("attitude_propagator: refusing to start: %s", e.what());
+      NODELET_FATAL("attitude_propagator %s: refusing to start: %s", getName().c_str(), e.what());
       throw;  // the manager then refuses to load the nodelet
     }
   }

@@ -35,13 +35,15 @@ AttitudePropagatorRos::AttitudePropagatorRos(ros::NodeHandle nh, ros::NodeHandle
     : nh_(nh),
       pnh_(pnh),
       imu_nh_(nh, "imu"),
-      config_(loadParameters(pnh)),
+      log_(instancePrefix(pnh.getNamespace(), ros::this_node::getName())),
+      in_manager_(!log_.prefix().empty()),
+      config_(loadParameters(pnh, log_.prefix())),
       updater_(nh, pnh, pnh.getNamespace()),
       diagnostics_(ros::WallTime::now()) {
   refuseFeedbackLoops();
   engine_ = std::make_unique<AttitudeEngine>(engineConfig(config_), *this);
   decoders_.emplace(DecoderFrames::of(config_));
-  fixes_.emplace(config_);
+  fixes_.emplace(config_, log_);
   rebuildEncoder();
   sim_time_ = ros::Time::isSimTime();
   advertise();
@@ -89,32 +91,30 @@ void AttitudePropagatorRos::refuseFeedbackLoops() const {
 void AttitudePropagatorRos::advertise() {
   // Published as shared pointers so subscribers in the same nodelet manager get them without
   // a copy. The tf publisher is our own (tf2_ros::TransformBroadcaster publishes by value).
-  tf_pub_ = nh_.advertise<tf2_msgs::TFMessage>("/tf", kOutputQueueSize);
+  const auto queue = static_cast<std::uint32_t>(config_.parameters.output_queue_size);
+  tf_pub_ = nh_.advertise<tf2_msgs::TFMessage>("/tf", queue);
   if (config_.world != WorldConvention::Enu) {
     tf_static_pub_ = nh_.advertise<tf2_msgs::TFMessage>("/tf_static", 1, true);
   }
-  imu_pub_ = imu_nh_.advertise<sensor_msgs::Imu>("data", kOutputQueueSize);
-  state_pub_ = nh_.advertise<AttitudeState>("attitude_state", kOutputQueueSize);
+  imu_pub_ = imu_nh_.advertise<sensor_msgs::Imu>("data", queue);
+  state_pub_ = nh_.advertise<AttitudeState>("attitude_state", queue);
   reset_srv_ = pnh_.advertiseService("reset", &AttitudePropagatorRos::onReset, this);
   set_state_srv_ = pnh_.advertiseService("set_state", &AttitudePropagatorRos::onSetState, this);
 }
 
 void AttitudePropagatorRos::subscribe() {
   const auto hints = ros::TransportHints().tcpNoDelay();
+  const auto queue = static_cast<std::uint32_t>(config_.parameters.input_queue_size);
   if (config_.rate_input == RateInput::Imu) {
-    rate_sub_ =
-        imu_nh_.subscribe("data_raw", kInputQueueSize, &AttitudePropagatorRos::onImu, this, hints);
+    rate_sub_ = imu_nh_.subscribe("data_raw", queue, &AttitudePropagatorRos::onImu, this, hints);
   } else if (config_.rate_input == RateInput::Twist) {
-    rate_sub_ =
-        nh_.subscribe("body_twist", kInputQueueSize, &AttitudePropagatorRos::onTwist, this, hints);
+    rate_sub_ = nh_.subscribe("body_twist", queue, &AttitudePropagatorRos::onTwist, this, hints);
   }
   if (config_.parameters.use_mag) {
-    mag_sub_ =
-        imu_nh_.subscribe("mag", kInputQueueSize, &AttitudePropagatorRos::onMag, this, hints);
+    mag_sub_ = imu_nh_.subscribe("mag", queue, &AttitudePropagatorRos::onMag, this, hints);
   }
   if (engine_->dynamicModel() && config_.torque_input) {
-    torque_sub_ =
-        nh_.subscribe("torque", kInputQueueSize, &AttitudePropagatorRos::onTorque, this, hints);
+    torque_sub_ = nh_.subscribe("torque", queue, &AttitudePropagatorRos::onTorque, this, hints);
   }
   if (config_.rate_input != RateInput::None) {
     bias_sub_ = nh_.subscribe("gyro_bias", kSparseQueueSize, &AttitudePropagatorRos::onGyroBias,
@@ -127,7 +127,7 @@ void AttitudePropagatorRos::subscribe() {
     // Under sim time /clock is the time source: every tick is seen, in order with the inputs
     // on this queue, so a jump of the clock is told apart from a callback that ran late.
     clock_sub_ = nh_.subscribe<rosgraph_msgs::Clock>(
-        "/clock", kInputQueueSize,
+        "/clock", queue,
         boost::function<void(const ros::MessageEvent<const rosgraph_msgs::Clock>&)>(
             [this](const ros::MessageEvent<const rosgraph_msgs::Clock>& e) { onClock(e); }),
         ros::VoidConstPtr(), hints);
@@ -166,8 +166,8 @@ void AttitudePropagatorRos::writeResolved() const {
   pnh_.setParam("resolved_integrator", integratorName(engine_->integrator()));
 }
 
-void AttitudePropagatorRos::logModel() const {
-  ROS_INFO("%s", modelText(config_, *engine_).c_str());
+void AttitudePropagatorRos::logModel() {
+  log(LogLine{ros::console::levels::Info, "", modelText(config_, *engine_)});
 }
 
 template <class F>
@@ -177,25 +177,18 @@ void AttitudePropagatorRos::guarded(const char* where, F&& f) {
   } catch (const std::exception& e) {
     ++callback_errors_;
     // The text may quote a message's strings (tf's errors quote frame ids).
-    ROS_ERROR_THROTTLE(kWarnPeriod, "%s: %s (input ignored, %lu errors so far)", where,
-                       logText(e.what(), 4 * kLogTextBytes).c_str(), callback_errors_);
+    log(LogLine{ros::console::levels::Error, "callback error",
+                formatted("%s: %s (input ignored, %lu errors so far)", where,
+                          logText(e.what(), 4 * kLogTextBytes).c_str(), callback_errors_)});
   } catch (...) {
     ++callback_errors_;
-    ROS_ERROR_THROTTLE(kWarnPeriod, "%s: unknown exception (input ignored)", where);
+    log(LogLine{ros::console::levels::Error, "callback error",
+                formatted("%s: unknown exception (input ignored)", where)});
   }
 }
 
 void AttitudePropagatorRos::log(const std::optional<LogLine>& line) {
-  if (!line) return;
-  if (!line->kind.empty()) {
-    // ROS_LOG_THROTTLE's rule, on wall time (ROS time may take turns between two /clock
-    // publishers), with the last line kept per kind.
-    const double now = ros::WallTime::now().toSec();
-    double& last = last_logged_[line->kind];
-    if (!(last + kWarnPeriod <= now || now < last)) return;
-    last = now;
-  }
-  ROS_LOG(line->level, ROSCONSOLE_DEFAULT_NAME, "%s", line->text.c_str());
+  log_.log(line, ros::WallTime::now().toSec(), kWarnPeriod);
 }
 
 // --- Inputs: decoded by the message layer (input_decoders.h), counted, logged, submitted
@@ -236,11 +229,11 @@ void AttitudePropagatorRos::onMag(
     if (field.refusal) return refused(*field.refusal, "imu/mag");
     if (field.new_mount) {
       const Eigen::Quaterniond& q = decoders_->magMount();
-      ROS_INFO(
-          "imu/mag: the field in frame '%s' is rotated into '%s' by q = [%g, %g, %g, %g] "
-          "(x y z w)",
-          logText(decoders_->magFrame()).c_str(), config_.parameters.body_frame.c_str(), q.x(),
-          q.y(), q.z(), q.w());
+      log(LogLine{ros::console::levels::Info, "",
+                  formatted("imu/mag: the field in frame '%s' is rotated into '%s' by q = [%g, "
+                            "%g, %g, %g] (x y z w)",
+                            logText(decoders_->magFrame()).c_str(),
+                            config_.parameters.body_frame.c_str(), q.x(), q.y(), q.z(), q.w())});
     }
     releaseTfListener(rates_settled_);
     engine_->submitMagneticField(field->stamp, field->value_B, field->covariance_B);
@@ -304,7 +297,7 @@ void AttitudePropagatorRos::submit(const Input& input) {
 void AttitudePropagatorRos::warnFrames() {
   // Once per frame with tf1's leading '/' (frame_ids.h): read without it.
   for (const auto& w : decoders_->takeFrameWarnings()) {
-    ROS_WARN("%s", logText(w, 4 * kLogTextBytes).c_str());
+    log(LogLine{ros::console::levels::Warn, "", logText(w, 4 * kLogTextBytes)});
   }
 }
 
@@ -317,8 +310,8 @@ bool AttitudePropagatorRos::taken(const DecodedInput& in, const char* topic) {
     return false;
   }
   if (in.new_mount) {
-    ROS_INFO("%s",
-             mountText(decoders_->mountFrame(), config_.parameters.body_frame, in.q_BS).c_str());
+    log(LogLine{ros::console::levels::Info, "",
+                mountText(decoders_->mountFrame(), config_.parameters.body_frame, in.q_BS)});
   }
   rates_settled_ = true;
   releaseTfListener(in.new_mount || decoders_->mountFrame().empty());
@@ -410,9 +403,10 @@ void AttitudePropagatorRos::note(const EngineNote& note) {
 void AttitudePropagatorRos::onTfSeen(const ros::MessageEvent<const tf2_msgs::TFMessage>& event,
                                      bool latched) {
   guarded(latched ? "/tf_static watch" : "/tf watch", [&] {
-    if (event.getPublisherName() == ros::this_node::getName()) return;  // our own
-    log(tf_watch_.onTfSeen(*event.getConstMessage(), event.getPublisherName(), latched,
-                           config_.parameters, ros::WallTime::now()));
+    const bool named_like_us = event.getPublisherName() == ros::this_node::getName();
+    if (named_like_us && !in_manager_) return;  // our own: a node of its own
+    log(tf_watch_.onTfSeen(*event.getConstMessage(), event.getPublisherName(), named_like_us,
+                           latched, config_.parameters, ros::WallTime::now()));
   });
 }
 
@@ -421,6 +415,7 @@ void AttitudePropagatorRos::publishTf(const EngineState& state) {
   auto msg = boost::make_shared<tf2_msgs::TFMessage>();
   msg->transforms.resize(1);
   encoder_->transform(state, msg->transforms[0]);
+  if (in_manager_ && tf_watch_sub_) tf_watch_.sent(msg->transforms[0]);
   tf_pub_.publish(msg);
 }
 
@@ -437,10 +432,10 @@ void AttitudePropagatorRos::publishImu(const sensor_msgs::Imu& input, const Engi
 bool AttitudePropagatorRos::onReset(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
   guarded("~reset", [&] {
     engine_->reset();
-    ROS_INFO_THROTTLE(kWarnPeriod,
-                      "reset to the initial state; the next input anchors time "
-                      "(%lu resets so far)",
-                      engine_->counters().resets);
+    log(LogLine{ros::console::levels::Info, "reset",
+                formatted("reset to the initial state; the next input anchors time (%lu resets "
+                          "so far)",
+                          engine_->counters().resets)});
   });
   return true;
 }

@@ -34,8 +34,13 @@ class NotingFrames : public FrameSource {
 
 }  // namespace
 
-FixInput::FixInput(const NodeConfig& config)
-    : decoder_(FixFrames::of(config)), config_(engineConfig(config).fixes) {}
+FixInput::FixInput(const NodeConfig& config, InstanceLog& log)
+    : decoder_(FixFrames::of(config)), config_(engineConfig(config).fixes), log_(log) {}
+
+void FixInput::warn(const char* kind, const std::string& text) {
+  log_.log(LogLine{ros::console::levels::Warn, kind, text}, ros::WallTime::now().toSec(),
+           kFixWarnPeriod);
+}
 
 void FixInput::onMessage(const topic_tools::ShapeShifter& msg, const ros::Time& arrival,
                          const std::string& publisher, AttitudeEngine& engine,
@@ -45,17 +50,19 @@ void FixInput::onMessage(const topic_tools::ShapeShifter& msg, const ros::Time& 
   msg.write(bytes);
   if (const std::optional<std::uint32_t> seq = headerSeq(buffer_.data(), buffer_.size())) {
     if (const std::uint64_t lost = gaps_.observe(publisher, *seq)) {
-      ROS_WARN_THROTTLE(kFixWarnPeriod,
-                        "orientation_fix: %lu fixes from %s lost before the node (header.seq "
-                        "jumped to %u: its subscriber queue of %u overflowed, or the "
-                        "connection dropped them) (%lu lost so far)",
-                        lost, logText(publisher).c_str(), *seq, kSparseQueueSize, gaps_.lost());
+      warn("fix lost",
+           formatted("orientation_fix: %lu fixes from %s lost before the node (header.seq "
+                     "jumped to %u: its subscriber queue of %u overflowed, or the "
+                     "connection dropped them) (%lu lost so far)",
+                     lost, logText(publisher).c_str(), *seq, kSparseQueueSize, gaps_.lost()));
     }
   }
   NotingFrames noting(frames, uses_tf_);
   const Decoded<Fix> fix = decoder_.topic(msg, arrival, &noting);
   for (const auto& w : decoder_.takeFrameWarnings()) {
-    ROS_WARN("orientation_fix: %s", logText(w, 4 * kLogTextBytes).c_str());
+    log_.log(LogLine{ros::console::levels::Warn, "",
+                     "orientation_fix: " + logText(w, 4 * kLogTextBytes)},
+             ros::WallTime::now().toSec(), kFixWarnPeriod);
   }
   if (!fix) return logRefusal(*fix.refusal);
   logOutcome(engine.submitFix(fix->stamp, fix->q_WB, fix->R_B), fix->stamp, engine);
@@ -114,37 +121,37 @@ void FixInput::logRefusal(const Refusal& r) {
   const FixFrames& f = decoder_.frames();
   switch (r.why) {
     case Refused::NoTransform:
-      ROS_WARN_THROTTLE(kFixWarnPeriod,
-                        "orientation_fix: no transform for frame '%s' (the header frame must be "
-                        "joined to '%s', fix_frame to '%s'): refused (%lu so far; %s)",
-                        logText(r.frame).c_str(), f.fixed.c_str(),
-                        (f.fix.empty() ? f.body : f.fix).c_str(), decoder_.refusals().no_tf,
-                        logText(r.detail, 4 * kLogTextBytes).c_str());
+      warn("fix refused no_tf",
+           formatted("orientation_fix: no transform for frame '%s' (the header frame must be "
+                     "joined to '%s', fix_frame to '%s'): refused (%lu so far; %s)",
+                     logText(r.frame).c_str(), f.fixed.c_str(),
+                     (f.fix.empty() ? f.body : f.fix).c_str(), decoder_.refusals().no_tf,
+                     logText(r.detail, 4 * kLogTextBytes).c_str()));
       break;
     case Refused::WrongType:
-      ROS_WARN_THROTTLE(kFixWarnPeriod,
-                        "orientation_fix: message type %s refused; the topic carries %s (its "
-                        "first message's type; accepted: %s) (%lu so far)",
-                        logText(r.detail).c_str(), decoder_.type().datatype().c_str(),
-                        decoder_.type().accepted().c_str(), decoder_.refusals().type);
+      warn("fix refused type",
+           formatted("orientation_fix: message type %s refused; the topic carries %s (its "
+                     "first message's type; accepted: %s) (%lu so far)",
+                     logText(r.detail).c_str(), decoder_.type().datatype().c_str(),
+                     decoder_.type().accepted().c_str(), decoder_.refusals().type));
       break;
     case Refused::NoTime:
-      ROS_WARN_THROTTLE(kFixWarnPeriod,
-                        "orientation_fix: unstamped fix and no ROS time yet (/clock): refused");
+      warn("fix refused no_time",
+           formatted("orientation_fix: unstamped fix and no ROS time yet (/clock): refused"));
       break;
     case Refused::NoOrientation:
-      ROS_WARN_THROTTLE(kFixWarnPeriod,
-                        "orientation_fix: sensor_msgs/Imu with orientation_covariance[0] == -1 "
-                        "(no orientation, REP-145): refused (%lu so far)",
-                        decoder_.refusals().no_orientation);
+      warn("fix refused no_orientation",
+           formatted("orientation_fix: sensor_msgs/Imu with orientation_covariance[0] == -1 "
+                     "(no orientation, REP-145): refused (%lu so far)",
+                     decoder_.refusals().no_orientation));
       break;
     case Refused::FixBodyFrame:
-      ROS_WARN_THROTTLE(kFixWarnPeriod,
-                        "orientation_fix: header frame '%s' is body_frame: a fix must be given "
-                        "in a frame joined to '%s' without passing through '%s': refused (%lu so "
-                        "far)",
-                        logText(r.frame).c_str(), f.fixed.c_str(), f.body.c_str(),
-                        decoder_.refusals().body_frame);
+      warn("fix refused body_frame",
+           formatted("orientation_fix: header frame '%s' is body_frame: a fix must be given "
+                     "in a frame joined to '%s' without passing through '%s': refused (%lu so "
+                     "far)",
+                     logText(r.frame).c_str(), f.fixed.c_str(), f.body.c_str(),
+                     decoder_.refusals().body_frame));
       break;
     default:
       break;  // the fix decoder makes no other
@@ -158,7 +165,8 @@ void FixInput::logOutcome(FixOutcome outcome, Stamp stamp, const AttitudeEngine&
     case FixOutcome::Accepted:
     case FixOutcome::Reset:
     case FixOutcome::Waiting:
-      ROS_DEBUG("orientation_fix at %.9f s: %s", toRosTime(stamp).toSec(), fixOutcomeName(outcome));
+      ROS_DEBUG("%sorientation_fix at %.9f s: %s", log_.prefix().c_str(), toRosTime(stamp).toSec(),
+                fixOutcomeName(outcome));
       return;
     case FixOutcome::RejectedGate:
       why = "its innovation is beyond fix_gate (5 in a row apply as a reset)";
@@ -182,9 +190,9 @@ void FixInput::logOutcome(FixOutcome outcome, Stamp stamp, const AttitudeEngine&
       break;
   }
   last_reason_ = fixOutcomeName(outcome);
-  ROS_WARN_THROTTLE(kFixWarnPeriod, "orientation_fix at %.9f s: %s: %s (%lu accepted so far)",
-                    toRosTime(stamp).toSec(), fixOutcomeName(outcome), why,
-                    engine.counters().fixes_accepted);
+  warn("fix outcome", formatted("orientation_fix at %.9f s: %s: %s (%lu accepted so far)",
+                                toRosTime(stamp).toSec(), fixOutcomeName(outcome), why,
+                                engine.counters().fixes_accepted));
 }
 
 }  // namespace attitude_propagator

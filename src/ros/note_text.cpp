@@ -64,7 +64,7 @@ std::string noteText(const EngineNote& note, const EngineCounters& c, const Para
       return formatted(
           "%s: stamp %.6f further ahead of ROS time than its stream by more than %g s: dropped "
           "until %d in a row confirm it (%lu so far)",
-          what, t, TimePolicy{}.backward_jump, kJumpConfirmation, c.held_ahead);
+          what, t, p.time_jump_threshold, kJumpConfirmation, c.held_ahead);
     case EngineNote::Deferred:
       return formatted(
           "publishing fell behind ROS time at %.3f s: the rest of the grid follows on the next "

@@ -98,6 +98,12 @@ void read(const std::string& name, XmlRpc::XmlRpcValue& v, double& out) {
   out = toDouble(v);
 }
 
+void read(const std::string& name, XmlRpc::XmlRpcValue& v, int& out) {
+  rejectNumberText(name, v, "an integer");
+  if (v.getType() != XmlRpc::XmlRpcValue::TypeInt) wrongType(name, v, "an integer");
+  out = static_cast<int>(v);
+}
+
 void read(const std::string& name, XmlRpc::XmlRpcValue& v, std::vector<double>& out) {
   if (v.getType() != XmlRpc::XmlRpcValue::TypeArray) wrongType(name, v, "a list of numbers");
   out.clear();
@@ -132,7 +138,7 @@ void rejectUnknownNames(const ros::NodeHandle& pnh) {
 
 }  // namespace
 
-NodeConfig loadParameters(const ros::NodeHandle& pnh) {
+NodeConfig loadParameters(const ros::NodeHandle& pnh, const std::string& log_prefix) {
   rejectUnknownNames(pnh);
   Parameters parameters;
   forEachParameter(parameters, [&pnh](const char* name, auto& field, const char*, const char*) {
@@ -140,7 +146,9 @@ NodeConfig loadParameters(const ros::NodeHandle& pnh) {
     if (pnh.getParam(name, value)) read(name, value, field);
   });
   // tf1's leading '/' in a frame parameter is read without it (frame_ids.h), with a warning.
-  for (const auto& w : tf2FrameParameters(parameters)) ROS_WARN("%s", w.c_str());
+  for (const auto& w : tf2FrameParameters(parameters)) {
+    ROS_WARN("%s%s", log_prefix.c_str(), w.c_str());
+  }
   NodeConfig config = validateParameters(parameters);
   // Every parameter in use, defaults included, on the server: `rosparam get` shows what runs.
   forEachParameter(config.parameters, [&pnh](const char* name, const auto& field, const char*,

@@ -2,13 +2,27 @@
 
 namespace attitude_propagator {
 
+void TfConflictWatch::sent(const geometry_msgs::TransformStamped& t) {
+  const std::uint64_t ns = t.header.stamp.toNSec();
+  own_stamps_.push_back(ns);
+  own_set_.insert(ns);
+  if (own_stamps_.size() > kOwnStampsKept) {
+    own_set_.erase(own_set_.find(own_stamps_.front()));
+    own_stamps_.pop_front();
+  }
+}
+
 std::optional<LogLine> TfConflictWatch::onTfSeen(const tf2_msgs::TFMessage& msg,
-                                                 const std::string& publisher, bool latched,
-                                                 const Parameters& p, const ros::WallTime& now) {
+                                                 const std::string& publisher, bool named_like_us,
+                                                 bool latched, const Parameters& p,
+                                                 const ros::WallTime& now) {
   const std::string& child = p.reverse_tf ? p.fixed_frame : p.body_frame;
   const std::string& parent = p.reverse_tf ? p.body_frame : p.fixed_frame;
   for (const auto& t : msg.transforms) {
     if (t.child_frame_id != child) continue;
+    const bool ours = named_like_us && !latched && t.header.frame_id == parent &&
+                      own_set_.count(t.header.stamp.toNSec()) > 0;
+    if (ours) continue;
     ++tf_conflicts_;
     const bool stop = p.tf_conflict == "stop";
     if (stop) {
@@ -21,11 +35,12 @@ std::optional<LogLine> TfConflictWatch::onTfSeen(const tf2_msgs::TFMessage& msg,
       line = LogLine{
           ros::console::levels::Warn, "",
           formatted(
-              "tf: %s also publishes '%s' as the child of '%s' on %s (we publish %s -> %s): a "
+              "tf: %s%s also publishes '%s' as the child of '%s' on %s (we publish %s -> %s): a "
               "frame has one parent. Publish our transform to a frame of its own "
               "(body_frame:=%s_attitude), or reverse_tf:=true for a tree rooted at the body, or "
               "publish_tf:=false%s",
-              logText(publisher).c_str(), child.c_str(), logText(t.header.frame_id).c_str(),
+              named_like_us ? "another nodelet in manager " : "", logText(publisher).c_str(),
+              child.c_str(), logText(t.header.frame_id).c_str(),
               latched ? "/tf_static" : "/tf", parent.c_str(), child.c_str(), child.c_str(),
               !stop     ? "; tf_conflict:=stop would stop our tf instead"
               : latched ? "; tf_conflict is stop: no tf from this node until publish_tf is "

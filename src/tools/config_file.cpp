@@ -49,6 +49,15 @@ void read(const std::string& name, const YAML::Node& v, double& out) {
   out = number(name, v, "a number");
 }
 
+void read(const std::string& name, const YAML::Node& v, int& out) {
+  if (!v.IsScalar()) wrongType(name, v, "an integer");
+  try {
+    out = v.as<int>();
+  } catch (const YAML::Exception&) {
+    wrongType(name, v, "an integer");
+  }
+}
+
 void read(const std::string& name, const YAML::Node& v, std::vector<double>& out) {
   if (!v.IsSequence()) wrongType(name, v, "a list of numbers");
   out.clear();

@@ -1015,6 +1015,7 @@ void BagPropagator::fixSummary(std::FILE* out) const {
 
 std::string valueText(const std::string& v) { return v.empty() ? "''" : logText(v); }
 std::string valueText(bool v) { return v ? "true" : "false"; }
+std::string valueText(int v) { return std::to_string(v); }
 std::string valueText(double v) {
   // The shortest digits that read back as v: 1e-09, not 1.0000000000000001e-09.
   char text[32];

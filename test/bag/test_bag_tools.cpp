@@ -346,6 +346,8 @@ TEST(PropagateBag, BadParametersAreRefused) {
   expectRefused(dir, dir.file("good.bag") + " --no-such-option", "unknown option", 2);
   expectRefused(dir, dir.file("good.bag") + " " + dir.file("good.bag"), "given twice", 2);
   expectRefused(dir, dir.file("good.bag") + " --set max_dt=1e300", "max_dt", 2);
+  expectRefused(dir, dir.file("good.bag") + " --set input_queue_size=1.5",
+                "input_queue_size: wrong type", 2);
   writeText(dir.file("bad.yaml"), "max_dt: [1, 2]\n");
   expectRefused(dir, dir.file("good.bag") + " --config " + dir.file("bad.yaml"),
                 "max_dt: wrong type", 2);

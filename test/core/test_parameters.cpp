@@ -408,6 +408,25 @@ TEST(Parameters, FormatsAsYaml) {
   EXPECT_EQ(ap::formatParameter(std::vector<double>{0, 0, 0, 1}), "[0.0, 0.0, 0.0, 1.0]");
   EXPECT_EQ(ap::formatParameter(std::vector<double>{}), "[]");
   EXPECT_EQ(ap::formatParameter(true), "true");
+  EXPECT_EQ(ap::formatParameter(10000), "10000");  // an int stays an int for rosparam
+}
+
+// The queue sizes are whole counts of messages in [1, 1e6] (docs/parameters.md).
+TEST(Parameters, QueueSizesAreCountsWithinTheirDocumentedRange) {
+  for (const int v : {1, 1000000}) {
+    ap::Parameters p;
+    p.input_queue_size = v;
+    p.output_queue_size = v;
+    EXPECT_EQ(ap::validateParameters(p).parameters.input_queue_size, v);
+  }
+  for (const int v : {0, -1, 1000001}) {
+    ap::Parameters in;
+    in.input_queue_size = v;
+    expectRefused(in, "input_queue_size");
+    ap::Parameters out;
+    out.output_queue_size = v;
+    expectRefused(out, "output_queue_size");
+  }
 }
 
 // The table in docs/parameters.md is generated from the struct; this fails when they drift

@@ -52,6 +52,11 @@ CASES = [
     ("accel_stddev", 0.0, "accel_stddev: invalid value 0.0; accepted: a number > 0"),
     ("body_frame", "world", "body_frame: equals fixed_frame"),
     ("body_frame", "base link", "body_frame: frame id 'base link' refused"),
+    ("input_queue_size", 2.5, "input_queue_size: wrong type, got '2.5'; accepted: an integer"),
+    ("output_queue_size", 0, "output_queue_size: invalid value 0; accepted: an integer in [1, "
+     "1000000]"),
+    ("time_jump_threshold", 0.0, "time_jump_threshold: invalid value 0.0; accepted: a number in "
+     "[1e-3, 3600] (s)"),
 ]
 
 # A sphere turning at 0.5 rad/s about its z axis from a quarter turn about x: the exact model's

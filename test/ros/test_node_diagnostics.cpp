@@ -122,7 +122,8 @@ class Summary : public ::testing::Test {
     ap::summarize(status, expects_input, silence, window, fixes_, c, lag);
     return status;
   }
-  ap::FixInput fixes_{ap::validateParameters({})};
+  ap::InstanceLog log_;
+  ap::FixInput fixes_{ap::validateParameters({}), log_};
 };
 
 TEST_F(Summary, NoRateInputForMoreThanASecond) {
@@ -147,7 +148,8 @@ TEST(NodeDiagnostics, ARefusalInTheLastSecondIsTheSummary) {
   const ap::NodeConfig config = ap::validateParameters({});
   engine_fixtures::DiscardingSink sink;
   ap::AttitudeEngine engine(ap::engineConfig(config), sink);
-  ap::FixInput fixes(config);
+  ap::InstanceLog log;
+  ap::FixInput fixes(config, log);
   ap::TfConflictWatch tf;
   ap::NodeDiagnostics d(at(0));
   d.inputRefused(at(0.5), "the cause");
@@ -185,14 +187,15 @@ TEST(NodeDiagnostics, TheInputRateAndTheWrappersCounts) {
   const ap::NodeConfig config = ap::validateParameters({});
   engine_fixtures::DiscardingSink sink;
   ap::AttitudeEngine engine(ap::engineConfig(config), sink);
-  ap::FixInput fixes(config);
+  ap::InstanceLog log;
+  ap::FixInput fixes(config, log);
   ap::TfConflictWatch tf;
   ap::Parameters stop;
   stop.tf_conflict = "stop";
   tf2_msgs::TFMessage other;
   other.transforms.resize(1);
   other.transforms[0].child_frame_id = stop.body_frame;
-  tf.onTfSeen(other, "/a", false, stop, at(0));
+  tf.onTfSeen(other, "/a", false, false, stop, at(0));
 
   ap::NodeDiagnostics diagnostics(at(0));
   for (int i = 1; i <= 4; ++i) {

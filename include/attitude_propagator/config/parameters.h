@@ -26,6 +26,15 @@ namespace attitude_propagator {
 /// sample a gap.
 constexpr double kMinMaxDt = 1e-6;
 
+/// Smallest `time_jump_threshold` (s): a millisecond is above the arrival jitter of any
+/// stream, so a step back below it is a straggler, never a new timeline. The largest is
+/// kMaxFuture: a forward glitch is told from a jump by the same threshold (source_timeline.h).
+constexpr double kMinTimeJumpThreshold = 1e-3;
+
+/// Largest `input_queue_size` and `output_queue_size` (messages): a million IMU messages hold
+/// about 0.4 GB per queue, the most a node should ever be allowed to keep.
+constexpr int kMaxQueueSize = 1000000;
+
 /// Every private parameter of the node with its default: the one place defaults live.
 struct Parameters {
   std::string model = "auto";
@@ -46,11 +55,14 @@ struct Parameters {
   double max_step = 0.0;  // 0: 1 / publish_rate
   double max_dt = 1.0;
   double max_future = 1.0;
+  double time_jump_threshold = 1.0;
   double rate_delay = 0.0;
   double tolerance = 1e-9;
   double angular_velocity_stddev = 0.01;
   double initial_orientation_stddev = 3.141592653589793;  // pi: unknown until pinned
   std::string tf_conflict = "warn";
+  int input_queue_size = 10000;
+  int output_queue_size = 5000;
   std::string rate_samples = "instantaneous";
   std::string average_stamp = "end";
   std::string stamp_filter = "none";
@@ -111,6 +123,14 @@ void forEachParameter(P& p, F&& f) {
     "another node publishes a parent of our child frame: `warn` (once, counted), `stop` "
     "(also stop publishing tf until it is over) or `ignore` (no watch: it sees every transform "
     "we publish, which costs throughput above about 20 kHz)");
+  f("input_queue_size", p.input_queue_size, "messages",
+    "subscriber queue of each streamed input (rates, torques, field, /clock): a burst this long "
+    "is queued, beyond it roscpp drops the oldest (counted from sequence gaps only for fixes); "
+    "in [1, 1000000]; start-up only");
+  f("output_queue_size", p.output_queue_size, "messages",
+    "publisher queue of /tf, `imu/data` and `attitude_state` per subscriber connection: a "
+    "subscriber this far behind loses the oldest (what the node keeps per output and slow "
+    "subscriber); in [1, 1000000]; start-up only");
   f("publish_rate", p.publish_rate, "Hz",
     "dynamic model: publish at multiples of 1/rate; at most 1000");
   f("max_step", p.max_step, "s",
@@ -120,6 +140,11 @@ void forEachParameter(P& p, F&& f) {
   f("max_future", p.max_future, "s",
     "an input, bias sample, fix or `~set_state` stamped further ahead of ROS time is refused "
     "(counted); more than 0, at most 3600");
+  f("time_jump_threshold", p.time_jump_threshold, "s",
+    "stamps (or, under sim time, the clock) that go back by more than this and stay back (a "
+    "looped bag, a restarted driver) start time again from the initial state; a smaller step "
+    "back is a straggler, dropped (imu_filter_madgwick's name; a jump always resets here, so 0 "
+    "is refused); in [1e-3, 3600]");
   f("rate_delay", p.rate_delay, "s",
     "how much older the rate is than its stamp (an on-chip filter's group delay, a fixed "
     "latency): stamps are moved back by it first; in [0, max_dt]");
@@ -184,6 +209,7 @@ std::vector<std::string> parameterNames();
 /// of config/default.yaml and of the table in docs/parameters.md.
 std::string formatParameter(const std::string& value);
 std::string formatParameter(bool value);
+std::string formatParameter(int value);
 std::string formatParameter(double value);
 std::string formatParameter(const std::vector<double>& value);
 

@@ -46,6 +46,7 @@
 #include "attitude_propagator/messages/input_decoders.h"
 #include "attitude_propagator/messages/outputs.h"
 #include "attitude_propagator/ros/fix_input.h"
+#include "attitude_propagator/ros/instance_log.h"
 #include "attitude_propagator/ros/log_text.h"
 #include "attitude_propagator/ros/node_diagnostics.h"
 #include "attitude_propagator/ros/tf_conflict_watch.h"
@@ -78,7 +79,7 @@ class AttitudePropagatorRos : public EngineSink {
   /// `ignore`, unsubscribes it otherwise; a fresh subscription receives the latched
   /// /tf_static parents again.
   void watchTf();
-  void logModel() const;
+  void logModel();
   /// ~resolved_model and ~resolved_integrator: what `auto` (or the user) chose, on the
   /// parameter server next to the parameters as given.
   void writeResolved() const;
@@ -87,9 +88,9 @@ class AttitudePropagatorRos : public EngineSink {
   /// callback (a numeric surprise must never take the node down).
   template <class F>
   void guarded(const char* where, F&& f);
-  /// Logs a line composed elsewhere (note_text.h, input_text.h ...), throttled per kind
-  /// (kWarnPeriod of wall time: ROS time may take turns between two /clock publishers) unless
-  /// its kind is empty.
+  /// Logs a line composed elsewhere (note_text.h, input_text.h ...) in this instance's name,
+  /// throttled per kind (kWarnPeriod of wall time) unless its kind is empty (instance_log.h).
+  /// Every line of the wrapper goes through here.
   void log(const std::optional<LogLine>& line);
 
   // Inputs.
@@ -148,6 +149,9 @@ class AttitudePropagatorRos : public EngineSink {
   ros::NodeHandle nh_;
   ros::NodeHandle pnh_;
   ros::NodeHandle imu_nh_;  // "imu" under nh_: `imu:=other` moves imu/data_raw and imu/data
+  InstanceLog log_;
+  // A nodelet: the manager's other nodelets publish under the same node name as we do.
+  bool in_manager_;
   NodeConfig config_;
   std::unique_ptr<AttitudeEngine> engine_;
   std::optional<OutputEncoder> encoder_;  // rebuilt when the frames or the integrator change
@@ -193,7 +197,6 @@ class AttitudePropagatorRos : public EngineSink {
   std::unique_ptr<dynamic_reconfigure::Server<AttitudePropagatorConfig>> reconfigure_server_;
   NodeDiagnostics diagnostics_;
   std::uint64_t callback_errors_ = 0;
-  std::map<std::string, double> last_logged_;  // per kind of line: wall time (s) last logged
   // The publishers of the latest /clock tick and of the one before from another publisher:
   // named when ROS time takes turns between two timelines.
   std::string clock_publisher_, previous_clock_publisher_;

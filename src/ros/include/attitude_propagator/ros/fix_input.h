@@ -15,6 +15,7 @@
 #include "attitude_propagator/config/parameters.h"
 #include "attitude_propagator/engine.h"
 #include "attitude_propagator/messages/fix_decoder.h"
+#include "attitude_propagator/ros/instance_log.h"
 
 namespace attitude_propagator {
 
@@ -24,7 +25,8 @@ constexpr std::uint64_t kFixWarnRun = 3;
 
 class FixInput {
  public:
-  explicit FixInput(const NodeConfig& config);
+  /// Logs through the wrapper's `log` (in the instance's name, throttled per kind).
+  FixInput(const NodeConfig& config, InstanceLog& log);
 
   /// Decodes one message (`frames` is asked for the header frame and fix_frame's mount),
   /// submits the fix, and logs a refusal or an outcome other than applied or waiting. The
@@ -48,6 +50,8 @@ class FixInput {
   std::uint64_t notApplied(const EngineCounters& c) const;
   void logRefusal(const Refusal& r);
   void logOutcome(FixOutcome outcome, Stamp stamp, const AttitudeEngine& engine);
+  /// A warning of `kind`, throttled per kind (kFixWarnPeriod).
+  void warn(const char* kind, const std::string& text);
 
   FixDecoder decoder_;
   SequenceGaps gaps_;  // fixes lost before the node (the subscriber queue, the transport)
@@ -57,6 +61,7 @@ class FixInput {
   std::uint64_t applied_seen_ = 0;               // fixes_accepted when last looked at
   std::uint64_t not_applied_at_last_apply_ = 0;  // notApplied() then
   std::string last_reason_;                      // the latest refusal or rejection, by name
+  InstanceLog& log_;
 };
 
 }  // namespace attitude_propagator

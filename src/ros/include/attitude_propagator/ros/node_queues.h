@@ -7,18 +7,18 @@
 namespace attitude_propagator {
 
 // Every queue the node sets is bounded in messages: at most the queue size times the size of
-// one message, per queue. (roscpp's hand-over from publish() to its I/O thread is not ours to
-// bound: it grows while that thread is kept reading an input faster than it can.)
-// Inputs are queued, not dropped, through a burst of this many messages (a bag played fast,
-// a load generator); beyond it roscpp drops the oldest.
-constexpr std::uint32_t kInputQueueSize = 10000;
-// Per subscriber connection: a burst of a few thousand reaches a subscriber that keeps reading
-// (kinematic.test sends 3000 to a Python subscriber; with 1000 here it lost some), while one
-// that falls further behind (a slow remote reader) loses the oldest messages. The node holds up
-// to this many per output and slow subscriber: one slow subscriber of all three outputs held it
-// at 82 MB with 10 000 (IMU input at 31 kHz), at 31 MB with 5 000. Subscribers in the same
-// nodelet manager are served through their own queue.
-constexpr std::uint32_t kOutputQueueSize = 5000;
+// one message, per queue. The streamed inputs' and the outputs' sizes are parameters
+// (`input_queue_size`, `output_queue_size`, docs/parameters.md); their defaults:
+// - inputs are queued, not dropped, through a burst of 10 000 messages (a bag played fast, a
+//   load generator); beyond it roscpp drops the oldest;
+// - 5 000 per subscriber connection and output: a burst of a few thousand reaches a subscriber
+//   that keeps reading (kinematic.test sends 3000 to a Python subscriber; with 1000 it lost
+//   some), while one that falls further behind (a slow remote reader) loses the oldest. One
+//   slow subscriber of all three outputs held the node at 82 MB with 10 000 (IMU input at
+//   31 kHz), at 31 MB with 5 000. Subscribers in the same nodelet manager are served through
+//   their own queue.
+// (roscpp's hand-over from publish() to its I/O thread is not ours to bound: it grows while
+// that thread is kept reading an input faster than it can.)
 // The tf watch needs one message of a conflicting publisher, not every transform on /tf.
 constexpr std::uint32_t kTfWatchQueueSize = 1000;
 // Topics with a message now and then (gyro bias, /tf_static).
