@@ -34,21 +34,46 @@ FLOOR = 1e-16  # zero errors are drawn here on log axes
 
 # One colour and marker per method, the same in every chart: the methods take these in the
 # order they first appear in the sweep (the core's table order), so a new method gets the next
-# free style without an edit here (test/checks/integrator_lists.sh checks that one is free).
+# free style without an edit here (test/checks/integrator_lists.sh checks that one is free). A
+# method of both models (rk4: order 2 from rate samples in the kinematic model, the classical
+# order 4 in the dynamic one) is two methods to a reader: its dynamic use takes the next free
+# style after all methods, and the charts and the text name it per model.
 PALETTE = [("tab:red", "v"), ("tab:blue", "o"), ("tab:orange", "s"), ("tab:olive", "D"),
            ("tab:green", "^"), ("tab:purple", "s"), ("tab:brown", "D"), ("tab:pink", "^"),
-           ("black", "*"), ("tab:cyan", "P"), ("tab:gray", "X"), ("gold", "p"),
+           ("black", "*"), ("tab:cyan", "P"), ("darkgoldenrod", "X"), ("tab:gray", "p"),
            ("navy", "h"), ("lime", "<"), ("teal", ">")]
 STYLE = {}
+BOTH_MODELS = set()  # methods the sweep runs in the kinematic and in the dynamic model
 
 
-def assign_styles(*tables):
-    """Gives every method in the rows its style, in order of first appearance."""
-    for rows in tables:
-        for r in rows:
-            method = r.get("method")
-            if method and method not in STYLE:
-                STYLE[method] = PALETTE[len(STYLE) % len(PALETTE)]
+def model_of(scene):
+    return "kinematic" if scene in KINEMATIC_SCENES else "dynamic"
+
+
+def name(method, model=None):
+    """A method as the charts name it: `kinematic rk4` and `dynamic rk4` are different methods
+    behind one setting."""
+    return f"{model} {method}" if model and method in BOTH_MODELS else method
+
+
+def called(method, model=None):
+    """A method as the text names it: the setting in code, the model in words."""
+    return f"{model} `{method}`" if model and method in BOTH_MODELS else f"`{method}`"
+
+
+def assign_styles(sweep, invariants):
+    """Gives every method in the rows its style, in order of first appearance, then one to the
+    dynamic use of each method of both models."""
+    models = defaultdict(set)
+    for r in sweep:
+        models[r["method"]].add(model_of(r["scene"]))
+    for r in invariants:
+        models[r["method"]].add("dynamic")
+    BOTH_MODELS.update(m for m, found in models.items() if len(found) > 1)
+    for method, found in models.items():
+        style(method, "kinematic" if "kinematic" in found else "dynamic")
+    for method in models:
+        style(method, "dynamic")
 
 
 FAILURE_MARKERS = {
@@ -69,10 +94,11 @@ def num(row, key):
     return float(value) if value not in ("", None) else float("nan")
 
 
-def style(method):
-    if method not in STYLE:
-        STYLE[method] = PALETTE[len(STYLE) % len(PALETTE)]
-    return STYLE[method]
+def style(method, model=None):
+    key = name(method, model)
+    if key not in STYLE:
+        STYLE[key] = PALETTE[len(STYLE) % len(PALETTE)]
+    return STYLE[key]
 
 
 def floored(values):
@@ -91,47 +117,63 @@ def work(row):
     return num(row, "ns_per_step") / num(row, "dt")
 
 
-def method_label(method, rows):
-    return method + " (auto)" if any(r["auto"] == "1" for r in rows) else method
+def method_label(method, rows, model=None):
+    label = name(method, model)
+    return label + " (auto)" if any(r["auto"] == "1" for r in rows) else label
 
 
 # A line that sits on one drawn before it in the same panel (every error within this factor
-# of the other method's at the same step, e.g. exp on euler for coning) is dashed.
+# of the other method's at the same step, e.g. exp on euler for coning) is drawn dashed on top
+# with hollow, larger markers, so the line below shows through, and its label names that line.
 OVERLAP = 1.25
 
 
-def overlaps(rows, drawn):
-    """Whether the errors of `rows` sit on those of an earlier line (same steps) in `drawn`."""
-    mine = {num(r, "dt"): num(r, "err_rad") for r in rows}
-    for other in drawn:
-        theirs = {num(r, "dt"): num(r, "err_rad") for r in other}
-        common = [dt for dt in mine if dt in theirs]
-        if common and all(max(mine[dt], FLOOR) <= OVERLAP * max(theirs[dt], FLOOR) and
-                          max(theirs[dt], FLOOR) <= OVERLAP * max(mine[dt], FLOOR)
-                          for dt in common):
-            return True
-    return False
+def overlaps(rows, drawn, x_key="dt", y_key="err_rad"):
+    """The label of an earlier line in `drawn` ((label, rows) pairs) whose errors `rows` sit on
+    at every common step, or None."""
+    mine = {num(r, x_key): num(r, y_key) for r in rows}
+    for label, other in drawn:
+        theirs = {num(r, x_key): num(r, y_key) for r in other}
+        common = [x for x in mine if x in theirs]
+        if common and all(max(mine[x], FLOOR) <= OVERLAP * max(theirs[x], FLOOR) and
+                          max(theirs[x], FLOOR) <= OVERLAP * max(mine[x], FLOOR)
+                          for x in common):
+            return label
+    return None
 
 
-def plot_line(ax, method, rows, xs, ys, dashed=False):
-    colour, marker = style(method)
-    is_auto = any(r["auto"] == "1" for r in rows)
-    ax.plot(xs, floored(ys), color=colour, marker=marker, markersize=9 if is_auto else 5,
-            linewidth=3.0 if is_auto else 1.3, label=method_label(method, rows),
-            linestyle="--" if dashed else "-", zorder=3 if is_auto else 2)
+def plot_line(ax, method, rows, xs, ys, model, under=None, note="", rank=0, thin=False):
+    """One method's line, the `rank`-th drawn in its panel: its markers shrink with the rank, so
+    a later marker on the same point sits inside the earlier ones; `auto`'s pick thick with
+    large hollow markers (unless `thin`), a line that sits on `under` dashed and hollow on top
+    of it."""
+    colour, marker = style(method, model)
+    is_auto = any(r["auto"] == "1" for r in rows) and not thin
+    label = method_label(method, rows, model) + note + (f", on {under}" if under else "")
+    if is_auto or under:
+        marks = dict(markersize=11 if is_auto else max(12.0 - 1.6 * rank, 7.0),
+                     markerfacecolor="none", markeredgecolor=colour, markeredgewidth=2.0)
+    else:
+        marks = dict(markersize=max(12.0 - (2.0 if thin else 1.6) * rank, 4.5),
+                     markeredgecolor="white" if rank else colour, markeredgewidth=0.6)
+    ax.plot(xs, floored(ys), color=colour, marker=marker, linewidth=3.0 if is_auto else 1.3,
+            linestyle=(0, (4, 3)) if under else "-", label=label,
+            zorder=5 if under else (3 if is_auto else 2), **marks)
+    return name(method, model)
 
 
-def work_precision_chart(sweep, path):
-    fig, axes = plt.subplots(2, 4, figsize=(20, 9.5))
+def work_precision_chart(sweep, path, advice):
+    fig, axes = plt.subplots(2, 4, figsize=(20, 10))
     for ax, scene in zip(axes.flat, SCENES):
         rows = [r for r in sweep if r["scene"] == scene]
         drawn = []
         for method, group in by_method(rows).items():
             key = "tolerance" if is_tolerance_sweep(group) else "dt"
             group.sort(key=lambda r: -num(r, key))
-            plot_line(ax, method, group, [work(r) for r in group],
-                      [num(r, "err_rad") for r in group], overlaps(group, drawn))
-            drawn.append(group)
+            label = plot_line(ax, method, group, [work(r) for r in group],
+                              [num(r, "err_rad") for r in group], model_of(scene),
+                              overlaps(group, drawn), rank=len(drawn))
+            drawn.append((label, group))
         kind = "kinematic, from rate samples" if scene in KINEMATIC_SCENES else "dynamic"
         ax.set_title(f"{scene} ({kind})")
         ax.set_xscale("log")
@@ -142,12 +184,39 @@ def work_precision_chart(sweep, path):
         ax.legend(fontsize=8, loc="best")
     notes = axes.flat[-1]
     notes.axis("off")
-    notes.text(0.0, 0.95, WORK_PRECISION_NOTE, va="top", fontsize=10, wrap=True)
-    fig.suptitle("Work-precision: attitude error against cost, one line per method "
-                 "(thick line: what `auto` picks)", fontsize=14)
+    notes.text(0.0, 0.97, WORK_PRECISION_NOTE + both_models_note(sweep), va="top", fontsize=10,
+               wrap=True)
+    fig.suptitle("Work-precision: attitude error against cost, one line per method\n"
+                 "Keep `auto` (thick line)" + (f": {advice}." if advice else "."), fontsize=14)
     fig.tight_layout()
     fig.savefig(path, dpi=80)
     plt.close(fig)
+
+
+def model_orders(sweep, method):
+    """(model, the median over the model's scenes of `method`'s measured order) pairs."""
+    out = []
+    for model, scenes in [("kinematic", KINEMATIC_SCENES), ("dynamic", DYNAMIC_SCENES)]:
+        orders = [measured_order([r for r in sweep if r["scene"] == s and r["method"] == method])
+                  for s in scenes]
+        orders = [p for p in orders if p is not None and p >= 0.5]
+        if orders:
+            out.append((model, statistics.median(orders)))
+    return out
+
+
+def both_models_note(sweep):
+    """What the notes say of each method that runs in both models."""
+    lines = []
+    for method in sorted(BOTH_MODELS):
+        orders = ", ".join(f"{model} {method} order {p:.1f}"
+                           for model, p in model_orders(sweep, method))
+        lines.append(f"\n\n`integrator: {method}` runs two methods: the\n"
+                     "kinematic one steps between rate samples\n"
+                     "(the midpoint rate interpolated), the dynamic\n"
+                     "one the equations of motion (docs/numerics.md\n"
+                     f"§2, §5). Measured here:\n{orders}.")
+    return "".join(lines)
 
 
 WORK_PRECISION_NOTE = (
@@ -191,9 +260,13 @@ def order_chart(sweep, path):
         drawn = []
         for method, group in groups.items():
             group.sort(key=lambda r: num(r, "dt"))
-            plot_line(ax, method, group, [num(r, "dt") for r in group],
-                      [num(r, "err_rad") for r in group], overlaps(group, drawn))
-            drawn.append(group)
+            p = measured_order(group)
+            label = plot_line(ax, method, group, [num(r, "dt") for r in group],
+                              [num(r, "err_rad") for r in group], model_of(scene),
+                              overlaps(group, drawn),
+                              f", order {p:.1f}" if p is not None and p >= 0.5 else "",
+                              rank=len(drawn))
+            drawn.append((label, group))
         # Reference slopes: the orders the methods of the panel show, rounded.
         orders = {round(p) for p in map(measured_order, groups.values()) if p and p >= 0.5}
         add_slopes(ax, rows, sorted(orders))
@@ -204,7 +277,8 @@ def order_chart(sweep, path):
         ax.set_title(title)
         ax.grid(True, which="major", alpha=0.3)
         ax.legend(fontsize=8, loc="upper left")
-    fig.suptitle("Order of convergence: error against step; dotted lines: reference slopes h^p")
+    fig.suptitle("Order of convergence: error against step, each method's measured order in its "
+                 "label; dotted lines: reference slopes h^p")
     fig.tight_layout()
     fig.savefig(path, dpi=80)
     plt.close(fig)
@@ -229,12 +303,13 @@ def invariants_chart(rows, path):
     for ax, key, label in [(axes[0], "energy_rel_drift", "|E - E0| / E0"),
                            (axes[1], "momentum_rel_drift", "||M| - |M0|| / |M0|")]:
         for method, group in groups.items():
-            colour, _ = style(method)
+            colour, marker = style(method, "dynamic")
             tolerance = group[0].get("tolerance")
-            name = method + (f" (tol {tolerance})" if tolerance else "")
+            line = name(method, "dynamic") + (f" (tol {tolerance})" if tolerance else "")
             ax.plot([num(r, "t") for r in group], floored(running_max([num(r, key)
                                                                         for r in group])),
-                    color=colour, label=name, linewidth=1.8)
+                    color=colour, marker=marker, markevery=0.1, markersize=6, label=line,
+                    linewidth=1.8)
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("time [s]")
@@ -269,14 +344,18 @@ def jitter_label(jitter):
 
 
 def stability_panel(ax, group_rows, title):
+    drawn = []
     for method, group in by_method(group_rows).items():
         group.sort(key=lambda r: num(r, "omega_dt"))
-        colour, marker = style(method)
+        model = model_of(group[0]["scene"])
+        colour, _ = style(method, model)
         xs = [num(r, "omega_dt") for r in group]
         ys = [min(num(r, "final_err_rad"), math.pi) if r["status"] != "nonfinite"
               else math.pi for r in group]
-        ax.plot(xs, floored(ys), color=colour, marker=marker, markersize=4,
-                linewidth=1.3, label=method_label(method, group))
+        label = plot_line(ax, method, group, xs, ys, model,
+                          overlaps(group, drawn, "omega_dt", "final_err_rad"),
+                          rank=len(drawn), thin=True)
+        drawn.append((label, group))
         for x, y, r in zip(xs, floored(ys), group):
             if r["status"] in FAILURE_MARKERS:
                 ax.plot([x], [y], linestyle="none", marker=FAILURE_MARKERS[r["status"]][0],
@@ -311,7 +390,8 @@ def stability_chart(rows, path):
                           markeredgecolor="black", label=label)
                for m, label in FAILURE_MARKERS.values()]
     fig.legend(handles=handles, loc="lower center", ncol=4, fontsize=10)
-    fig.suptitle("Stability map: where each method fails (pi is the largest possible error)")
+    fig.suptitle("Stability map: where each method fails (pi is the largest possible error); "
+                 "where lines coincide, each later method's markers sit inside the earlier ones")
     fig.tight_layout(rect=(0, 0.05, 1, 1))
     fig.savefig(path, dpi=80)
     plt.close(fig)
@@ -338,7 +418,8 @@ def cheapest_table(sweep):
     lines = ["| scene | auto | ≤ 1e-6 rad | ≤ 1e-9 rad | ≤ 1e-12 rad |", "|---|---|---|---|---|"]
     for scene in SCENES:
         rows = [r for r in sweep if r["scene"] == scene and r["status"] == "ok"]
-        auto = sorted({r["method"] for r in rows if r["auto"] == "1"})
+        model = model_of(scene)
+        auto = sorted({name(r["method"], model) for r in rows if r["auto"] == "1"})
         cells = []
         for tol in TOLERANCES:
             within = [r for r in rows if num(r, "err_rad") <= tol]
@@ -346,7 +427,7 @@ def cheapest_table(sweep):
                 cells.append("none in the sweep")
                 continue
             best = min(within, key=work)
-            cells.append(f"**{best['method']}** ({step_label(best)}): "
+            cells.append(f"**{name(best['method'], model)}** ({step_label(best)}): "
                          f"{fmt(work(best) / 1e3)} µs/s, error {fmt(num(best, 'err_rad'), 2)}")
         lines.append(f"| {scene} | {', '.join(auto) or '–'} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
@@ -602,27 +683,39 @@ def round_off_methods(rows):
             if all(r["status"] == "ok" and num(r, "err_rad") <= round_off(r) for r in g)]
 
 
-def quoted(methods):
-    return ", ".join(f"`{m}`" for m in methods) or "none"
+def quoted(methods, model=None):
+    return ", ".join(called(m, model) for m in methods) or "none"
 
 
 def choice_lines(sweep, method, scenes):
     """What the measurements say of `auto` picking `method` on `scenes`."""
+    model = model_of(scenes[0])
+    me = called(method, model)
     cells = auto_cells(sweep, scenes)
     cheapest = [c for c in cells if c[3] and c[3] is c[2]]
     close = [c for c in cells if c[3] and c[3] is not c[2] and
              work(c[3]) <= AUTO_SLACK * work(c[2])]
     beaten = [c for c in cells if c not in cheapest and c not in close]
     verdict = "keep it" if not beaten else "keep it except where another method is cheaper"
-    text = (f"- **`{method}`** ({', '.join(scenes)}): the cheapest method in {len(cheapest)} of "
+    text = (f"- **{me}** ({', '.join(scenes)}): the cheapest method in {len(cheapest)} of "
             f"the {len(cells)} (scene, tolerance) cells the sweep reaches, within "
             f"{AUTO_SLACK:g}× of it in {len(close)}; {verdict}.")
+    # One sentence per scene and pair of runs, with every tolerance where they are the pair.
+    pairs = defaultdict(list)
     for scene, tol, best, mine in beaten:
-        against = (f"{fmt(work(mine) / 1e3)} µs/s for `{method}`" if mine
-                   else f"`{method}` does not reach it in the sweep")
-        text += (f" On {scene} to ≤ {tol:g} rad `{best['method']}` ({step_label(best)}) costs "
-                 f"{fmt(work(best) / 1e3)} µs/s ({against}): set `integrator: {best['method']}`"
-                 " there.")
+        pairs[(scene, id(best), id(mine))].append((tol, best, mine))
+    for (scene, _, _), group in pairs.items():
+        tols = [f"{tol:g}" for tol, _, _ in group]
+        _, best, mine = group[0]
+        within = (tols[0] if len(tols) == 1 else
+                  ", ".join(tols[:-1]) + f" and {tols[-1]}")
+        against = (f"{fmt(work(mine) / 1e3)} µs/s for {me}" if mine
+                   else f"{me} does not reach it in the sweep")
+        text += (f" On {scene} to ≤ {within} rad {called(best['method'], model)} "
+                 f"({step_label(best)}) costs {fmt(work(best) / 1e3)} µs/s ({against}): "
+                 f"`integrator: {best['method']}` there"
+                 + (f" saves {fmt((work(mine) - work(best)) / 1e3, 2)} µs of CPU per "
+                    "simulated second." if mine else " reaches it."))
     return text
 
 
@@ -649,14 +742,17 @@ def accuracy_lines(sweep, method, scenes):
                 gains.append((num(cheap, "err_rad") / max(num(mine[0], "err_rad"), FLOOR),
                               num(mine[0], "ns_per_step") - num(cheap, "ns_per_step"),
                               cheap["method"]))
+    model = model_of(scenes[0])
     if total:
-        lines.append(f"  `{method}` is the most accurate method (ties within round-off) at "
+        lines.append(f"  {called(method, model)} is the most accurate method (ties within "
+                     "round-off) at "
                      f"{wins} of the {total} steps swept on {', '.join(scenes)}.")
     if gains:
         low, high = min(g[0] for g in gains), max(g[0] for g in gains)
         extra = [g[1] for g in gains]
         lines.append(f"  Against the method cheapest per step where that one is not exact "
-                     f"({quoted(sorted({g[2] for g in gains}))}) it is {math.log10(low):.1f}-{math.log10(high):.1f} orders of magnitude more "
+                     f"({quoted(sorted({g[2] for g in gains}), model)}) it is "
+                     f"{math.log10(low):.1f}-{math.log10(high):.1f} orders of magnitude more "
                      f"accurate for {min(extra):.0f}-{max(extra):.0f} ns more per step.")
     return lines
 
@@ -673,9 +769,11 @@ def exact_lines(sweep, scenes):
         cheapest = min(runs, key=work)
         worst = max(num(r, "err_rad") for r in runs)
         duration = max(num(r, "dt") * num(r, "steps") for r in runs)
-        lines.append(f"  On {scene} {quoted(exact)} {'stays' if len(exact) == 1 else 'stay'} "
+        model = model_of(scene)
+        lines.append(f"  On {scene} {quoted(exact, model)} "
+                     f"{'stays' if len(exact) == 1 else 'stay'} "
                      f"within round-off at every step (largest {fmt(worst, 2)} rad over "
-                     f"{duration:.0f} s); the cheapest is `{cheapest['method']}` "
+                     f"{duration:.0f} s); the cheapest is {called(cheapest['method'], model)} "
                      f"({step_label(cheapest)}, {fmt(work(cheapest) / 1e3)} µs/s).")
     return lines
 
@@ -689,7 +787,8 @@ def numerical_best_lines(sweep, scenes, exact_method):
         if not rows:
             continue
         best = min(rows, key=lambda r: num(r, "err_rad"))
-        lines.append(f"  The most accurate other run on {scene}: `{best['method']}` "
+        lines.append(f"  The most accurate other run on {scene}: "
+                     f"{called(best['method'], model_of(scene))} "
                      f"({step_label(best)}) at {fmt(num(best, 'err_rad'), 2)} rad.")
     return lines
 
@@ -699,7 +798,8 @@ def exact_cost_line(sweep, method):
     if not rows:
         return []
     costs = sorted(num(r, "ns_per_step") for r in rows)
-    return [f"  One `{method}` step costs {costs[0]:.0f}-{costs[-1]:.0f} ns, at most "
+    return [f"  One {called(method, 'dynamic')} step costs {costs[0]:.0f}-{costs[-1]:.0f} ns, "
+            "at most "
             f"{costs[-1] * 100 / 1e3:.0f} µs of CPU per simulated second at 100 steps per "
             "second."]
 
@@ -720,7 +820,7 @@ def invariant_lines(sweep, invariants):
     if not keeps:
         return []
     t_end = max(num(r, "t") for r in invariants)
-    parts = [f"`{m}` keeps {' and '.join(k)}" for m, k in keeps.items()]
+    parts = [f"{called(m, 'dynamic')} keeps {' and '.join(k)}" for m, k in keeps.items()]
     lines = [f"- **Invariants** (free body, {t_end:.0f} s): " + "; ".join(parts) +
              f" to {KEPT:g} relative."]
     for method in keeps:
@@ -732,7 +832,8 @@ def invariant_lines(sweep, invariants):
             if mine and all(any(work(o) <= work(r) and num(o, "err_rad") <= num(r, "err_rad")
                                 for o in others) for r in mine):
                 beaten_on.append(scene)
-        lines.append(f"  `{method}`: every run beaten by a cheaper, more accurate one on "
+        lines.append(f"  {called(method, 'dynamic')}: every run beaten by a cheaper, more "
+                     "accurate one on "
                      f"{len(beaten_on)} of {len(scenes)} scenes"
                      f"{' (' + ', '.join(beaten_on) + ')' if beaten_on else ''}.")
     return lines
@@ -795,7 +896,8 @@ def stream_verdict(streams):
         "**On the real streams** (`real_streams.csv`, `bench_sweep --streams`; the streams in "
         "[real_streams.md](docs/real_streams.md)). `auto` chooses per stream "
         "(`src/core/auto_integrator.cpp`): `cf4`, but `exp2` for the steps whose window holds "
-        "an interval mean filled in for a lost one, and `rk4` (point samples) or `exp2` "
+        f"an interval mean filled in for a lost one, and {called('rk4', 'kinematic')} (point "
+        "samples) or `exp2` "
         "(means) while the jitter measure J = σ_t |Δω|_rms / (h |ω|_rms) exceeds 2e-3 and "
         "the body turns (mean rate ≥ 0.1 |ω|_rms), without the stamp filter. "
         f"Each cell: `auto`'s largest error over the best method's on that stream, and the "
@@ -821,9 +923,9 @@ def stream_verdict(streams):
             text = f"{ratio:.2f}"
             if ratio > STREAM_SLACK:
                 text = f"**{text}**"
-            text += f" {auto['auto_used']}"
+            text += " " + "+".join(name(m, "kinematic") for m in auto["auto_used"].split("+"))
             if ratio > 1.005 and best["method"] not in auto["auto_used"].split("+"):
-                text += f" (best {best['method']})"
+                text += f" (best {name(best['method'], 'kinematic')})"
             row.append(text)
         lines.append(f"| {stream_label(stream, rate)} | " + " | ".join(row) + " |")
     return lines
@@ -876,7 +978,12 @@ def settings_table(streams):
     autos = {(r["scene"], r["stream"], r["rate_hz"]): r for r in streams if r["method"] == "auto"}
     scenes = list(dict.fromkeys(r["scene"] for r in streams))
     rate_of = {r["stream"]: r["rate_hz"] for r in streams}
-    lines = ["| stream | settings | `auto`'s error with them, rad (" + ", ".join(scenes) +
+    cells = stream_cells(streams)
+    held = sum(1 for best, auto in cells.values() if stream_ratio(best, auto) <= STREAM_SLACK)
+    lines = [f"Keep `integrator: auto` on every stream: it is within {STREAM_SLACK:g}× of the "
+             f"best method's error on {held} of the {len(cells)} streams and scenes (chart "
+             "below); what a stream needs is its settings:", "",
+             "| stream | settings | `auto`'s error with them, rad (" + ", ".join(scenes) +
              ") | read otherwise |", "|---|---|---|---|"]
     for label, with_, without in SETTINGS_ROWS:
         rate = "200" if with_ in ("point", "averaged_end") else rate_of.get(with_)
@@ -961,6 +1068,22 @@ def p99_spread_sentence(node):
 NODE_QUEUE = 10000  # messages: the node's input queue (attitude_propagator_ros)
 
 
+def both_models_sentence(sweep):
+    """The sentence on a setting that names a method in each model (rk4), with the orders the
+    sweep measured."""
+    out = ""
+    for method in sorted(BOTH_MODELS):
+        orders = model_orders(sweep, method)
+        if len(orders) < 2:
+            continue
+        out += (f" `integrator: {method}` names two methods, charted and named apart: "
+                + " and ".join(f"{model} `{method}` (order {p:.1f} measured here)"
+                               for model, p in orders) +
+                "; the kinematic one has only the rate samples, so its midpoint rate is "
+                "interpolated ([numerics.md](docs/numerics.md) §2, §5).")
+    return out
+
+
 def results_markdown(sweep, medians, node, has_node_chart, machine, invariants=(),
                      spreads=None, streams=()):
     parts = [
@@ -973,10 +1096,17 @@ def results_markdown(sweep, medians, node, has_node_chart, machine, invariants=(
         "bash bench/run_all.sh      # --no-node skips the node benchmark (bench/node_bench.sh)",
         "```",
         "",
+        "The charts and the text alone, from the data already in `docs/data/` (seconds, no "
+        "build): `/usr/bin/python3 bench/plot.py docs/data docs docs/benchmarks.md`.",
+        "",
         f"Measured on {machine}; costs are CPU time of the benchmark thread, and methods are "
         "timed in turn within one run, so that load from other processes falls on all of them. "
         f"{spread_sentence(spreads)}"
         "Raw data: `docs/data/*.csv`, `docs/data/step_costs.json`.",
+        "",
+        "### Which setting to pick",
+        "",
+        advice_markdown(medians, node, sweep) + both_models_sentence(sweep),
         "",
         "### Which integrator: cheapest method within a tolerance",
         "",
@@ -996,11 +1126,21 @@ def results_markdown(sweep, medians, node, has_node_chart, machine, invariants=(
         "",
         "![work-precision](docs/work_precision.png)",
         "",
+        "Error against cost per scene: keep `auto` (the thick line); a line that sits on "
+        "another is dashed with hollow markers, and its label names the line below.",
+        "",
         "![order](docs/order.png)",
+        "",
+        "Error against step, each method's measured order in its label.",
         "",
         "![invariants](docs/invariants.png)",
         "",
+        "The energy and |angular momentum| over a long free-body run.",
+        "",
         "![stability](docs/stability.png)",
+        "",
+        "The error after a fixed time against |Ω| h, and where each method fails; where "
+        "lines coincide, each later method's markers sit inside the earlier ones.",
         "",
         "### Cost of one step (Google Benchmark, median CPU time of 7 repetitions)",
         "",
@@ -1047,51 +1187,117 @@ def splice_page(page, text, docs_dir, marker="results"):
         f.write(head + begin + "\n" + text + end + tail)
 
 
-def real_streams_chart(rows, path):
-    """Accuracy on real streams: error per method and stream (median over seeds, whisker to
-    the worst seed), one panel per scene, with `auto`'s error (black dot) and the error the
-    stream's noise alone sets."""
+# The streams of real_streams.csv by what the gyro delivers (first matching prefix), in the
+# chart's order.
+STREAM_FAMILIES = [
+    (("point",), "point samples"),
+    (("averaged",), "interval means"),
+    (("butterworth", "sinc"), "filtered rates"),
+    (("jitter",), "receipt stamps, jitter"),
+    (("fifo",), "FIFO reads"),
+    (("rate_change",), "rate change"),
+    (("drops",), "lost means"),
+    (("mems",), "noisy MEMS means"),
+]
+
+
+def stream_family(stream):
+    for prefixes, family in STREAM_FAMILIES:
+        if stream.startswith(prefixes):
+            return family
+    return "other"
+
+
+def ratio_text(ratio):
+    if ratio < 9.95:
+        return f"{ratio:.2g}" if ratio < 0.995 or ratio >= 1.005 else "1"
+    if ratio < 999.5:
+        return f"{ratio:.0f}"
+    return f"{ratio:.0e}".replace("e+0", "e")
+
+
+def real_streams_chart(rows, path, advice=""):
+    """Which method on which stream: per scene (one panel each), a grid of streams (rows,
+    grouped by what the gyro delivers) against methods (columns, `auto` last and framed), each
+    cell the method's largest error (median over seeds) over the best method's on that stream,
+    so 1 marks the method to pick; the absolute errors are in docs/real_streams.md's table."""
+    from matplotlib.colors import LogNorm
+    from matplotlib.patches import Rectangle
+
     scenes = list(dict.fromkeys(r["scene"] for r in rows))
     keys = list(dict.fromkeys((r["stream"], r["rate_hz"]) for r in rows))
-    fig, axes = plt.subplots(len(scenes), 1, figsize=(20, 5.0 * len(scenes)), squeeze=False)
-    methods = [m for m in dict.fromkeys(r["method"] for r in rows) if m != "auto"]
-    width = 0.8 / len(methods)
-    for ax, scene in zip(axes[:, 0], scenes):
+    families = [f for _, f in STREAM_FAMILIES] + ["other"]
+    keys.sort(key=lambda k: families.index(stream_family(k[0])))  # stable: the csv's order within
+    methods = [m for m in dict.fromkeys(r["method"] for r in rows) if m != "auto"] + ["auto"]
+    cells = stream_cells(rows)
+    held = sum(1 for best, auto in cells.values() if stream_ratio(best, auto) <= STREAM_SLACK)
+    norm = LogNorm(vmin=1.0, vmax=100.0)
+    cmap = plt.get_cmap("YlOrRd")
+    height = 2.8 + 0.3 * len(keys)
+    fig, axes = plt.subplots(1, len(scenes), figsize=(6.5 + 3.9 * len(scenes), height),
+                             sharey=True, squeeze=False)
+    for ax, scene in zip(axes[0], scenes):
         mine = {(r["stream"], r["rate_hz"], r["method"]): r for r in rows if r["scene"] == scene}
-        for m, method in enumerate(methods):
-            xs, ys, tops = [], [], []
-            for i, (stream, rate) in enumerate(keys):
-                row = mine.get((stream, rate, method))
-                if row is None:
-                    continue
-                xs.append(i - 0.4 + (m + 0.5) * width)
-                ys.append(max(num(row, "err_rad"), FLOOR))
-                tops.append(max(num(row, "err_rad_max"), FLOOR))
-            color, _ = style(method)
-            ax.bar(xs, ys, width, color=color, label=method, log=True)
-            ax.vlines(xs, ys, tops, color="black", linewidth=0.6)
-        autos = [(i, mine.get((stream, rate, "auto"))) for i, (stream, rate) in enumerate(keys)]
-        autos = [(i, r) for i, r in autos if r is not None]
-        ax.plot([i for i, _ in autos], [max(num(r, "err_rad"), FLOOR) for _, r in autos], "o",
-                color="black", markersize=5, label="auto", zorder=4)
-        labelled = False
+        grid = []
         for i, (stream, rate) in enumerate(keys):
-            row = next((r for (s_, r_, _), r in mine.items() if s_ == stream and r_ == rate),
-                       None)
-            floor = num(row, "floor_rad") if row else float("nan")
-            if not math.isnan(floor):
-                ax.hlines(floor, i - 0.45, i + 0.45, color="black", linestyles="dashed",
-                          label=None if labelled else "noise floor (1 sigma at the end)")
-                labelled = True
-        ax.set_xticks(range(len(keys)))
-        ax.set_xticklabels([f"{s.replace('_', ' ')} {r} Hz" for s, r in keys], rotation=35,
-                           ha="right", fontsize=7)
-        ax.set_ylabel("largest error along the path (rad)")
-        ax.set_title(f"accuracy on real streams: {scene}")
-        ax.grid(True, axis="y", which="major", alpha=0.3)
-        ax.legend(fontsize=8, ncol=4, loc="lower left")
-    fig.tight_layout()
-    fig.savefig(path, dpi=70)
+            errs = {m: max(num(mine[(stream, rate, m)], "err_rad"), FLOOR) for m in methods
+                    if (stream, rate, m) in mine}
+            others = [e for m, e in errs.items() if m != "auto"]
+            best = min(others) if others else float("nan")
+            line = []
+            for j, method in enumerate(methods):
+                ratio = errs[method] / best if method in errs else float("nan")
+                line.append(max(ratio, 1.0))
+                if math.isnan(ratio):
+                    continue
+                winner = method != "auto" and errs[method] == best
+                ax.text(j, i, ratio_text(ratio), ha="center", va="center", fontsize=8,
+                        fontweight="bold" if winner or (method == "auto" and
+                                                        ratio <= STREAM_SLACK) else "normal",
+                        color="white" if ratio > 30 else "black")
+            grid.append(line)
+        ax.imshow(grid, cmap=cmap, norm=norm, aspect="auto", interpolation="nearest")
+        ax.add_patch(Rectangle((len(methods) - 1.5, -0.5), 1.0, len(keys), fill=False,
+                               edgecolor="black", linewidth=2.5, clip_on=False))
+        ax.set_xticks(range(len(methods)))
+        ax.set_xticklabels([name(m, "kinematic").replace(" ", "\n") for m in methods],
+                           fontsize=9)
+        for tick, method in zip(ax.get_xticklabels(), methods):
+            tick.set_color("black" if method == "auto" else style(method, "kinematic")[0])
+            tick.set_fontweight("bold")
+        ax.xaxis.tick_top()
+        mine_held = sum(1 for (s, _, _), (best, auto) in cells.items()
+                        if s == scene and stream_ratio(best, auto) <= STREAM_SLACK)
+        mine_all = sum(1 for (s, _, _) in cells if s == scene)
+        ax.set_title(f"{scene}\nauto within {STREAM_SLACK:g}x of the best on {mine_held} of "
+                     f"{mine_all}", fontsize=10)
+        for i in range(1, len(keys)):
+            if stream_family(keys[i][0]) != stream_family(keys[i - 1][0]):
+                ax.axhline(i - 0.5, color="black", linewidth=1.2)
+        ax.tick_params(length=0)
+    labels = []
+    for stream, rate in keys:
+        autos = [r for r in rows if r["stream"] == stream and r["rate_hz"] == rate and
+                 r["method"] == "auto"]
+        settings = settings_of(autos[0]).replace("`", "") if autos else ""
+        label = f"{stream.replace('_', ' ')}, {rate} Hz"
+        labels.append(label + ("" if settings == "the defaults" else f"  [{settings}]"))
+    axes[0][0].set_yticks(range(len(keys)))
+    axes[0][0].set_yticklabels(labels, fontsize=8.5)
+    previous = None
+    for i, (stream, _) in enumerate(keys):
+        family = stream_family(stream)
+        if family != previous:
+            axes[0][-1].annotate(family, xy=(1.02, i - 0.45), xycoords=("axes fraction", "data"),
+                                 fontsize=9, fontweight="bold", va="top", annotation_clip=False)
+            previous = family
+    fig.suptitle("Which method on which stream: each method's largest error over the best "
+                 "method's on that stream (1 = the best, bold; median over seeds)\n"
+                 f"Keep `auto` (framed column): within {STREAM_SLACK:g}x of the best on "
+                 f"{held} of {len(cells)} streams and scenes" +
+                 (f";\n{advice}." if advice else "."), fontsize=12)
+    fig.tight_layout(rect=(0, 0, 0.94, 1))
+    fig.savefig(path, dpi=75)
     plt.close(fig)
 
 
@@ -1207,6 +1413,83 @@ def ahrs_chart(rows, path, settle=10.0):
     plt.close(fig)
 
 
+# ---------------------------------------------------------------------------------------------
+# Which setting to pick: the cost of a step against the time a message spends in the node.
+# ---------------------------------------------------------------------------------------------
+
+def step_costs(medians):
+    """The medians of one step of each method (kinematicStep/, dynamicStep/), by name."""
+    return {n: v for n, v in medians.items()
+            if n.split("/")[0] in ("kinematicStep", "dynamicStep")}
+
+
+def node_latencies(node, mode):
+    """Median latencies (ms) at the offered rates where `mode` keeps up: every rate up to there
+    delivered (highest_lossless) and its p99 under 1 ms, i.e. no queue builds up."""
+    top = highest_lossless(node, mode)
+    return [num(r, "latency_p50_ms") for r in node
+            if r["mode"] == mode and num(r, "rate_hz") <= top and num(r, "latency_p99_ms") < 1]
+
+
+def advice_figures(medians, node):
+    """(auto's kinematic step on the node's path [ns], the dearest step [name, ns], the node's
+    median latencies [ms]) or None when a figure is missing."""
+    steps = step_costs(medians)
+    auto_path = medians.get("addSample/cf4")
+    latencies = node_latencies(node, "node")
+    if not steps or auto_path is None or not latencies:
+        return None
+    dearest = max(steps, key=steps.get)
+    return auto_path, (dearest, steps[dearest]), latencies
+
+
+def advice_title(medians, node):
+    """The clause of the charts' titles that says why the cost of a method does not decide."""
+    figures = advice_figures(medians, node)
+    if figures is None:
+        return ""
+    auto_path, (_, dearest), latencies = figures
+    return (f"its step costs {auto_path:.0f} ns (cf4 on the node's path; any method at most "
+            f"{dearest:.0f} ns) against {min(latencies):.2f}-{max(latencies):.2f} ms for a "
+            "message through the node")
+
+
+def largest_saving(sweep):
+    """The most CPU per simulated second (ns) another method saves over `auto`'s choice where it
+    is cheaper to a tolerance of the sweep (auto_cells)."""
+    savings = [work(mine) - work(best) for _, _, best, mine in auto_cells(sweep, SCENES)
+               if mine is not None and mine is not best]
+    return max(savings) if savings else 0.0
+
+
+def advice_markdown(medians, node, sweep):
+    """The paragraph that says which setting to pick, from the measurements."""
+    figures = advice_figures(medians, node)
+    if figures is None:
+        return ("**Keep `integrator: auto`.** (No step costs or node latencies measured to "
+                "compare.)")
+    auto_path, (dearest_name, dearest), latencies = figures
+    step = medians.get("kinematicStep/cf4")
+    nodelet = node_latencies(node, "nodelet")
+    nodelet_text = (f"; {min(nodelet):.2f}-{max(nodelet):.2f} ms as a nodelet" if nodelet
+                    else "")
+    saving = largest_saving(sweep)
+    return (
+        f"**Keep `integrator: auto`.** Its step in the kinematic model costs {auto_path:.0f} ns "
+        f"on the node's path (`addSample/cf4`"
+        f"{f', {step:.0f} ns for the step alone' if step else ''}), and the dearest step of any "
+        f"method {dearest:.0f} ns (`{dearest_name}`), against a median of "
+        f"{min(latencies):.2f}-{max(latencies):.2f} ms from `imu/data_raw` to `imu/data` "
+        f"through the node at the rates it keeps up with{nodelet_text} (node benchmark below): "
+        f"the integrator is {100 * auto_path / (1e6 * min(latencies)):.1g} % of a message's "
+        "time with `auto` in the kinematic model and at most "
+        f"{100 * dearest / (1e6 * min(latencies)):.1g} % with any "
+        "method. So pick by the error, not the cost: the sections below measure `auto`'s "
+        "choice against the cheapest method to each accuracy per scene and on the real "
+        "streams, and where another method is cheaper it saves at most "
+        f"{fmt(saving / 1e3, 2)} µs of CPU per simulated second.")
+
+
 def main(argv):
     if len(argv) > 1 and argv[1] == "--fixes":
         fixes_chart(read_csv(os.path.join(argv[2], "fixes.csv")),
@@ -1220,7 +1503,13 @@ def main(argv):
     sweep = read_csv(os.path.join(data_dir, "sweep.csv"))
     invariants = read_csv(os.path.join(data_dir, "invariants.csv"))
     assign_styles(sweep, invariants)
-    work_precision_chart(sweep, os.path.join(docs_dir, "work_precision.png"))
+    costs_path = os.path.join(data_dir, "step_costs.json")
+    medians = gbench_medians(costs_path) if os.path.exists(costs_path) else {}
+    spreads = gbench_spreads(costs_path) if os.path.exists(costs_path) else {}
+    node_path = os.path.join(data_dir, "node_bench.csv")
+    node = aggregate_node(read_csv(node_path)) if os.path.exists(node_path) else []
+    advice = advice_title(medians, node)
+    work_precision_chart(sweep, os.path.join(docs_dir, "work_precision.png"), advice)
     order_chart(sweep, os.path.join(docs_dir, "order.png"))
     invariants_chart(invariants, os.path.join(docs_dir, "invariants.png"))
     stability_chart(read_csv(os.path.join(data_dir, "stability.csv")),
@@ -1228,7 +1517,7 @@ def main(argv):
     streams_path = os.path.join(data_dir, "real_streams.csv")
     streams = read_csv(streams_path) if os.path.exists(streams_path) else []
     if streams:
-        real_streams_chart(streams, os.path.join(docs_dir, "real_streams.png"))
+        real_streams_chart(streams, os.path.join(docs_dir, "real_streams.png"), advice)
         streams_page = os.path.join(docs_dir, "real_streams.md")
         if os.path.exists(streams_page):
             splice_page(streams_page, settings_table(streams), docs_dir, "settings")
@@ -1238,11 +1527,6 @@ def main(argv):
     ahrs_path = os.path.join(data_dir, "ahrs.csv")
     if os.path.exists(ahrs_path):
         ahrs_chart(read_csv(ahrs_path), os.path.join(docs_dir, "ahrs.png"))
-    costs_path = os.path.join(data_dir, "step_costs.json")
-    medians = gbench_medians(costs_path) if os.path.exists(costs_path) else {}
-    spreads = gbench_spreads(costs_path) if os.path.exists(costs_path) else {}
-    node_path = os.path.join(data_dir, "node_bench.csv")
-    node = aggregate_node(read_csv(node_path)) if os.path.exists(node_path) else []
     if node:
         node_chart(node, os.path.join(docs_dir, "node_bench.png"))
     text = results_markdown(sweep, medians, node, bool(node), machine_line(data_dir), invariants,

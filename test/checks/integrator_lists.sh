@@ -79,10 +79,12 @@ if help_list is not None:
     expect(core + " --integrators help", help_list.split(","), kinematic)
 
 # The benchmark charts give each method the next PALETTE entry in the order it first appears in
-# the sweep (kinematic methods, then the dynamic ones not yet seen); evaluate_bag uses the same
-# colours for the kinematic methods.
+# the sweep (kinematic methods, then the dynamic ones not yet seen), then one more to the dynamic
+# use of each method of both models (rk4); evaluate_bag uses the same colours for the kinematic
+# methods.
 palette = assigned("bench/plot.py", "PALETTE")
-charted = kinematic + [m for m in dynamic if m not in kinematic]
+charted = (kinematic + [m for m in dynamic if m not in kinematic] +
+           ["dynamic " + m for m in dynamic if m in kinematic])
 if palette is not None:
     colours = [c for c, _ in palette]
     if len(palette) < len(charted) or len(set(colours[:len(charted)])) < len(charted):
