@@ -61,8 +61,10 @@ TEST(TfConflictWatch, OurParentAsAChildIsNone) {
 
 TEST(TfConflictWatch, ReverseTfMakesTheFixedFrameOurChild) {
   ap::TfConflictWatch watch;
-  EXPECT_FALSE(watch.onTfSeen(edge("map", "base_link"), "/a", false, false, params("stop", true), at(0)));
-  const auto line = watch.onTfSeen(edge("map", "odom"), "/a", false, false, params("stop", true), at(0));
+  EXPECT_FALSE(
+      watch.onTfSeen(edge("map", "base_link"), "/a", false, false, params("stop", true), at(0)));
+  const auto line =
+      watch.onTfSeen(edge("map", "odom"), "/a", false, false, params("stop", true), at(0));
   ASSERT_TRUE(line);
   EXPECT_NE(line->text.find("also publishes 'odom' as the child of 'map' on /tf (we publish "
                             "base_link -> odom)"),
@@ -224,7 +226,7 @@ TEST(TfConflictWatch, TheNewestOwnStampsAreKeptAndNoMore) {
     fresh.sent(at_ns(ns).transforms[1]);
   }
   EXPECT_FALSE(fresh.onTfSeen(at_ns(ap::kOwnStampsKept + 1), "/m", true, false, params("warn"),
-                              at(0)));  // the newest
+                              at(0)));                                               // the newest
   EXPECT_FALSE(fresh.onTfSeen(at_ns(2), "/m", true, false, params("warn"), at(0)));  // kept
   EXPECT_EQ(fresh.conflicts(), 0u);
   EXPECT_TRUE(fresh.onTfSeen(at_ns(1), "/m", true, false, params("warn"), at(0)));  // forgotten
