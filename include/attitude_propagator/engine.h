@@ -28,6 +28,7 @@
 #include "attitude_propagator/integrator.h"
 #include "attitude_propagator/kinematic_propagator.h"
 #include "attitude_propagator/propagator.h"
+#include "attitude_propagator/replay_budget.h"
 #include "attitude_propagator/source_timeline.h"
 
 namespace attitude_propagator {
@@ -82,6 +83,7 @@ enum class FixOutcome {
                   ///< a correlation beyond one
   QueueFull,      ///< waiting, and dropped: kMaxPendingFixes were stamped nearer
   Future,         ///< stamped more than max_future ahead of the clock, as every input
+  OverBudget,     ///< late: its replay would exceed what its second may replay (replay_budget.h)
 };
 const char* fixOutcomeName(FixOutcome outcome);
 
@@ -344,6 +346,9 @@ class AttitudeEngine : private PropagatorHost {
   void keepApplied(const PendingFix& fix);
   /// Saves the model's state after a replayed step into its entry.
   void saveReplayed(FixHistoryEntry& entry);
+  /// Whether a fix or measurement at `stamp`, its replay and the re-applications after it fit
+  /// in the replay budget of the newest state's second (replay_budget.h).
+  bool replayAffordable(Stamp stamp);
   /// Applies the waiting fixes (and gravity and field samples) the rates have reached.
   void applyDueFixes();
   /// Where a fix or a measurement stamped at or before the newest entry acts: the last entry k
@@ -422,6 +427,7 @@ class AttitudeEngine : private PropagatorHost {
   std::size_t history_size_ = 0;
   std::vector<PendingFix> pending_fixes_;  // sorted by stamp, at most kMaxPendingFixes
   std::vector<PendingFix> applied_fixes_;  // the newest applied, by stamp, kMaxFixesReapplied
+  ReplayBudget replay_budget_;             // states replayed per second of stamp time
   std::optional<Stamp> forgotten_fix_;     // the newest applied fix's stamp no longer kept
   int rejected_in_a_row_ = 0;
   bool replaying_ = false;

@@ -129,6 +129,7 @@ struct EngineCounters {
   std::uint64_t fixes_bad_covariance = 0;  ///< non-finite, asymmetric, negative or above pi^2
   std::uint64_t fixes_queue_full = 0;      ///< ahead of the newest rate, the queue full: dropped
   std::uint64_t fixes_future = 0;          ///< stamped more than max_future ahead of the clock
+  std::uint64_t fixes_over_budget = 0;     ///< late, its replay beyond the second's budget
   // Gravity (use_accel) and the magnetic field (use_mag) as measurements (docs/design.md §6.10),
   // named accel_* and mag_* after AidingCounters::forEach.
   AidingCounters accel;

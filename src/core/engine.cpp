@@ -126,6 +126,8 @@ const char* fixOutcomeName(FixOutcome outcome) {
       return "queue_full";
     case FixOutcome::Future:
       return "future";
+    case FixOutcome::OverBudget:
+      return "over_budget";
   }
   return "unknown";
 }
@@ -704,6 +706,9 @@ void AttitudeEngine::countFix(FixOutcome outcome) {
     case FixOutcome::Future:
       ++counters_.fixes_future;
       break;
+    case FixOutcome::OverBudget:
+      ++counters_.fixes_over_budget;
+      break;
   }
 }
 
@@ -774,6 +779,7 @@ void AttitudeEngine::recordHistory(const ModelStep& step, bool base) {
   if (!t) return;
   const std::optional<Stamp> stamp = stampAt(*t);
   if (!stamp) return;
+  replay_budget_.recorded(*stamp);
   FixHistoryEntry* slot = &nextHistorySlot();
   slot->step = step;
   slot->step.input.payload.reset();  // the message is not kept
@@ -813,6 +819,7 @@ FixHistoryEntry& AttitudeEngine::nextHistorySlot() {
 // rejects is dropped, and the gate's run of rejections is the arrivals'.
 FixOutcome AttitudeEngine::applyInStampOrder(const PendingFix& fix) {
   if (forgotten_fix_ && fix.stamp < *forgotten_fix_) return FixOutcome::TooOld;
+  if (!replayAffordable(fix.stamp)) return FixOutcome::OverBudget;
   std::vector<PendingFix> again = takeAppliedAfter(fix.stamp);
   const FixOutcome outcome = applyFix(fix);
   if (outcome != FixOutcome::Accepted && outcome != FixOutcome::Reset) {
@@ -913,7 +920,23 @@ FixOutcome AttitudeEngine::applyFix(const PendingFix& fix) {
   return reset ? FixOutcome::Reset : FixOutcome::Accepted;
 }
 
+bool AttitudeEngine::replayAffordable(Stamp stamp) {
+  if (history_size_ == 0) return true;
+  // The states after the stamp are replayed once, and once more for each applied fix after it
+  // (applied again): an upper bound of the work, known before anything changes.
+  std::size_t after = 0;
+  for (std::size_t i = history_size_; i > 0 && historyEntry(i - 1).stamp > stamp; --i) ++after;
+  const auto later =
+      std::upper_bound(applied_fixes_.begin(), applied_fixes_.end(), stamp,
+                       [](Stamp t, const PendingFix& other) { return t < other.stamp; });
+  const auto again = static_cast<std::size_t>(applied_fixes_.end() - later);
+  return replay_budget_.affords(historyEntry(history_size_ - 1).stamp, after * (1 + again));
+}
+
 void AttitudeEngine::replayFrom(std::size_t first) {
+  if (first < history_size_) {
+    replay_budget_.charge(historyEntry(history_size_ - 1).stamp, history_size_ - first);
+  }
   replaying_ = true;
   for (std::size_t i = first; i < history_size_; ++i) {
     FixHistoryEntry& entry = historyEntry(i);

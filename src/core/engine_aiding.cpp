@@ -193,7 +193,8 @@ AidingOutcome AttitudeEngine::applyMeasurement(const PendingMeasurement& pm) {
     return applyAtNewest(*pm.measurement, pm.stamp, pm.value, pm.measurement);
   }
   // Late: applied where it belongs, the steps since repeated, and the fixes applied after its
-  // stamp applied again after it (as a late fix does).
+  // stamp applied again after it (as a late fix does), when its second can afford the replay.
+  if (!replayAffordable(pm.stamp)) return AidingOutcome::OverBudget;
   const std::optional<Located> at = locate(pm.stamp);
   if (!at) return AidingOutcome::TooOld;
   Eigen::Quaterniond q = at->q_k * at->D;

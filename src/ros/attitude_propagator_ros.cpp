@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <string>
 
+#include <ros/poll_manager.h>
 #include <boost/make_shared.hpp>
 
 #include "attitude_propagator/AttitudeState.h"
@@ -38,9 +39,15 @@ AttitudePropagatorRos::AttitudePropagatorRos(ros::NodeHandle nh, ros::NodeHandle
       log_(instancePrefix(pnh.getNamespace(), ros::this_node::getName())),
       in_manager_(!log_.prefix().empty()),
       config_(loadParameters(pnh, log_.prefix())),
+      tf_bound_(io_rounds_, static_cast<std::uint64_t>(config_.parameters.output_queue_size)),
+      imu_bound_(io_rounds_, static_cast<std::uint64_t>(config_.parameters.output_queue_size)),
+      state_bound_(io_rounds_, static_cast<std::uint64_t>(config_.parameters.output_queue_size)),
       updater_(nh, pnh, pnh.getNamespace()),
       diagnostics_(ros::WallTime::now()) {
   refuseFeedbackLoops();
+  io_listener_ = ros::PollManager::instance()->addPollThreadListener([this] {
+    io_rounds_.ranOnce();  // on roscpp's I/O thread, once per round
+  });
   engine_ = std::make_unique<AttitudeEngine>(engineConfig(config_), *this);
   decoders_.emplace(DecoderFrames::of(config_));
   fixes_.emplace(config_, log_);
@@ -71,7 +78,10 @@ AttitudePropagatorRos::AttitudePropagatorRos(ros::NodeHandle nh, ros::NodeHandle
   logModel();
 }
 
-AttitudePropagatorRos::~AttitudePropagatorRos() = default;
+AttitudePropagatorRos::~AttitudePropagatorRos() {
+  // First: the I/O thread must not call into a node being destroyed (a nodelet unloaded).
+  ros::PollManager::instance()->removePollThreadListener(io_listener_);
+}
 
 void AttitudePropagatorRos::refuseFeedbackLoops() const {
   const std::vector<NamedTopic> outputs{{"imu/data", imu_nh_.resolveName("data")},
@@ -379,6 +389,7 @@ void AttitudePropagatorRos::onWatchdog(const ros::WallTimerEvent&) {
 void AttitudePropagatorRos::publishState(const EngineState& state) {
   if (config_.parameters.publish_tf) publishTf(state);
   if (state_pub_.getNumSubscribers() == 0) return;
+  if (!handOver(state_bound_)) return;
   auto msg = boost::make_shared<AttitudeState>();
   encoder_->state(state, *msg);
   state_pub_.publish(msg);
@@ -411,7 +422,7 @@ void AttitudePropagatorRos::onTfSeen(const ros::MessageEvent<const tf2_msgs::TFM
 }
 
 void AttitudePropagatorRos::publishTf(const EngineState& state) {
-  if (tf_watch_.stopped()) return;
+  if (tf_watch_.stopped() || !handOver(tf_bound_)) return;
   auto msg = boost::make_shared<tf2_msgs::TFMessage>();
   msg->transforms.resize(1);
   encoder_->transform(state, msg->transforms[0]);
@@ -421,7 +432,7 @@ void AttitudePropagatorRos::publishTf(const EngineState& state) {
 
 void AttitudePropagatorRos::publishImu(const sensor_msgs::Imu& input, const EngineState& state,
                                        const Eigen::Quaterniond& q_BS) {
-  if (imu_pub_.getNumSubscribers() == 0) return;
+  if (imu_pub_.getNumSubscribers() == 0 || !handOver(imu_bound_)) return;
   auto msg = boost::make_shared<sensor_msgs::Imu>();
   encoder_->imu(input, state, q_BS, *msg);
   imu_pub_.publish(msg);
@@ -476,9 +487,33 @@ void AttitudePropagatorRos::onReconfigure(AttitudePropagatorConfig& live, std::u
   showInForce(config_.parameters, live);
 }
 
+std::uint64_t AttitudePropagatorRos::outputsDropped() const {
+  return tf_bound_.dropped() + imu_bound_.dropped() + state_bound_.dropped();
+}
+
+bool AttitudePropagatorRos::handOver(HandOverBound& bound) {
+  if (bound.admit()) return true;
+  log(LogLine{ros::console::levels::Warn, "outputs dropped",
+              formatted("outputs dropped: roscpp's I/O thread has not come round for %d messages "
+                        "of an output (it is kept reading an input faster than it can); the "
+                        "newest are dropped so that memory stays bounded (output_queue_size; %lu "
+                        "so far)",
+                        config_.parameters.output_queue_size,
+                        static_cast<unsigned long>(outputsDropped()))});
+  return false;
+}
+
 void AttitudePropagatorRos::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status) {
   diagnostics_.diagnose(ros::WallTime::now(), config_, *engine_, *fixes_, tf_watch_,
                         callback_errors_, status);
+  const std::uint64_t dropped = outputsDropped();
+  status.add("outputs_dropped", dropped);
+  if (dropped > outputs_dropped_at_diagnosis_) {
+    status.mergeSummary(diagnostic_msgs::DiagnosticStatus::WARN,
+                        "outputs dropped: roscpp's I/O thread is kept reading input faster than "
+                        "it can (output_queue_size bounds what waits for it)");
+  }
+  outputs_dropped_at_diagnosis_ = dropped;
 }
 
 }  // namespace attitude_propagator

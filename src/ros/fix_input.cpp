@@ -70,7 +70,7 @@ void FixInput::onMessage(const topic_tools::ShapeShifter& msg, const ros::Time& 
 
 std::uint64_t FixInput::notApplied(const EngineCounters& c) const {
   return c.fixes_rejected_gate + c.fixes_too_old + c.fixes_bad_quaternion + c.fixes_bad_covariance +
-         c.fixes_queue_full + c.fixes_future + decoder_.refusals().total();
+         c.fixes_queue_full + c.fixes_future + c.fixes_over_budget + decoder_.refusals().total();
 }
 
 std::uint64_t FixInput::notAppliedInARow(const EngineCounters& c) {
@@ -101,6 +101,7 @@ void FixInput::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status,
   status.add("fixes_bad_covariance", c.fixes_bad_covariance);
   status.add("fixes_queue_full", c.fixes_queue_full);
   status.add("fixes_future", c.fixes_future);
+  status.add("fixes_over_budget", c.fixes_over_budget);
   status.add("fixes_refused", r.total());
   status.add(fixRefusedCounter(Refused::NoTransform), r.no_tf);
   status.add(fixRefusedCounter(Refused::WrongType), r.type);
@@ -187,6 +188,11 @@ void FixInput::logOutcome(FixOutcome outcome, Stamp stamp, const AttitudeEngine&
       break;
     case FixOutcome::Future:
       why = "stamped more than max_future ahead of ROS time";
+      break;
+    case FixOutcome::OverBudget:
+      why =
+          "late, and replaying the rates since would exceed the replays one second may cost "
+          "(too many late fixes: the rates must not fall behind)";
       break;
   }
   last_reason_ = fixOutcomeName(outcome);

@@ -991,17 +991,19 @@ void BagPropagator::fixSummary(std::FILE* out) const {
   const std::uint64_t pending = engine_->pendingFixes();
   const std::uint64_t accounted = c.fixes_accepted + c.fixes_rejected_gate + c.fixes_too_old +
                                   c.fixes_bad_quaternion + c.fixes_bad_covariance +
-                                  c.fixes_queue_full + c.fixes_future + pending + r.total();
+                                  c.fixes_queue_full + c.fixes_future + c.fixes_over_budget +
+                                  pending + r.total();
   auto u = [](std::uint64_t x) { return static_cast<unsigned long long>(x); };
   std::fprintf(out,
                "  fixes: %llu = %llu accepted (%llu as resets) + %llu rejected_gate + %llu "
                "too_old + %llu bad_quaternion + %llu bad_covariance + %llu queue_full + %llu "
-               "future + %llu pending at the end + %llu refused (no_tf %llu, type %llu, "
-               "no_time %llu, no_orientation %llu, body_frame %llu)",
+               "future + %llu over_budget + %llu pending at the end + %llu refused (no_tf %llu, "
+               "type %llu, no_time %llu, no_orientation %llu, body_frame %llu)",
                u(n), u(c.fixes_accepted), u(c.fixes_reset), u(c.fixes_rejected_gate),
                u(c.fixes_too_old), u(c.fixes_bad_quaternion), u(c.fixes_bad_covariance),
-               u(c.fixes_queue_full), u(c.fixes_future), u(pending), u(r.total()), u(r.no_tf),
-               u(r.type), u(r.no_time), u(r.no_orientation), u(r.body_frame));
+               u(c.fixes_queue_full), u(c.fixes_future), u(c.fixes_over_budget), u(pending),
+               u(r.total()), u(r.no_tf), u(r.type), u(r.no_time), u(r.no_orientation),
+               u(r.body_frame));
   if (accounted != n) {
     std::fprintf(out, " (%lld not accounted for)",
                  static_cast<long long>(n) - static_cast<long long>(accounted));

@@ -238,8 +238,9 @@ TEST(BagFixes, SummaryAccountsForEveryFix) {
   const RunResult r = run(kPropagate + " " + in + " --fixes /fix -o " + dir.file("out.bag"));
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("fixes: 7 = 2 accepted (0 as resets) + 0 rejected_gate + 1 too_old + "
-                          "1 bad_quaternion + 0 bad_covariance + 0 queue_full + 0 future + 1 "
-                          "pending at the end + 2 refused (no_tf 1, type 1, no_time 0, "
+                          "1 bad_quaternion + 0 bad_covariance + 0 queue_full + 0 future + 0 "
+                          "over_budget + 1 pending at the end + 2 refused (no_tf 1, type 1, "
+                          "no_time 0, "
                           "no_orientation 0, body_frame 0)\n"),
             std::string::npos)
       << r.output;

@@ -47,6 +47,7 @@ enum class AidingOutcome {
   Invalid,            ///< non-finite, zero, or a bad covariance
   QueueFull,          ///< waiting, and dropped: kMaxPendingMeasurements were stamped nearer
   Future,             ///< stamped more than max_future ahead of the clock
+  OverBudget,         ///< late, its replay beyond the second's budget (replay_budget.h)
   Off,                ///< the kind is not configured (use_accel, use_mag false): ignored
 };
 const char* aidingOutcomeName(AidingOutcome outcome);
@@ -63,6 +64,7 @@ struct AidingCounters {
   std::uint64_t invalid = 0;
   std::uint64_t queue_full = 0;
   std::uint64_t future = 0;
+  std::uint64_t over_budget = 0;
   void count(AidingOutcome outcome);
   /// Calls f(name, value) for each counter, in the order above: the one list the diagnostics,
   /// the tools' summaries and the docs' table follow.
@@ -78,6 +80,7 @@ struct AidingCounters {
     f("invalid", invalid);
     f("queue_full", queue_full);
     f("future", future);
+    f("over_budget", over_budget);
   }
 };
 

@@ -29,6 +29,8 @@ const char* aidingOutcomeName(AidingOutcome outcome) {
       return "queue_full";
     case AidingOutcome::Future:
       return "future";
+    case AidingOutcome::OverBudget:
+      return "over_budget";
     case AidingOutcome::Off:
       return "off";
   }
@@ -66,6 +68,9 @@ void AidingCounters::count(AidingOutcome outcome) {
       break;
     case AidingOutcome::Future:
       ++future;
+      break;
+    case AidingOutcome::OverBudget:
+      ++over_budget;
       break;
     case AidingOutcome::Waiting:  // counted when the rates reach it
     case AidingOutcome::Off:

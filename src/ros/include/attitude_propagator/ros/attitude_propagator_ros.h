@@ -46,6 +46,7 @@
 #include "attitude_propagator/messages/input_decoders.h"
 #include "attitude_propagator/messages/outputs.h"
 #include "attitude_propagator/ros/fix_input.h"
+#include "attitude_propagator/ros/hand_over_bound.h"
 #include "attitude_propagator/ros/instance_log.h"
 #include "attitude_propagator/ros/log_text.h"
 #include "attitude_propagator/ros/node_diagnostics.h"
@@ -136,6 +137,10 @@ class AttitudePropagatorRos : public EngineSink {
   void publishConventionFrames();
   void publishImu(const sensor_msgs::Imu& input, const EngineState& state,
                   const Eigen::Quaterniond& q_BS);
+  /// Outputs dropped at the hand-over bound, all three outputs (hand_over_bound.h).
+  std::uint64_t outputsDropped() const;
+  /// Whether an output may be handed over; logs the drop (throttled) when not.
+  bool handOver(HandOverBound& bound);
 
   // Services and diagnostics.
   bool onReset(std_srvs::Empty::Request& request, std_srvs::Empty::Response& response);
@@ -153,6 +158,11 @@ class AttitudePropagatorRos : public EngineSink {
   // A nodelet: the manager's other nodelets publish under the same node name as we do.
   bool in_manager_;
   NodeConfig config_;
+  // What is handed to roscpp per output since its I/O thread last came round (hand_over_bound.h).
+  IoRounds io_rounds_;
+  HandOverBound tf_bound_, imu_bound_, state_bound_;
+  boost::signals2::connection io_listener_;
+  std::uint64_t outputs_dropped_at_diagnosis_ = 0;
   std::unique_ptr<AttitudeEngine> engine_;
   std::optional<OutputEncoder> encoder_;  // rebuilt when the frames or the integrator change
   bool sim_time_ = false;

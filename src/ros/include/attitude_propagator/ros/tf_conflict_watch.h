@@ -64,7 +64,7 @@ class TfConflictWatch {
   bool tf_conflict_latched_ = false;  // the stop came from /tf_static: only a toggle clears it
   ros::WallTime last_tf_conflict_;    // the latest other parent of our child frame seen on /tf
   std::uint64_t tf_resumes_ = 0;
-  std::deque<std::uint64_t> own_stamps_;             // ns, oldest first
+  std::deque<std::uint64_t> own_stamps_;            // ns, oldest first
   std::unordered_multiset<std::uint64_t> own_set_;  // the same, for the look-up
 };
 
