@@ -30,26 +30,37 @@ compiler_launcher() {
   fi
 }
 
-# Debian 12 packages by name (Debian's own ROS 1 lives under /usr, no rosdep index). Besides
-# the build, what the README's commands run: roslaunch and roscore (python3-roslaunch), rosrun
-# (rosbash), rosparam (python3-rosparam), rostopic, rosbag, and dynparam (with
-# python3-dynamic-reconfigure, run through rosrun).
-DEBIAN_PACKAGES=(
-  build-essential cmake catkin catkin-lint
+# Debian 12 packages by name (Debian's own ROS 1 lives under /usr, no rosdep index), in three
+# lists; install_deps.sh installs all three (DEBIAN_PACKAGES).
+# The build, and what the README's commands run: roslaunch and roscore (python3-roslaunch),
+# rosrun (rosbash), rosparam (python3-rosparam), rostopic, rosbag, and dynparam (with
+# python3-dynamic-reconfigure, run through rosrun). The README's "In your catkin workspace"
+# names exactly these (test/checks/ordinary_build.sh compares them).
+DEBIAN_BUILD_PACKAGES=(
+  build-essential cmake catkin
   ros-base-dev ros-message-generation ros-message-runtime
   libroscpp-dev libstd-msgs-dev libstd-srvs-dev libgeometry-msgs-dev libsensor-msgs-dev
   libdiagnostic-msgs-dev libdiagnostic-updater-dev
   libtf2-ros-dev libtf2-eigen-dev libtf2-msgs-dev tf2-tools libros-rosgraph-msgs-dev
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
   libnodelet-dev pluginlib-dev libtopic-tools-dev
-  librostest-dev python3-rostest python3-rospy python3-roslaunch python3-rosnode
+  python3-rospy python3-roslaunch python3-rosnode
   rosbash python3-rosparam python3-rostopic python3-tf2-ros python3-tf2-msgs python3-sensor-msgs python3-diagnostic-msgs
   python3-std-srvs python3-geometry-msgs python3-std-msgs python3-rosgraph-msgs python3-yaml
   libeigen3-dev libboost-dev libboost-math-dev
-  librosbag-storage-dev libnav-msgs-dev libyaml-cpp-dev python3-rosbag
-  libgtest-dev googletest libbenchmark-dev python3-matplotlib
-  clang libclang-rt-14-dev ccache
+  librosbag-storage-dev libnav-msgs-dev libyaml-cpp-dev python3-rosbag python3-matplotlib
 )
+# The tests (`catkin_make run_tests`): gtest, rostest, catkin_lint for the repository checks.
+DEBIAN_TEST_PACKAGES=(
+  catkin-lint librostest-dev python3-rostest libgtest-dev googletest
+)
+# Only the project's own scripts: the benchmarks (Google Benchmark), fuzzing (clang with
+# libFuzzer) and the compiler cache. A build in a catkin workspace needs none of them.
+DEBIAN_SCRIPT_PACKAGES=(
+  libbenchmark-dev clang libclang-rt-14-dev ccache
+)
+DEBIAN_PACKAGES=("${DEBIAN_BUILD_PACKAGES[@]}" "${DEBIAN_TEST_PACKAGES[@]}"
+  "${DEBIAN_SCRIPT_PACKAGES[@]}")
 
 as_root() {
   if [ "$(id -u)" = 0 ]; then "$@"; else sudo "$@"; fi

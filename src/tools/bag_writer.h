@@ -3,12 +3,17 @@
 // Why hand-written: rosbag::Bag::write seeks to the end of the file twice per message, which with
 // glibc's read-write FILE costs an fstat, an lseek and a 4 KiB read each, plus one write per
 // message uncompressed: about six system calls per message, against about two per chunk here.
-// How much that costs depends on what a system call costs: the same 400 k messages (Imu and
-// TFMessage, uncompressed, best of 3) took 15.4 s wall and 5.4 s CPU through rosbag::Bag::write
-// and 0.34 s and 0.12 s here, on two shared cores under a load of about 14; within propagate_bag
-// as a whole, rosbag's writer held it at 285× real time (docs/bag_tools.md, Throughput). The file
-// is laid out as rosbag::Bag lays it out (the same records, header padding and chunk threshold),
-// so rosbag's readers, `rosbag check`, `rosbag info` and `rosbag reindex` take it as their own
+// Measured with bench/bag_writer.cpp, the two writers alternating (`bash scripts/build.sh
+// bench_bag_writer && .workspace/devel/lib/attitude_propagator/bench_bag_writer 5 400000 /tmp`:
+// 400 k sensor_msgs/Imu, uncompressed, medians of 5 rounds each; docs/benchmarks.md, "Writing
+// bags"): rosbag::Bag::write took 6.6-7.7 s wall and 5.4-5.5 s CPU (3.2-3.3 s of it in the
+// kernel), this writer 0.17 s wall and 0.13 s CPU, about 40× less either way, on two shared
+// cores of a virtual machine under a load of about 3. The absolute times depend on what a
+// system call costs where it runs; rosbag's user time alone (2.2 s) is still about 20 times this
+// writer's (0.11 s). Within propagate_bag as a whole, rosbag's writer held it at 285× real time
+// (docs/bag_tools.md, Throughput). The file is laid out as rosbag::Bag lays it out (the same
+// records, header padding and chunk threshold), so rosbag's readers, `rosbag check`,
+// `rosbag info` and `rosbag reindex` take it as their own
 // (test/bag/test_bag_writer.cpp runs them on it).
 //
 // The layout written (names and op codes in bag_format.h). Every record is
