@@ -338,6 +338,8 @@ class AttitudeEngine : private PropagatorHost {
   FixOutcome applyInStampOrder(const PendingFix& fix);
   /// Applies a fix stamped at or before the newest entry.
   FixOutcome applyFix(const PendingFix& fix);
+  /// The first applied fix stamped after `stamp` (fixes of equal stamps keep their order).
+  std::vector<PendingFix>::iterator firstAppliedAfter(Stamp stamp);
   /// The applied fixes stamped after `stamp`, taken out of those kept, in stamp order.
   std::vector<PendingFix> takeAppliedAfter(Stamp stamp);
   /// Applies fixes again after an earlier fix or measurement, keeping those applied.

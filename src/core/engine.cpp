@@ -831,10 +831,13 @@ FixOutcome AttitudeEngine::applyInStampOrder(const PendingFix& fix) {
   return outcome;
 }
 
+std::vector<AttitudeEngine::PendingFix>::iterator AttitudeEngine::firstAppliedAfter(Stamp stamp) {
+  return std::upper_bound(applied_fixes_.begin(), applied_fixes_.end(), stamp,
+                          [](Stamp t, const PendingFix& other) { return t < other.stamp; });
+}
+
 std::vector<AttitudeEngine::PendingFix> AttitudeEngine::takeAppliedAfter(Stamp stamp) {
-  const auto later =
-      std::upper_bound(applied_fixes_.begin(), applied_fixes_.end(), stamp,
-                       [](Stamp t, const PendingFix& other) { return t < other.stamp; });
+  const auto later = firstAppliedAfter(stamp);
   std::vector<PendingFix> taken(later, applied_fixes_.end());
   applied_fixes_.erase(later, applied_fixes_.end());
   return taken;
@@ -926,10 +929,7 @@ bool AttitudeEngine::replayAffordable(Stamp stamp) {
   // (applied again): an upper bound of the work, known before anything changes.
   std::size_t after = 0;
   for (std::size_t i = history_size_; i > 0 && historyEntry(i - 1).stamp > stamp; --i) ++after;
-  const auto later =
-      std::upper_bound(applied_fixes_.begin(), applied_fixes_.end(), stamp,
-                       [](Stamp t, const PendingFix& other) { return t < other.stamp; });
-  const auto again = static_cast<std::size_t>(applied_fixes_.end() - later);
+  const auto again = static_cast<std::size_t>(applied_fixes_.end() - firstAppliedAfter(stamp));
   return replay_budget_.affords(historyEntry(history_size_ - 1).stamp, after * (1 + again));
 }
 

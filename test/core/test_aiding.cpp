@@ -713,6 +713,31 @@ ap::EngineState runWithFixes(int accel_delay) {
   return engine.state();
 }
 
+// A flood of late gravity samples (each 3 s late on 1 kHz rates, 3000 states to replay) is
+// bounded as late fixes are (replay_budget.h): per second at most (4096 + 20 x 1000) / 3000 = 8
+// are applied, the rest counted over_budget, and every rate is taken.
+TEST(Late, AFloodOfLateGravitySamplesIsBoundedByTheReplayBudget) {
+  ap::EngineConfig c = aidedConfig();
+  c.aiding.use_mag = true;  // the history from the start
+  c.fixes.history = 10.0;
+  engine_fixtures::DiscardingSink sink;
+  ap::AttitudeEngine engine(c, sink);
+  const Eigen::Vector3d f(0.0, 0.0, ap::kStandardGravity);
+  int late = 0;
+  for (int k = 0; k <= 8000; ++k) {
+    engine.submit(imu(at(0.001 * k), Eigen::Vector3d::Zero()));
+    if (k == 0) engine.submitAcceleration(at(0.0), f, Eigen::Matrix3d::Zero());  // aligns
+    if (k < 5000) continue;
+    engine.submitAcceleration(at(0.001 * k - 3.0), f, Eigen::Matrix3d::Zero());
+    ++late;
+  }
+  const ap::AidingCounters& a = engine.counters().accel;
+  EXPECT_EQ(engine.counters().accepted, 8001u);
+  EXPECT_EQ(a.accepted + a.over_budget, static_cast<std::uint64_t>(late));
+  EXPECT_GT(a.over_budget, 0u);
+  EXPECT_LE(a.accepted, 8u * 4u);  // seconds 5, 6, 7 and 8
+}
+
 TEST(Late, ALateGravitySampleGoesBeforeTheFixesStampedAfterIt) {
   const ap::EngineState on_time = runWithFixes(0);
   const ap::EngineState late = runWithFixes(4);

@@ -108,3 +108,24 @@ TEST(ReplayBudgetEngine, OrdinaryLateFixesAreNeverOverBudget) {
   EXPECT_EQ(engine.counters().fixes_too_old, 1u);
   EXPECT_EQ(engine.counters().fixes_accepted, 99u);
 }
+
+// The estimate counts the re-applications: a fix before an applied one replays the states
+// after it once, and once more from the applied fix on. 100 Hz rates for 10 s (allowance in the
+// newest second: 4096 + 20 x 100 = 6096), a fix at 9 s (100 states), then fixes at 1 s, each
+// estimated at 900 x 2 = 1800 and charged 900 + 100: the fifth fits (5100 + 1800 > 6096 only
+// for the sixth), the sixth does not.
+TEST(ReplayBudgetEngine, TheEstimateCountsTheFixesAppliedAgain) {
+  DiscardingSink sink;
+  ap::AttitudeEngine engine(withFixes(ap::FixMode::Reset, 10.0), sink);
+  const Eigen::Quaterniond q = Eigen::Quaterniond::Identity();
+  for (int k = 0; k <= 1000; ++k) {
+    engine.submit(rate(at(0.01 * k), Eigen::Vector3d(0.0, 0.0, 0.2)));
+    if (k == 0) engine.submitFix(at(0.0), q, Eigen::Matrix3d::Zero());  // the history starts
+  }
+  ASSERT_EQ(engine.submitFix(at(9.0), q, Eigen::Matrix3d::Zero()), ap::FixOutcome::Reset);
+  for (int j = 1; j <= 5; ++j) {
+    EXPECT_EQ(engine.submitFix(at(1.0), q, Eigen::Matrix3d::Zero()), ap::FixOutcome::Reset) << j;
+  }
+  EXPECT_EQ(engine.submitFix(at(1.0), q, Eigen::Matrix3d::Zero()), ap::FixOutcome::OverBudget);
+  EXPECT_EQ(engine.counters().fixes_over_budget, 1u);
+}
