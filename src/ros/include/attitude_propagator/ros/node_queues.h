@@ -17,8 +17,8 @@ namespace attitude_propagator {
 //   slow subscriber of all three outputs held the node at 82 MB with 10 000 (IMU input at
 //   31 kHz), at 31 MB with 5 000. Subscribers in the same nodelet manager are served through
 //   their own queue.
-// (roscpp's hand-over from publish() to its I/O thread is not ours to bound: it grows while
-// that thread is kept reading an input faster than it can.)
+// roscpp's own hand-over from publish() to its I/O thread has no bound: the node bounds what it
+// hands over between two rounds of that thread to the same size per output (hand_over_bound.h).
 // The tf watch needs one message of a conflicting publisher, not every transform on /tf.
 constexpr std::uint32_t kTfWatchQueueSize = 1000;
 // Topics with a message now and then (gyro bias, /tf_static).
