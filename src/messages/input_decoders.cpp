@@ -174,6 +174,13 @@ std::optional<Refusal> TopicType::admit(const std::string& datatype, const std::
   return r;
 }
 
+std::optional<std::string> TopicType::otherRegistered(const std::string& registered) const {
+  if (datatype_.empty() || registered.empty() || registered == "*" || registered == datatype_) {
+    return std::nullopt;
+  }
+  return registered;
+}
+
 std::string TopicType::accepted() const {
   std::string out;
   for (std::size_t i = 0; i < types_.size(); ++i) {

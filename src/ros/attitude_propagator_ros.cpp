@@ -66,6 +66,12 @@ AttitudePropagatorRos::AttitudePropagatorRos(ros::NodeHandle nh, ros::NodeHandle
   updater_.add("state", this, &AttitudePropagatorRos::diagnose);
   watchdog_timer_ = nh_.createWallTimer(ros::WallDuration(kWatchdogPeriod),
                                         &AttitudePropagatorRos::onWatchdog, this);
+  fix_type_timer_ = nh_.createWallTimer(
+      ros::WallDuration(kFixTypeCheckPeriod),
+      boost::function<void(const ros::WallTimerEvent&)>([this](const ros::WallTimerEvent&) {
+        guarded("fix type check",
+                [&] { fixes_->checkRegisteredType(nh_.resolveName("orientation_fix")); });
+      }));
   reconfigure_server_ =
       std::make_unique<dynamic_reconfigure::Server<AttitudePropagatorConfig>>(pnh_);
   reconfigure_server_->setCallback(

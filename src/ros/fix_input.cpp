@@ -4,6 +4,7 @@
 #include <optional>
 
 #include <ros/console.h>
+#include <ros/master.h>
 #include <ros/serialization.h>
 
 #include "attitude_propagator/messages/conversions.h"
@@ -110,11 +111,34 @@ void FixInput::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status,
   status.add(fixRefusedCounter(Refused::FixBodyFrame), r.body_frame);
   status.add("fixes_pending", engine.pendingFixes());
   status.add("fixes_lost", gaps_.lost());
+  status.add("fixes_other_type", other_type_.empty() ? std::string("none") : other_type_);
   if (config_.estimate_gyro_bias) {
     const Eigen::Vector3d& b = engine.gyroBiasEstimate();
     const Eigen::Vector3d s = engine.gyroBiasStddev();
     status.addf("gyro_bias_estimate", "[%g, %g, %g]", b.x(), b.y(), b.z());
     status.addf("gyro_bias_estimate_stddev", "[%g, %g, %g]", s.x(), s.y(), s.z());
+  }
+}
+
+void FixInput::checkRegisteredType(const std::string& topic) {
+  if (decoder_.type().datatype().empty()) return;  // no type of our own yet
+  ros::master::V_TopicInfo topics;
+  if (!ros::master::getTopics(topics)) return;
+  for (const auto& t : topics) {
+    if (t.name != topic) continue;
+    const std::optional<std::string> other = decoder_.type().otherRegistered(t.datatype);
+    if (!other || *other == other_type_) return;
+    other_type_ = *other;
+    log_.log(
+        LogLine{ros::console::levels::Warn, "",
+                formatted("orientation_fix: a publisher of %s is registered on %s, which "
+                          "carries %s (its first message's type): ROS 1 refuses that "
+                          "publisher's connection, so its fixes never reach the node and "
+                          "cannot be counted (accepted: one of %s per topic)",
+                          logText(other_type_).c_str(), topic.c_str(),
+                          decoder_.type().datatype().c_str(), decoder_.type().accepted().c_str())},
+        ros::WallTime::now().toSec(), kFixWarnPeriod);
+    return;
   }
 }
 

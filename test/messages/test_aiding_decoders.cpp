@@ -238,10 +238,12 @@ TEST(AidingCounters, NamedAccelThenMagInTheCoresOrder) {
     names.push_back(name);
     sum += name == "accel_aligned" ? value : name == "mag_future" ? 10 * value : 1000 * value;
   });
-  ASSERT_EQ(names.size(), 20u);
+  ASSERT_EQ(names.size(), 22u);
   EXPECT_EQ(names.front(), "accel_accepted");
   EXPECT_EQ(names[9], "accel_future");
-  EXPECT_EQ(names[10], "mag_accepted");
-  EXPECT_EQ(names.back(), "mag_future");
+  EXPECT_EQ(names[10], "accel_over_budget");
+  EXPECT_EQ(names[11], "mag_accepted");
+  EXPECT_EQ(names[20], "mag_future");
+  EXPECT_EQ(names.back(), "mag_over_budget");
   EXPECT_EQ(sum, 71u);
 }

@@ -403,6 +403,25 @@ TEST(FixDecoder, TopicTakesItsFirstTypeOnly) {
             "geometry_msgs/QuaternionStamped or sensor_msgs/Imu");
 }
 
+// Another publisher's type registered with the master (ROS 1 refuses its connection: its
+// messages never arrive) is named once the topic has a type; the topic's own type, "*" and a
+// topic with no message yet name nothing.
+TEST(FixDecoder, AnotherTypeRegisteredOnTheTopicIsNamedOnceItHasAType) {
+  tf2::BufferCore buffer;
+  addFrames(buffer);
+  ap::BufferCoreFrames frames(buffer);
+  ap::FixDecoder decoder(fixFrames());
+  const std::string quaternion = "geometry_msgs/QuaternionStamped";
+  EXPECT_FALSE(decoder.type().otherRegistered(quaternion));  // no message yet
+  ASSERT_TRUE(
+      decoder.topic(Serialized::of(poseFix("map", truthLookup("map", "camera"), someCovariance())),
+                    kArrival, &frames));
+  EXPECT_EQ(decoder.type().otherRegistered(quaternion), quaternion);
+  EXPECT_FALSE(decoder.type().otherRegistered("geometry_msgs/PoseWithCovarianceStamped"));
+  EXPECT_FALSE(decoder.type().otherRegistered("*"));
+  EXPECT_FALSE(decoder.type().otherRegistered(""));
+}
+
 // A bad quaternion or covariance is the engine's to refuse: the decoder hands it on (a bad
 // covariance unrotated), the engine refuses and counts it once, the decoder counts nothing.
 TEST(FixDecoder, BadQuaternionsAndCovariancesAreRefusedByTheEngineOnce) {

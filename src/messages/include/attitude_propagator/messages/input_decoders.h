@@ -188,6 +188,11 @@ class TopicType {
   std::optional<Refusal> admit(const std::string& datatype, const std::string& md5);
   /// The topic's type; empty before its first message of an accepted type.
   const std::string& datatype() const { return datatype_; }
+  /// `registered`, the type the ROS master holds for the topic (its latest publisher's), when
+  /// it is not the topic's: another publisher, whose connection ROS 1 refuses, so that its
+  /// messages never arrive to be refused. Nothing before the topic's first message, for the
+  /// topic's own type, or for "*" (a publisher of any type).
+  std::optional<std::string> otherRegistered(const std::string& registered) const;
   template <class M>
   bool is() const {
     return datatype_ == ros::message_traits::datatype<M>();

@@ -202,6 +202,7 @@ class AttitudePropagatorRos : public EngineSink {
   ros::ServiceServer set_state_srv_;
   ros::Timer dynamic_timer_;
   ros::WallTimer watchdog_timer_;
+  ros::WallTimer fix_type_timer_;  // asks the master for the fix topic's type (fix_input.h)
 
   diagnostic_updater::Updater updater_;
   std::unique_ptr<dynamic_reconfigure::Server<AttitudePropagatorConfig>> reconfigure_server_;

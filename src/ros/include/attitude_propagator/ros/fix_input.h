@@ -45,6 +45,12 @@ class FixInput {
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status,
                 const AttitudeEngine& engine) const;
 
+  /// Asks the master which type is registered on the fix topic (`topic`, resolved): another
+  /// publisher's type than the topic's never reaches the node (ROS 1 refuses its connection),
+  /// so it is said once per type (a warning, and `fixes_other_type` in the diagnostics). One
+  /// call to the master: the wrapper calls it every kFixTypeCheckPeriod.
+  void checkRegisteredType(const std::string& topic);
+
  private:
   /// Every fix not applied so far: the engine's refusals and the decoder's.
   std::uint64_t notApplied(const EngineCounters& c) const;
@@ -61,6 +67,7 @@ class FixInput {
   std::uint64_t applied_seen_ = 0;               // fixes_accepted when last looked at
   std::uint64_t not_applied_at_last_apply_ = 0;  // notApplied() then
   std::string last_reason_;                      // the latest refusal or rejection, by name
+  std::string other_type_;                       // another type registered on the topic
   InstanceLog& log_;
 };
 

@@ -23,6 +23,9 @@ namespace attitude_propagator {
 constexpr std::uint32_t kTfWatchQueueSize = 1000;
 // Topics with a message now and then (gyro bias, /tf_static).
 constexpr std::uint32_t kSparseQueueSize = 100;
+// How often (wall s) the master is asked which type is registered on the fix topic: one
+// XML-RPC call, about a millisecond on the callback thread.
+constexpr double kFixTypeCheckPeriod = 5.0;
 // Throttle period (s) of warnings about input that keeps coming bad.
 constexpr double kWarnPeriod = 5.0;
 // How often the clock is looked at while nothing else happens (wall seconds): publishes a
