@@ -136,6 +136,33 @@ struct EngineCounters {
   AidingCounters mag;
 };
 
+/// Calls f(name, value) for each of the engine's fix counters, without their `fixes_` prefix,
+/// in the order of docs/node.md's table: the one list the diagnostics, propagate_bag's summary
+/// and the sums of fixes not applied follow.
+template <class F>
+void forEachFixCounter(const EngineCounters& c, F&& f) {
+  f("accepted", c.fixes_accepted);
+  f("reset", c.fixes_reset);
+  f("rejected_gate", c.fixes_rejected_gate);
+  f("too_old", c.fixes_too_old);
+  f("bad_quaternion", c.fixes_bad_quaternion);
+  f("bad_covariance", c.fixes_bad_covariance);
+  f("queue_full", c.fixes_queue_full);
+  f("future", c.fixes_future);
+  f("over_budget", c.fixes_over_budget);
+}
+
+/// The fixes the engine took and did not apply: every counter of forEachFixCounter but
+/// `accepted` and `reset` (the applied ones, resets among them).
+inline std::uint64_t fixesNotApplied(const EngineCounters& c) {
+  std::uint64_t n = 0;
+  forEachFixCounter(c, [&n](const char* name, std::uint64_t value) {
+    const std::string counter(name);
+    if (counter != "accepted" && counter != "reset") n += value;
+  });
+  return n;
+}
+
 /// Something the node should log (throttled per kind).
 struct EngineNote {
   enum Kind {

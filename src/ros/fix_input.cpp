@@ -70,8 +70,7 @@ void FixInput::onMessage(const topic_tools::ShapeShifter& msg, const ros::Time& 
 }
 
 std::uint64_t FixInput::notApplied(const EngineCounters& c) const {
-  return c.fixes_rejected_gate + c.fixes_too_old + c.fixes_bad_quaternion + c.fixes_bad_covariance +
-         c.fixes_queue_full + c.fixes_future + c.fixes_over_budget + decoder_.refusals().total();
+  return fixesNotApplied(c) + decoder_.refusals().total();
 }
 
 std::uint64_t FixInput::notAppliedInARow(const EngineCounters& c) {
@@ -94,15 +93,9 @@ void FixInput::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status,
                         const AttitudeEngine& engine) const {
   const EngineCounters& c = engine.counters();
   const FixRefusals& r = decoder_.refusals();
-  status.add("fixes_accepted", c.fixes_accepted);
-  status.add("fixes_reset", c.fixes_reset);
-  status.add("fixes_rejected_gate", c.fixes_rejected_gate);
-  status.add("fixes_too_old", c.fixes_too_old);
-  status.add("fixes_bad_quaternion", c.fixes_bad_quaternion);
-  status.add("fixes_bad_covariance", c.fixes_bad_covariance);
-  status.add("fixes_queue_full", c.fixes_queue_full);
-  status.add("fixes_future", c.fixes_future);
-  status.add("fixes_over_budget", c.fixes_over_budget);
+  forEachFixCounter(c, [&status](const char* name, std::uint64_t value) {
+    status.add(std::string("fixes_") + name, value);
+  });
   status.add("fixes_refused", r.total());
   status.add(fixRefusedCounter(Refused::NoTransform), r.no_tf);
   status.add(fixRefusedCounter(Refused::WrongType), r.type);

@@ -1582,8 +1582,7 @@ void Evaluation::reportFixes(std::FILE* out) const {
   for (const auto& m : methods_) {
     if (!m->started()) continue;
     const EngineCounters& c = m->counters();
-    const std::uint64_t other = c.fixes_bad_quaternion + c.fixes_bad_covariance +
-                                c.fixes_queue_full + c.fixes_future + c.fixes_over_budget;
+    const std::uint64_t other = fixesNotApplied(c) - c.fixes_rejected_gate - c.fixes_too_old;
     std::fprintf(out, " %s %llu/%llu/%llu/%llu/%llu", m->name().c_str(), u(c.fixes_accepted),
                  u(c.fixes_rejected_gate), u(c.fixes_too_old), u(other), u(m->pendingFixes()));
   }

@@ -989,21 +989,21 @@ void BagPropagator::fixSummary(std::FILE* out) const {
   std::uint64_t n = 0;
   for (const auto& [topic, count] : read_) n += sameTopic(topic, fixes_) ? count : 0;
   const std::uint64_t pending = engine_->pendingFixes();
-  const std::uint64_t accounted = c.fixes_accepted + c.fixes_rejected_gate + c.fixes_too_old +
-                                  c.fixes_bad_quaternion + c.fixes_bad_covariance +
-                                  c.fixes_queue_full + c.fixes_future + c.fixes_over_budget +
-                                  pending + r.total();
+  const std::uint64_t accounted = c.fixes_accepted + fixesNotApplied(c) + pending + r.total();
   auto u = [](std::uint64_t x) { return static_cast<unsigned long long>(x); };
+  // The engine's counters in forEachFixCounter's order, the resets among the accepted.
+  std::string engine_terms;
+  forEachFixCounter(c, [&](const char* name, std::uint64_t value) {
+    const std::string counter(name);
+    if (counter == "reset") return;
+    engine_terms += (engine_terms.empty() ? "" : " + ") + std::to_string(value) + " " + counter;
+    if (counter == "accepted") engine_terms += " (" + std::to_string(c.fixes_reset) + " as resets)";
+  });
   std::fprintf(out,
-               "  fixes: %llu = %llu accepted (%llu as resets) + %llu rejected_gate + %llu "
-               "too_old + %llu bad_quaternion + %llu bad_covariance + %llu queue_full + %llu "
-               "future + %llu over_budget + %llu pending at the end + %llu refused (no_tf %llu, "
-               "type %llu, no_time %llu, no_orientation %llu, body_frame %llu)",
-               u(n), u(c.fixes_accepted), u(c.fixes_reset), u(c.fixes_rejected_gate),
-               u(c.fixes_too_old), u(c.fixes_bad_quaternion), u(c.fixes_bad_covariance),
-               u(c.fixes_queue_full), u(c.fixes_future), u(c.fixes_over_budget), u(pending),
-               u(r.total()), u(r.no_tf), u(r.type), u(r.no_time), u(r.no_orientation),
-               u(r.body_frame));
+               "  fixes: %llu = %s + %llu pending at the end + %llu refused (no_tf %llu, type "
+               "%llu, no_time %llu, no_orientation %llu, body_frame %llu)",
+               u(n), engine_terms.c_str(), u(pending), u(r.total()), u(r.no_tf), u(r.type),
+               u(r.no_time), u(r.no_orientation), u(r.body_frame));
   if (accounted != n) {
     std::fprintf(out, " (%lld not accounted for)",
                  static_cast<long long>(n) - static_cast<long long>(accounted));

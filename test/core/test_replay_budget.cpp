@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <map>
+#include <string>
 
 #include "attitude_propagator/replay_budget.h"
 #include "engine_fixtures.h"
@@ -128,4 +129,30 @@ TEST(ReplayBudgetEngine, TheEstimateCountsTheFixesAppliedAgain) {
   }
   EXPECT_EQ(engine.submitFix(at(1.0), q, Eigen::Matrix3d::Zero()), ap::FixOutcome::OverBudget);
   EXPECT_EQ(engine.counters().fixes_over_budget, 1u);
+}
+
+// The fix counters' one list: each counter once, in the order of docs/node.md's table, and the
+// fixes not applied are all of them but the applied ones (accepted, resets among them).
+TEST(FixCounters, OneListEachCounterOnceAndTheNotAppliedSum) {
+  ap::EngineCounters c;
+  c.fixes_accepted = 1;
+  c.fixes_reset = 2;
+  c.fixes_rejected_gate = 4;
+  c.fixes_too_old = 8;
+  c.fixes_bad_quaternion = 16;
+  c.fixes_bad_covariance = 32;
+  c.fixes_queue_full = 64;
+  c.fixes_future = 128;
+  c.fixes_over_budget = 256;
+  std::string names;
+  std::uint64_t sum = 0;
+  ap::forEachFixCounter(c, [&](const char* name, std::uint64_t value) {
+    names += std::string(names.empty() ? "" : " ") + name;
+    sum += value;
+  });
+  EXPECT_EQ(names,
+            "accepted reset rejected_gate too_old bad_quaternion bad_covariance queue_full future "
+            "over_budget");
+  EXPECT_EQ(sum, 511u);
+  EXPECT_EQ(ap::fixesNotApplied(c), 511u - 1u - 2u);
 }
