@@ -232,16 +232,18 @@ TEST(BagFixes, SummaryAccountsForEveryFix) {
     doubled.pose.orientation.w *= 2.0;
     bag.write("/fix", recordOf(at(2.6), 0.0), doubled);
     bag.write("/fix", recordOf(at(2.9), 0.0), poseFix(at(9.0)));  // pending
+    // The body's own frame: the node's output read back as a fix (body_frame)
+    bag.write("/fix", recordOf(at(2.8), 0.0), poseFix(at(2.8), "base_link"));
     bag.close();
   }
   const std::string in = dir.file("in.bag");
   const RunResult r = run(kPropagate + " " + in + " --fixes /fix -o " + dir.file("out.bag"));
   ASSERT_EQ(r.status, 0) << r.output;
-  EXPECT_NE(r.output.find("fixes: 7 = 2 accepted (0 as resets) + 0 rejected_gate + 1 too_old + "
+  EXPECT_NE(r.output.find("fixes: 8 = 2 accepted (0 as resets) + 0 rejected_gate + 1 too_old + "
                           "1 bad_quaternion + 0 bad_covariance + 0 queue_full + 0 future + 0 "
-                          "over_budget + 1 pending at the end + 2 refused (no_tf 1, type 1, "
+                          "over_budget + 1 pending at the end + 3 refused (no_tf 1, type 1, "
                           "no_time 0, "
-                          "no_orientation 0, body_frame 0)\n"),
+                          "no_orientation 0, body_frame 1)\n"),
             std::string::npos)
       << r.output;
   // The terms add up (the line says so when they do not).
@@ -249,11 +251,11 @@ TEST(BagFixes, SummaryAccountsForEveryFix) {
   const std::string output = r.output;
   ASSERT_TRUE(std::regex_search(output, line, std::regex("fixes: [^\n]*")));
   EXPECT_EQ(line.str().find("not accounted"), std::string::npos) << line.str();
-  EXPECT_NE(r.output.find("/fix 7"), std::string::npos) << r.output;  // the messages read
+  EXPECT_NE(r.output.find("/fix 8"), std::string::npos) << r.output;  // the messages read
 
   const RunResult dry = run(kPropagate + " " + in + " --fixes /fix --dry-run");
   ASSERT_EQ(dry.status, 0) << dry.output;
-  EXPECT_TRUE(std::regex_search(dry.output, std::regex("/fix +geometry_msgs/\\w+ +7  fixes")))
+  EXPECT_TRUE(std::regex_search(dry.output, std::regex("/fix +geometry_msgs/\\w+ +8  fixes")))
       << dry.output;
   const RunResult without = run(kPropagate + " " + in + " -o " + dir.file("plain.bag"));
   ASSERT_EQ(without.status, 0) << without.output;

@@ -55,6 +55,9 @@ CASES = [
     ("input_queue_size", 2.5, "input_queue_size: wrong type, got '2.5'; accepted: an integer"),
     ("output_queue_size", 0, "output_queue_size: invalid value 0; accepted: an integer in [1, "
      "1000000]"),
+    ("gyro_bias_stddev", 300.0, "gyro_bias_stddev: invalid value 300.0; accepted: a finite "
+     "number >= 0 and at most 10 (rad/s)"),
+    ("max_future", 0.0, "max_future: invalid value 0.0; accepted: a number > 0 and at most 3600"),
     ("time_jump_threshold", 0.0, "time_jump_threshold: invalid value 0.0; accepted: a number in "
      "[1e-3, 3600] (s)"),
 ]
@@ -195,6 +198,14 @@ class BadParametersTest(unittest.TestCase):
             self.assertEqual(rospy.get_param("/slash/node/fixed_frame"), "slash_world")
             self.assertTrue(node.running(), node.output())
             self.assertIn("body_frame: frame id '/slash_imu' has a leading '/'", node.output())
+
+    def test_a_node_name_that_is_no_ros_name_is_refused_with_one_fatal(self):
+        # name:='a b' on roslaunch's command line: roscpp throws InvalidNameException in
+        # ros::init; the node names it in one FATAL line and exits 1 instead of aborting.
+        result = run([self.node, "__name:=a b"])
+        self.assertEqual(result.returncode, 1, result.stderr)
+        self.assertIn("invalid node name, namespace or remapping", result.stderr)
+        self.assertNotIn("terminate called", result.stderr)
 
     def test_nodelet_refuses_to_start(self):
         result = run([self.nodelet, "standalone", "attitude_propagator/AttitudePropagatorNodelet",
