@@ -1009,8 +1009,13 @@ void BagPropagator::fixSummary(std::FILE* out) const {
                  static_cast<long long>(n) - static_cast<long long>(accounted));
   }
   if (config_.parameters.estimate_gyro_bias) {
+    // With its standard deviation, so that an estimate stuck at its prior shows as one.
     const Eigen::Vector3d& b = engine_->gyroBiasEstimate();
-    std::fprintf(out, "; gyro bias estimate [%g, %g, %g] rad/s", b.x(), b.y(), b.z());
+    const Eigen::Vector3d s = engine_->gyroBiasStddev();
+    std::fprintf(out,
+                 "; gyro bias estimate [%g, %g, %g] rad/s, standard deviation [%g, %g, %g] rad/s "
+                 "(prior %g)",
+                 b.x(), b.y(), b.z(), s.x(), s.y(), s.z(), config_.parameters.gyro_bias_stddev);
   }
   std::fputc('\n', out);
 }

@@ -167,6 +167,12 @@ TEST(BagFixes, LateFixesEstimateTheGyroBias) {
   EXPECT_NE(with.output.find("fixes: 96 = 95 accepted (0 as resets) + 0 rejected_gate + 1 too_old"),
             std::string::npos)
       << with.output;
+  // The summary gives the estimate with its standard deviation, that of the last state.
+  char stddev[160];
+  const Eigen::Vector3d s = toEigen(fused.back().gyro_bias_stddev);
+  std::snprintf(stddev, sizeof(stddev), "standard deviation [%g, %g, %g] rad/s", s.x(), s.y(),
+                s.z());
+  EXPECT_NE(with.output.find(stddev), std::string::npos) << stddev << "\n" << with.output;
 }
 
 // The same fixes on time and 100 ms late (recorded after the 20 rates that follow their stamps):
