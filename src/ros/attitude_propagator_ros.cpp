@@ -4,7 +4,6 @@
 #include <stdexcept>
 #include <string>
 
-#include <ros/poll_manager.h>
 #include <boost/make_shared.hpp>
 
 #include "attitude_propagator/AttitudeState.h"
@@ -45,9 +44,6 @@ AttitudePropagatorRos::AttitudePropagatorRos(ros::NodeHandle nh, ros::NodeHandle
       updater_(nh, pnh, pnh.getNamespace()),
       diagnostics_(ros::WallTime::now()) {
   refuseFeedbackLoops();
-  io_listener_ = ros::PollManager::instance()->addPollThreadListener([this] {
-    io_rounds_.ranOnce();  // on roscpp's I/O thread, once per round
-  });
   engine_ = std::make_unique<AttitudeEngine>(engineConfig(config_), *this);
   decoders_.emplace(DecoderFrames::of(config_));
   fixes_.emplace(config_, log_);
@@ -84,10 +80,7 @@ AttitudePropagatorRos::AttitudePropagatorRos(ros::NodeHandle nh, ros::NodeHandle
   logModel();
 }
 
-AttitudePropagatorRos::~AttitudePropagatorRos() {
-  // First: the I/O thread must not call into a node being destroyed (a nodelet unloaded).
-  ros::PollManager::instance()->removePollThreadListener(io_listener_);
-}
+AttitudePropagatorRos::~AttitudePropagatorRos() = default;
 
 void AttitudePropagatorRos::refuseFeedbackLoops() const {
   const std::vector<NamedTopic> outputs{{"imu/data", imu_nh_.resolveName("data")},
@@ -193,12 +186,13 @@ void AttitudePropagatorRos::guarded(const char* where, F&& f) {
   } catch (const std::exception& e) {
     ++callback_errors_;
     // The text may quote a message's strings (tf's errors quote frame ids).
-    log(LogLine{ros::console::levels::Error, "callback error",
+    // Throttled per callback: an error in one never hides another's.
+    log(LogLine{ros::console::levels::Error, std::string("callback error ") + where,
                 formatted("%s: %s (input ignored, %lu errors so far)", where,
                           logText(e.what(), 4 * kLogTextBytes).c_str(), callback_errors_)});
   } catch (...) {
     ++callback_errors_;
-    log(LogLine{ros::console::levels::Error, "callback error",
+    log(LogLine{ros::console::levels::Error, std::string("callback error ") + where,
                 formatted("%s: unknown exception (input ignored)", where)});
   }
 }

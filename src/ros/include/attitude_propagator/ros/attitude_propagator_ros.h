@@ -160,8 +160,8 @@ class AttitudePropagatorRos : public EngineSink {
   NodeConfig config_;
   // What is handed to roscpp per output since its I/O thread last came round (hand_over_bound.h).
   IoRounds io_rounds_;
+  IoRoundsListener io_listener_{io_rounds_};  // destroyed first of the two
   HandOverBound tf_bound_, imu_bound_, state_bound_;
-  boost::signals2::connection io_listener_;
   std::uint64_t outputs_dropped_at_diagnosis_ = 0;
   std::unique_ptr<AttitudeEngine> engine_;
   std::optional<OutputEncoder> encoder_;  // rebuilt when the frames or the integrator change

@@ -13,6 +13,8 @@
 #include <atomic>
 #include <cstdint>
 
+#include <boost/signals2/connection.hpp>
+
 namespace attitude_propagator {
 
 /// The I/O thread's rounds: bumped from that thread, read from the callback thread.
@@ -23,6 +25,20 @@ class IoRounds {
 
  private:
   std::atomic<std::uint64_t> rounds_{0};
+};
+
+/// roscpp's poll-thread listener that counts the rounds, for as long as it lives: removed when
+/// its owner goes, also when the owner's constructor throws after it was added (a nodelet that
+/// refuses to start must leave nothing behind that the I/O thread calls).
+class IoRoundsListener {
+ public:
+  explicit IoRoundsListener(IoRounds& rounds);
+  ~IoRoundsListener();
+  IoRoundsListener(const IoRoundsListener&) = delete;
+  IoRoundsListener& operator=(const IoRoundsListener&) = delete;
+
+ private:
+  boost::signals2::connection connection_;
 };
 
 /// One output's bound (its publisher), used from the callback thread only.
