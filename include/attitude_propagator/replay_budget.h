@@ -35,6 +35,9 @@ class ReplayBudget {
   std::size_t replayedThisSecond() const { return replayed_; }
   /// What may be replayed in the current second.
   std::size_t allowance() const;
+  /// Forgets everything: time starts again (a reset, a jump back, set_state), so a second of
+  /// the old timeline never holds the new one's replays back.
+  void clear() { *this = ReplayBudget{}; }
 
  private:
   /// Moves to the second of `stamp`: a later second starts empty, the previous one's recorded

@@ -772,6 +772,7 @@ void AttitudeEngine::clearHistory() {
   history_size_ = 0;  // the entries' storage stays for reuse
   applied_fixes_.clear();
   forgotten_fix_.reset();
+  replay_budget_.clear();
 }
 
 void AttitudeEngine::recordHistory(const ModelStep& step, bool base) {

@@ -51,6 +51,14 @@ TEST(ReplayBudget, AnEarlierStampIsCountedInTheCurrentSecond) {
   EXPECT_EQ(budget.replayedThisSecond(), 20u);
 }
 
+TEST(ReplayBudget, ClearedItStartsAgainAtAnEarlierSecond) {
+  ap::ReplayBudget budget;
+  budget.charge(at(10.5), ap::kReplayFloor);
+  EXPECT_FALSE(budget.affords(at(0.5), 1));  // time went back: still the later second's
+  budget.clear();
+  EXPECT_TRUE(budget.affords(at(0.5), ap::kReplayFloor));
+}
+
 namespace {
 
 ap::EngineConfig withFixes(ap::FixMode mode, double history) {
