@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# What the bag tools do with each shared real recording (test1.bag, ardrone_imu.bag,
-# phidgets_imu_upside_down.bag; not part of the repository), written into docs/real_data.md
+# What the bag tools do with each public real recording (test1.bag, ardrone_imu.bag,
+# phidgets_imu_upside_down.bag; not part of the repository, see docs/real_data.md), written into docs/real_data.md
 # between the markers `<!-- >>> real recordings (bench/real_data.sh) -->` and
 # `<!-- <<< real recordings -->` (the section "What the tools do with each recording"; the rest
 # of the page is left as it is). For each recording present:
@@ -19,13 +19,13 @@
 # touched. Runs the built tools (scripts/build.sh), never builds them; AP_WORKSPACE names
 # another workspace (scripts/common.sh).
 #   bash bench/real_data.sh [DATA_DIR] [--doc FILE] [--work DIR]
-# DATA_DIR defaults to $REAL_DATA, else the folder real/ of shared/data beside the checkout
-# ($REPO/../shared/data/real); --doc to docs/real_data.md; --work (the runs' outputs, kept) to
+# DATA_DIR (the folder holding the recordings) defaults to $REAL_DATA; with neither, nothing is
+# run and the page is left as it is. --doc defaults to docs/real_data.md; --work (the runs' outputs, kept) to
 # a new temporary folder.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/../scripts/common.sh"
 
-data="${REAL_DATA:-$REPO_DIR/../shared/data/real}"
+data="${REAL_DATA:-}"
 doc="$REPO_DIR/docs/real_data.md"
 work=""
 while [ $# -gt 0 ]; do

@@ -40,8 +40,8 @@ std::optional<LogLine> TfConflictWatch::onTfSeen(const tf2_msgs::TFMessage& msg,
               "(body_frame:=%s_attitude), or reverse_tf:=true for a tree rooted at the body, or "
               "publish_tf:=false%s",
               named_like_us ? "another nodelet in manager " : "", logText(publisher).c_str(),
-              child.c_str(), logText(t.header.frame_id).c_str(),
-              latched ? "/tf_static" : "/tf", parent.c_str(), child.c_str(), child.c_str(),
+              child.c_str(), logText(t.header.frame_id).c_str(), latched ? "/tf_static" : "/tf",
+              parent.c_str(), child.c_str(), child.c_str(),
               !stop     ? "; tf_conflict:=stop would stop our tf instead"
               : latched ? "; tf_conflict is stop: no tf from this node until publish_tf is "
                           "switched off and on"
