@@ -67,8 +67,10 @@ struct FixConfig {
   double stddev = 0.01;
   /// The gyro bias joins the error state (6x6: attitude error, bias error).
   bool estimate_gyro_bias = false;
-  double gyro_bias_random_walk = 1e-6;  ///< rad/s/sqrt(s): the bias' random walk
-  double gyro_bias_stddev = 2.424e-5;   ///< rad/s: prior standard deviation per axis (5 deg/h)
+  /// rad/s/sqrt(s): the bias' random walk (a MEMS gyro's, docs/parameters.md)
+  double gyro_bias_random_walk = 1e-5;
+  /// rad/s: prior standard deviation per axis (0.57 deg/s: a MEMS gyro's, docs/parameters.md)
+  double gyro_bias_stddev = 0.01;
 };
 
 /// What became of a fix (the counters say the same: EngineCounters::fixes_*).

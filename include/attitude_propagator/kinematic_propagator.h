@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 
 #include <Eigen/Geometry>
 
@@ -17,6 +18,16 @@
 
 namespace attitude_propagator {
 
+/// A silence longer than this many mean periods of the rate stream (the mean of its intervals
+/// since the anchor, the last 16 or so weighted most, once three of at least 1 us are known) is
+/// a dropout: the state is held across it (HeldGap), as across one longer than max_dt, which
+/// stays the bound in seconds. Up to
+/// kMaxGapFill lost samples in a row (kMaxGapFill + 1 periods) are bridged instead: filled in
+/// for interval averages, spanned by one step for point samples.
+constexpr double kGapPeriods = 5.5;
+/// Largest `max_gap_fill`: lost samples in a row that can be filled before a dropout.
+constexpr int kMaxGapFill = 4;
+
 struct KinematicConfig {
   /// Auto: chosen per step by KinematicAutoRule (cf4 unless the stream shows filled losses or
   /// heavy stamp jitter; auto_integrator.h).
@@ -28,9 +39,11 @@ struct KinematicConfig {
   /// Interval averages: where in its interval a sample is stamped (Mid, Start: each waits for
   /// the next sample, IntervalEnds). Point samples: End only.
   AverageStamp average_stamp = AverageStamp::End;
-  /// Interval-averaged samples: up to this many lost samples in a row are filled from the
-  /// polynomial fitted to the neighbouring means (0: never). Longer gaps follow max_dt.
-  int max_gap_fill = 4;
+  /// Interval-averaged samples: up to this many lost samples in a row (at most kMaxGapFill) are
+  /// filled from the polynomial fitted to the neighbouring means (0: never), on a stream whose
+  /// last intervals are regular (the stamps prove the loss). Longer silences are dropouts
+  /// (kGapPeriods).
+  int max_gap_fill = kMaxGapFill;
   /// Replace receipt stamps by the sensor-clock model's (SensorClockFilter).
   StampFilter stamp_filter = StampFilter::None;
   /// Gyro bias (rad/s, body frame), subtracted from every rate before integration.
@@ -113,6 +126,14 @@ class KinematicPropagator {
   StampOutcome integrate(const RateSample& sample);
   Eigen::Quaterniond restartFromAnchor(const RateWindow& window) const;
   StampOutcome fillAndIntegrate(const RateSample& sample);
+  // The stream's nominal period, the median of its last intervals since the anchor, and whether
+  // those intervals all lie within kRegularIntervals of it.
+  struct NominalPeriod {
+    double period = 0.0;
+    bool regular = false;
+  };
+  std::optional<NominalPeriod> nominalPeriod() const;  // empty before three intervals
+  bool dropout(double interval) const;
   int lostSamples(double interval) const;
   void rememberInterval(double interval);
 
@@ -140,6 +161,8 @@ class KinematicPropagator {
   std::uint64_t filled_samples_ = 0;
   std::array<double, 5> intervals_{};  // the last intervals integrated, for the nominal period
   std::size_t interval_count_ = 0;     // since the anchor
+  double mean_interval_ = 0.0;         // the mean period since the anchor, for dropouts
+  std::uint64_t mean_count_ = 0;       // intervals in it (at most kMeanIntervals)
 };
 
 }  // namespace attitude_propagator

@@ -180,10 +180,15 @@ struct EngineNote {
     PendingFull,
     Deferred,
     HeldAhead,  ///< an input further ahead of the clock than its source's others: dropped
+    /// The rates' stamps stopped fitting the stamp filter's model (SensorClockFilter::misfit()):
+    /// their receipt stamps are used until they fit again.
+    StampFilterMisfit,
   };
   Kind kind = Gap;
   std::optional<Source> source;  ///< empty: the clock
   Stamp stamp = 0;
+  /// StampFilterMisfit: the stamps' jitter and the sensor period the filter measured (s).
+  double jitter = 0.0, period = 0.0;
 };
 
 /// What a model needs from the engine that drives it. Implemented by AttitudeEngine; called

@@ -17,6 +17,10 @@
 // the filter recognises a batch from the stamps alone, gives every sample its own index, fits
 // the batch's stamp once (a repeated stamp belongs to the batch's newest sample) and measures
 // the jitter only at batch boundaries.
+//
+// A stream the model does not fit (its stamps' scatter about the line, jitter(), comparable to
+// the period: a whole number of periods can no longer be told from the jitter) gets its receipt
+// stamps back until it fits again (misfit(), docs/numerics.md §3).
 #pragma once
 
 #include <array>
@@ -31,6 +35,15 @@ namespace attitude_propagator {
 /// stamp has whole nanoseconds, and core time's round-off is a fraction of one, so two returned
 /// stamps are never published alike (docs/numerics.md §3).
 constexpr double kMinStampStep = 2e-9;
+
+/// The stamps do not fit the sensor-clock model once their jitter (one standard deviation about
+/// the line) exceeds this fraction of the period: an interval's error, sqrt(2) jitter, is then
+/// above a third of a period, and one interval in six is counted a period wrong.
+constexpr double kMisfitJitter = 0.25;
+/// A stream that did not fit is modelled again once its jitter is below this fraction of the
+/// period (a period counted wrong about once in 60000 intervals); between the two the last
+/// verdict holds, so a stream near the bound does not switch back and forth.
+constexpr double kFitAgainJitter = 0.1;
 
 /// The `stamp_filter` parameter.
 enum class StampFilter {
@@ -64,8 +77,9 @@ class SensorClockFilter {
     /// The model started again from this stamp, which is returned as it is: after a jump; after
     /// a run of rejections or of lost periods (a new rate), no earlier than the last returned.
     Restarted,
-    /// A batch of repeated stamps too large to model (Options::max_batch): the stamp is
-    /// returned as it came, and the model starts again after the first batch of a usable size.
+    /// The stamp returned as it came: a batch of repeated stamps too large to model
+    /// (Options::max_batch; the model starts again after the first batch of a usable size), or a
+    /// stream that does not fit the model (misfit(); the fit goes on, for the stream to fit again).
     Unfiltered,
   };
 
@@ -109,9 +123,23 @@ class SensorClockFilter {
   /// True while batches of repeated stamps are too large to model (Options::max_batch): the
   /// stamps are then returned unfiltered.
   bool unfiltered() const { return unfiltered_; }
+  /// True while the stream does not fit the model (jitter() above kMisfitJitter periods, until
+  /// below kFitAgainJitter): the receipt stamps are returned as they came (moved on only to
+  /// follow the stamp returned before by kMinStampStep).
+  bool misfit() const { return misfit_; }
+  /// Times the stream stopped fitting the model (each a fall back to the receipt stamps).
+  std::uint64_t fallbacks() const { return fallbacks_; }
+  /// Samples whose returned stamp differs from their receipt stamp, since construction.
+  std::uint64_t moved() const { return moved_; }
+  /// The most a returned stamp was later than its receipt stamp (s, >= 0), and earlier.
+  double largestLater() const { return largest_later_; }
+  double largestEarlier() const { return largest_earlier_; }
 
  private:
   void start(double t_receipt);
+  Result model(double t_receipt);
+  void judgeFit();
+  void account(double t_out, double t_receipt);
   Result restartAfter(double t_receipt);
   /// The smallest stamp after t, at least 1 ps later: returned stamps increase strictly.
   static double after(double t);
@@ -157,6 +185,9 @@ class SensorClockFilter {
   std::uint64_t boundary_missed_ = 0;  // periods it counted as lost otherwise
   bool batch_rejected_ = false;        // the current batch's first stamp was rejected
   bool unfiltered_ = false;
+  bool misfit_ = false;  // kept across restarts (it belongs to the stream); reset() forgets it
+  std::uint64_t fallbacks_ = 0, moved_ = 0;
+  double largest_later_ = 0.0, largest_earlier_ = 0.0;
 };
 
 /// First-order correction of the orientation for stamps the clock model moved after they were

@@ -167,6 +167,10 @@ void checkScalars(const Parameters& p) {
   requireFinite("initial_orientation_stddev", p.initial_orientation_stddev, 0.0, true, M_PI,
                 "a finite number in [0, pi] (rad)");
   requireOneOf("tf_conflict", p.tf_conflict, {"warn", "stop", "ignore"});
+  if (p.max_gap_fill < 0 || p.max_gap_fill > kMaxGapFill) {
+    fail("max_gap_fill",
+         "invalid value " + formatParameter(p.max_gap_fill) + "; accepted: an integer in [0, 4]");
+  }
   requireCount("input_queue_size", p.input_queue_size, kMaxQueueSize, "an integer in [1, 1000000]");
   requireCount("output_queue_size", p.output_queue_size, kMaxQueueSize,
                "an integer in [1, 1000000]");
@@ -224,6 +228,7 @@ void applyStreamParameters(const Parameters& p, KinematicConfig& kinematic) {
   kinematic.rate_samples = rateSamplesFromName(p.rate_samples);
   kinematic.average_stamp = averageStampFromName(p.average_stamp);
   kinematic.stamp_filter = stampFilterFromName(p.stamp_filter);
+  kinematic.max_gap_fill = p.max_gap_fill;
   kinematic.gyro_bias_B = Eigen::Vector3d(p.gyro_bias[0], p.gyro_bias[1], p.gyro_bias[2]);
 }
 

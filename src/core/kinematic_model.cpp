@@ -31,7 +31,13 @@ void KinematicModel::apply(const Input& input) {
   // time() is only defined once anchored (the window is empty before).
   const double t_before = kinematic_.anchored() ? kinematic_.time() : 0.0;
   const Eigen::Quaterniond q_before = kinematic_.orientation();
+  const SensorClockFilter* filter = kinematic_.stampFilter();
+  const std::uint64_t fallbacks = filter != nullptr ? filter->fallbacks() : 0;
   const StampOutcome outcome = kinematic_.addSample(t, input.value);
+  if (filter != nullptr && filter->fallbacks() > fallbacks) {
+    host_.note({EngineNote::StampFilterMisfit, input.source, input.stamp, filter->jitter(),
+                filter->period()});
+  }
   if (!host_.handleOutcome(outcome, input.source, input.stamp)) return;
   if (outcome == StampOutcome::Advanced) {
     // The step's own rotation drives the covariance, whatever the integrator did inside it.

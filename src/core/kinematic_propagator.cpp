@@ -43,6 +43,15 @@ Eigen::Quaterniond checkedUnit(const Eigen::Quaterniond& q, const std::string& w
 
 // A gap is taken for lost samples only when it is this close to a whole number of periods.
 constexpr double kWholePeriods = 0.25;
+// ... and only on a stream whose stamps prove it: its last intervals all within this fraction
+// of their median. Receipt stamps scattered by more than that make a whole number of periods
+// out of jitter (a long interval before a short one), not out of a loss.
+constexpr double kRegularIntervals = 0.1;
+// The mean period: a plain mean of the first intervals since the anchor, then an exponential
+// one over about this many.
+constexpr std::uint64_t kMeanIntervals = 16;
+// Intervals shorter than this (s) are stamps bunched together, not a stream's period (1 MHz).
+constexpr double kShortestInterval = 1e-6;
 
 Eigen::Vector3d checkedBias(const Eigen::Vector3d& bias_B) {
   if (!bias_B.allFinite()) {
@@ -97,7 +106,7 @@ KinematicPropagator::KinematicPropagator(const KinematicConfig& config)
       q_WB_(initial_q_WB_),
       anchor_q_WB_(initial_q_WB_),
       rate_samples_(config.rate_samples),
-      max_gap_fill_(std::clamp(config.max_gap_fill, 0, 8)),
+      max_gap_fill_(std::clamp(config.max_gap_fill, 0, kMaxGapFill)),
       stamp_filter_(config.stamp_filter),
       restamp_(clock_.memory()),
       average_stamp_(config.average_stamp),
@@ -168,6 +177,10 @@ StampOutcome KinematicPropagator::addStamped(double t, const Eigen::Vector3d& w_
     case StampClass::Forward:
       break;
   }
+  if (dropout(t - time())) {
+    anchor(t, w);  // held, as across a gap longer than max_dt
+    return StampOutcome::HeldGap;
+  }
   if (rate_samples_ == RateSamples::IntervalAverage && max_gap_fill_ > 0) {
     return fillAndIntegrate({t, w});
   }
@@ -226,6 +239,8 @@ void KinematicPropagator::anchor(double t, const Eigen::Vector3d& w_B) {
   anchored_ = true;
   steps_ = 0;
   interval_count_ = 0;
+  mean_interval_ = 0.0;
+  mean_count_ = 0;
 }
 
 // The step is committed only when finite: a finite rate can still overflow (|w| h beyond the
@@ -254,19 +269,42 @@ StampOutcome KinematicPropagator::integrate(const RateSample& sample) {
 
 void KinematicPropagator::rememberInterval(double interval) {
   intervals_[interval_count_++ % intervals_.size()] = interval;
+  // The mean period the dropouts are judged by: bursts and pauses of receipt stamps average
+  // out in it where a median of a few would follow a burst. Stamps bunched by a FIFO read
+  // before the stamp filter knows the period are not periods of the stream.
+  if (interval < kShortestInterval) return;
+  mean_count_ = std::min<std::uint64_t>(mean_count_ + 1, kMeanIntervals);
+  mean_interval_ += (interval - mean_interval_) / static_cast<double>(mean_count_);
+}
+
+std::optional<KinematicPropagator::NominalPeriod> KinematicPropagator::nominalPeriod() const {
+  const std::size_t n = std::min(interval_count_, intervals_.size());
+  if (n < 3) return std::nullopt;
+  std::array<double, 5> sorted = intervals_;
+  std::sort(sorted.begin(), sorted.begin() + n);
+  const double median = sorted[n / 2];
+  const bool regular = sorted[0] >= (1.0 - kRegularIntervals) * median &&
+                       sorted[n - 1] <= (1.0 + kRegularIntervals) * median;
+  return NominalPeriod{median, regular};
+}
+
+// A silence of more than kGapPeriods mean periods: a dropout, held rather than bridged.
+bool KinematicPropagator::dropout(double interval) const {
+  return mean_count_ >= 3 && interval > kGapPeriods * mean_interval_;
 }
 
 // Samples lost before one that arrives `interval` after the newest: m - 1 when the interval is
-// within kWholePeriods of m nominal periods (the median of the last intervals), m >= 2, and
-// m - 1 <= max_gap_fill; 0 otherwise (no drop, an irregular gap, or too long a one).
+// within kWholePeriods of m nominal periods (the median of the last intervals, which all lie
+// within kRegularIntervals of it: the stamps prove the loss), m >= 2, and m - 1 <= max_gap_fill;
+// 0 otherwise (no drop, an irregular gap or stream, or too long a gap).
 int KinematicPropagator::lostSamples(double interval) const {
-  const std::size_t n = std::min(interval_count_, intervals_.size());
-  if (n < 3) return 0;
-  const double shortest = *std::min_element(intervals_.begin(), intervals_.begin() + n);
+  if (interval_count_ < 3) return 0;
+  const double shortest = *std::min_element(
+      intervals_.begin(), intervals_.begin() + std::min(interval_count_, intervals_.size()));
   if (interval < 1.5 * shortest) return 0;  // the common case: no median needed
-  std::array<double, 5> sorted = intervals_;
-  std::nth_element(sorted.begin(), sorted.begin() + n / 2, sorted.begin() + n);
-  const double periods = interval / sorted[n / 2];
+  const std::optional<NominalPeriod> nominal = nominalPeriod();
+  if (!nominal->regular) return 0;
+  const double periods = interval / nominal->period;
   const double m = std::round(periods);
   if (m < 2.0 || m > max_gap_fill_ + 1.0 || std::abs(periods - m) > kWholePeriods) return 0;
   return static_cast<int>(m) - 1;

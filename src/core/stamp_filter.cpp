@@ -48,7 +48,7 @@ void SensorClockFilter::reset() {
   exact_interval_ = previous_interval_ = 0.0;
   run_ = 0;
   batch_ = 1;
-  run_repeats_ = repeated_ = unfiltered_ = false;
+  run_repeats_ = repeated_ = unfiltered_ = misfit_ = false;
 }
 
 double SensorClockFilter::jitter() const { return std::sqrt(variance_); }
@@ -81,6 +81,44 @@ double spacingTolerance(double t) {
 }  // namespace
 
 SensorClockFilter::Result SensorClockFilter::filter(double t_receipt) {
+  const double returned_before = last_output_;
+  // A model that did not fit may have learned a wrong period (periods counted wrong): it starts
+  // afresh every memory's length of samples, so that a stream that fits again is learned anew.
+  if (misfit_ && static_cast<double>(samples_) >= options_.memory) samples_ = 0;
+  Result result = model(t_receipt);
+  judgeFit();
+  if (misfit_) {
+    // The receipt stamp as it came, unless it does not follow the last one returned by
+    // kMinStampStep (a burst a nanosecond apart; the first receipt stamps after the line's):
+    // returned stamps still increase, so no sample is dropped as stale for it.
+    last_output_ = std::max(t_receipt, after(returned_before));
+    result = {last_output_, Verdict::Unfiltered, result.missed};
+  }
+  account(result.t, t_receipt);
+  return result;
+}
+
+// The verdict changes only once the jitter is measured (warm) and a period known; a restart
+// keeps it (a stream that does not fit restarts often).
+void SensorClockFilter::judgeFit() {
+  if (!warm_ || !(slope_ > 0.0)) return;
+  const double jitter_periods = jitter() / slope_;
+  if (!misfit_ && jitter_periods > kMisfitJitter) {
+    misfit_ = true;
+    ++fallbacks_;
+  } else if (misfit_ && jitter_periods < kFitAgainJitter) {
+    misfit_ = false;
+  }
+}
+
+void SensorClockFilter::account(double t_out, double t_receipt) {
+  if (t_out == t_receipt) return;
+  ++moved_;
+  largest_later_ = std::max(largest_later_, t_out - t_receipt);
+  largest_earlier_ = std::max(largest_earlier_, t_receipt - t_out);
+}
+
+SensorClockFilter::Result SensorClockFilter::model(double t_receipt) {
   recent_[recent_count_++ % recent_.size()] = t_receipt;
   // FIFO batches, from the stamps alone: a stamp equal to the one before is the same read of
   // the FIFO; a stamp exactly the batch spacing after the one before is the same read too

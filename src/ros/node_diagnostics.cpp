@@ -63,6 +63,14 @@ void NodeDiagnostics::diagnose(const ros::WallTime& now, const NodeConfig& confi
                          "followed, the other ignored",
                          apart, sources.c_str());
   }
+  const KinematicPropagator* kinematic = engine.kinematic();
+  const SensorClockFilter* filter = kinematic != nullptr ? kinematic->stampFilter() : nullptr;
+  if (filter != nullptr && filter->misfit()) {
+    status.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN,
+                         "stamp_filter: the stamps do not fit one sensor period (jitter %.3g ms, "
+                         "period %.3g ms): their receipt stamps are used",
+                         filter->jitter() * 1e3, filter->period() * 1e3);
+  }
   const EngineState state = engine.state();
   status.add("model", engine.modelName());
   status.add("integrator", integratorName(engine.integrator()));
@@ -114,10 +122,10 @@ void NodeDiagnostics::diagnose(const ros::WallTime& now, const NodeConfig& confi
   forEachAidingCounter(
       c, [&status](const std::string& name, std::uint64_t value) { status.add(name, value); });
   status.add("tilt_known", engine.tiltKnown());
-  if (const KinematicPropagator* k = engine.kinematic()) {
+  if (const KinematicPropagator* k = kinematic) {
     status.add("rate_samples", config.parameters.rate_samples);
     status.add("filled_samples", k->filledSamples());
-    if (const SensorClockFilter* f = k->stampFilter()) {
+    if (const SensorClockFilter* f = filter) {
       status.add("stamp_filter_period_s", f->period());
       status.add("stamp_filter_offset_s", f->offset());
       status.add("stamp_filter_jitter_s", f->jitter());
@@ -126,6 +134,11 @@ void NodeDiagnostics::diagnose(const ros::WallTime& now, const NodeConfig& confi
       status.add("stamp_filter_restarts", f->restarts());
       status.add("stamp_batch", f->batchSize());
       status.add("stamp_filter_unfiltered", f->unfiltered());
+      status.add("stamp_filter_misfit", f->misfit());
+      status.add("stamp_filter_fallbacks", f->fallbacks());
+      status.add("stamp_filter_moved", f->moved());
+      status.add("stamp_filter_largest_later_s", f->largestLater());
+      status.add("stamp_filter_largest_earlier_s", f->largestEarlier());
     }
   }
   status.add("norm_error", state.norm_error);

@@ -2,6 +2,9 @@
 
 #include <string>
 
+#include "attitude_propagator/kinematic_propagator.h"
+#include "attitude_propagator/stamp_filter.h"
+
 namespace attitude_propagator {
 
 namespace {
@@ -12,9 +15,9 @@ std::string noteText(const EngineNote& note, const EngineCounters& c, const Para
   switch (note.kind) {
     case EngineNote::Gap:
       return formatted(
-          "%s: gap longer than max_dt = %g s before %.6f: not integrated across, state held "
-          "(%lu gaps so far)",
-          what, p.max_dt, t, c.gaps);
+          "%s: gap longer than max_dt = %g s or %g periods of the stream before %.6f: not "
+          "integrated across, state held (%lu gaps so far)",
+          what, p.max_dt, kGapPeriods, t, c.gaps);
     case EngineNote::StampsJumpedBack:
       return formatted(
           "%s: stamps jumped back to %.3f and went on from there (looped bag, restarted "
@@ -65,6 +68,12 @@ std::string noteText(const EngineNote& note, const EngineCounters& c, const Para
           "%s: stamp %.6f further ahead of ROS time than its stream by more than %g s: dropped "
           "until %d in a row confirm it (%lu so far)",
           what, t, p.time_jump_threshold, kJumpConfirmation, c.held_ahead);
+    case EngineNote::StampFilterMisfit:
+      return formatted(
+          "%s: the stamps do not fit one sensor period (stamp jitter %.3g ms against a period of "
+          "%.3g ms, more than %g periods): stamp_filter uses the receipt stamps until they fit "
+          "again (below %g periods); diagnostics stamp_filter_misfit",
+          what, note.jitter * 1e3, note.period * 1e3, kMisfitJitter, kFitAgainJitter);
     case EngineNote::Deferred:
       return formatted(
           "publishing fell behind ROS time at %.3f s: the rest of the grid follows on the next "

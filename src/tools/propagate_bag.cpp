@@ -41,6 +41,7 @@
 #include "aiding_summary.h"
 #include "attitude_propagator/AttitudeState.h"
 #include "attitude_propagator/engine.h"
+#include "attitude_propagator/kinematic_propagator.h"
 #include "attitude_propagator/messages/conversions.h"
 #include "attitude_propagator/messages/fix_decoder.h"
 #include "attitude_propagator/messages/frame_source.h"
@@ -509,6 +510,7 @@ class BagPropagator : public EngineSink {
   void onFix(const rosbag::MessageInstance& m);
   /// The account of the fixes read (the engine's fixes_* counters and the decoder's refusals).
   void fixSummary(std::FILE* out) const;
+  void stampSummary(std::FILE* out, const KinematicPropagator& k) const;
   /// Prints the decoders' warnings of frame ids with a leading '/', once per frame.
   void warnFrames();
   /// Keeps the first frame whose rates had no transform to the body (the advice at the end).
@@ -966,6 +968,7 @@ void BagPropagator::summary(std::FILE* out, bool written) const {
                  static_cast<unsigned long long>(pending),
                  static_cast<unsigned long long>(c.deferred_ticks));
   }
+  if (const KinematicPropagator* k = engine_->kinematic()) stampSummary(out, *k);
   if (!bias_.empty()) {
     std::fprintf(out,
                  "  gyro bias: %llu used, %llu refused (non-finite, too large, another frame, "
@@ -979,6 +982,25 @@ void BagPropagator::summary(std::FILE* out, bool written) const {
   for (const auto& [topic, count] : read_) mag_read += sameTopic(topic, mag_) ? count : 0;
   printAidingSummary(out, c, config_.parameters.use_accel, config_.parameters.use_mag, accel_read_,
                      mag_read);
+}
+
+// What the kinematic model did to the rates' stamps: the stamp filter's moves and fallbacks,
+// the means filled in for lost samples (the gaps held are on the first line).
+void BagPropagator::stampSummary(std::FILE* out, const KinematicPropagator& k) const {
+  auto u = [](std::uint64_t x) { return static_cast<unsigned long long>(x); };
+  if (const SensorClockFilter* f = k.stampFilter()) {
+    std::fprintf(out,
+                 "  stamp filter: %llu stamps moved (at most %.3f ms later and %.3f ms earlier "
+                 "than received), %llu fallbacks to the receipt stamps (%s; jitter %.3g ms, "
+                 "period %.3g ms), %llu rejected, %llu restarts\n",
+                 u(f->moved()), f->largestLater() * 1e3, f->largestEarlier() * 1e3,
+                 u(f->fallbacks()), f->misfit() ? "in one at the end" : "fitting at the end",
+                 f->jitter() * 1e3, f->period() * 1e3, u(f->rejected()), u(f->restarts()));
+  }
+  if (k.rateSamples() == RateSamples::IntervalAverage) {
+    std::fprintf(out, "  interval averages: %llu means filled in for lost samples (max_gap_fill %d)\n",
+                 u(k.filledSamples()), config_.parameters.max_gap_fill);
+  }
 }
 
 void BagPropagator::fixSummary(std::FILE* out) const {

@@ -613,8 +613,14 @@ TEST(FixHistory, ParametersOutsideTheirRangesRefuseStart) {
   const ap::EngineConfig c = ap::engineConfig(ap::validateParameters(p));
   EXPECT_EQ(c.fixes.mode, ap::FixMode::Reset);
   EXPECT_TRUE(c.fixes.estimate_gyro_bias);
-  EXPECT_DOUBLE_EQ(c.fixes.gyro_bias_stddev, 2.424e-5);
-  EXPECT_NEAR(c.fixes.gyro_bias_stddev / kDegPerHour, 5.0, 0.001);
+  // MEMS-sized defaults (docs/parameters.md): a prior of 0.57 deg/s covers the zero-rate offsets
+  // MEMS gyros specify (0.5 to 5 deg/s before, well under 1 deg/s after a calibration at rest).
+  EXPECT_DOUBLE_EQ(c.fixes.gyro_bias_stddev, 0.01);
+  EXPECT_NEAR(c.fixes.gyro_bias_stddev * 180.0 / M_PI, 0.573, 0.001);
+  EXPECT_DOUBLE_EQ(c.fixes.gyro_bias_random_walk, 1e-5);
+  // The engine's own defaults are the parameters': one default, whichever way it is built.
+  EXPECT_DOUBLE_EQ(ap::FixConfig{}.gyro_bias_stddev, c.fixes.gyro_bias_stddev);
+  EXPECT_DOUBLE_EQ(ap::FixConfig{}.gyro_bias_random_walk, c.fixes.gyro_bias_random_walk);
 }
 
 // The cost of a replay: a fix 1 s late on a 200 Hz stream replays 200 inputs. Printed, not

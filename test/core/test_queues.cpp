@@ -429,6 +429,8 @@ TEST(Queues, InputLagIsAMeanOverAbout32Inputs) {
 
 // ---- Gap filling of averaged samples (docs/real_streams.md: 2 <= m <= 5) ---------------------
 
+// Two to five periods (one to four lost) are filled; six and seven, past kGapPeriods (5.5), are
+// dropouts: held, nothing filled.
 TEST(Queues, GapsOfTwoToFivePeriodsAreFilled) {
   ap::KinematicConfig config;
   config.rate_samples = ap::RateSamples::IntervalAverage;
@@ -443,7 +445,7 @@ TEST(Queues, GapsOfTwoToFivePeriodsAreFilled) {
   for (int i = 0; i < 10; ++i) feed(1);
   std::uint64_t filled = k.filledSamples();
   for (int m = 2; m <= 7; ++m) {
-    EXPECT_EQ(feed(m), ap::StampOutcome::Advanced);
+    EXPECT_EQ(feed(m), m <= 5 ? ap::StampOutcome::Advanced : ap::StampOutcome::HeldGap) << m;
     EXPECT_EQ(k.filledSamples() - filled, m <= 5 ? static_cast<std::uint64_t>(m - 1) : 0u) << m;
     filled = k.filledSamples();
     for (int i = 0; i < 6; ++i) feed(1);  // the nominal period again

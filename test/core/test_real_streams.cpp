@@ -302,6 +302,82 @@ TEST(GapFill, LongGapsAreNotFilled) {
   EXPECT_EQ(propagator.filledSamples(), 2u);
 }
 
+// A loss is filled only where the stamps prove it: the last intervals within kRegularIntervals
+// (10 %) of their median. Intervals 9 % off the period still prove a loss of one sample two
+// periods on; 11 % off, the same interval is taken for jitter and not filled.
+TEST(GapFill, OnlyWhereTheStampsProveTheLoss) {
+  for (const double spread : {0.09, 0.11}) {
+    ap::KinematicPropagator propagator(configFor(Integrator::Cf4, RateSamples::IntervalAverage));
+    const Eigen::Vector3d w(0.0, 0.0, 1.0);
+    double t = 0.0;
+    propagator.addSample(t, w);
+    for (int k = 1; k <= 5; ++k) {
+      t += 0.01 * (k == 3 ? 1.0 + spread : 1.0);
+      propagator.addSample(t, w);
+    }
+    propagator.addSample(t + 0.02, w);  // one lost, two periods on
+    EXPECT_EQ(propagator.filledSamples(), spread < 0.1 ? 1u : 0u) << spread;
+  }
+}
+
+// Receipt stamps of a 180 Hz stream of means scattered by a third of the period: their long
+// intervals (before a short one) come close to whole numbers of periods by chance; none is a
+// loss, none is filled, and the rotation of a constant rate is kept exactly.
+TEST(GapFill, JitterIsNeverFilled) {
+  ap::KinematicPropagator propagator(configFor(Integrator::Exp, RateSamples::IntervalAverage));
+  const Eigen::Vector3d w(0.3, -0.2, 1.0);
+  std::uint64_t state = 11;
+  double last = 0.0;
+  for (int k = 0; k < 20000; ++k) {
+    const double t = std::max(k / 180.0 + 0.33 / 180.0 * normalRandom(state), last + 1e-6);
+    propagator.addSample(t, w);
+    last = t;
+  }
+  EXPECT_EQ(propagator.filledSamples(), 0u);
+}
+
+// Dropouts are relative to the stream: with three intervals known, a silence of more than
+// kGapPeriods (5.5) nominal periods is held (HeldGap: the state at the new stamp is the one
+// before the silence), a silence of 5.4 periods is bridged (integrated across); with two
+// intervals known, no period is known yet and the silence is bridged. max_dt (1 s) is far.
+TEST(Dropouts, ASilenceOfMoreThanFiveAndAHalfPeriodsIsHeld) {
+  for (const int known : {2, 3}) {
+    for (const double periods : {5.4, 5.6}) {
+      ap::KinematicPropagator propagator(configFor(Integrator::Exp, RateSamples::Instantaneous));
+      const Eigen::Vector3d w(0.0, 0.0, 1.0);
+      const Eigen::Quaterniond q0 = ConingMotion().attitude(0.0);
+      double t = 0.0;
+      for (int k = 0; k <= known; ++k, t += 0.01) propagator.addSample(t, w);
+      t -= 0.01;
+      const double after = t + periods * 0.01;
+      const bool held = known >= 3 && periods > ap::kGapPeriods;
+      EXPECT_EQ(propagator.addSample(after, w),
+                held ? ap::StampOutcome::HeldGap : ap::StampOutcome::Advanced)
+          << known << " intervals, " << periods << " periods";
+      // exp holds the rate of the sample opening the interval: a constant rate exactly.
+      const double turned = held ? t : after;
+      EXPECT_LT(ap::rotationAngle(propagator.orientation(),
+                                  q0 * ap::expMap(Eigen::Vector3d(0.0, 0.0, turned))),
+                1e-12)
+          << known << " intervals, " << periods << " periods";
+    }
+  }
+}
+
+// The quadrotor's case (47 Hz, a dropout of 0.999 s, under max_dt): held, not integrated
+// across with the rate after it; the intervals after the dropout are learned afresh.
+TEST(Dropouts, ASecondLongDropoutUnderMaxDtIsHeld) {
+  ap::KinematicPropagator propagator(configFor(Integrator::Cf4, RateSamples::Instantaneous));
+  const Eigen::Vector3d w(0.0, 0.0, 0.5);
+  double t = 0.0;
+  for (int k = 0; k < 100; ++k, t += 1.0 / 47) propagator.addSample(t, w);
+  const Eigen::Quaterniond before = propagator.orientation();
+  EXPECT_EQ(propagator.addSample(t - 1.0 / 47 + 0.999, Eigen::Vector3d(0.0, 0.0, 5.0)),
+            ap::StampOutcome::HeldGap);
+  EXPECT_LT(ap::rotationAngle(propagator.orientation(), before), 1e-15);
+  EXPECT_EQ(propagator.steps(), 0u);
+}
+
 TEST(GyroBias, IsSubtractedBeforeIntegration) {
   const Eigen::Vector3d bias(0.01, -0.02, 0.005), w(0.3, 0.0, -0.2);
   ap::KinematicConfig config = configFor(Integrator::Exp, RateSamples::Instantaneous);

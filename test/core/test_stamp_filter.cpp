@@ -449,6 +449,78 @@ TEST(SensorClockFilter, FallsBackToUnfilteredStampsOnBatchesTooLarge) {
   }
 }
 
+namespace {
+
+// 50 Hz, received after a latency whose spread is `sigma` periods (absolute normal draws, so
+// that no sample is received before it is taken), in order.
+std::vector<double> latentStamps(double sigma, int count, std::uint64_t seed, double t0) {
+  const double period = 0.02;
+  std::uint64_t state = seed;
+  std::vector<double> stamps;
+  for (int n = 0; n < count; ++n) {
+    const double t = t0 + period * n + std::abs(sigma * period * normalRandom(state));
+    stamps.push_back(stamps.empty() ? t : std::max(t, stamps.back() + 1e-6));
+  }
+  return stamps;
+}
+
+}  // namespace
+
+// A stream the model does not fit (latency spread 0.6 periods: the quadrotor's receipt stamps)
+// gets its receipt stamps back once the jitter is measured (warm-up), says so once (misfit,
+// one fallback), and the moves before that are counted; the same stream with a spread of 0.02
+// periods fits and never falls back. Stamps that fit again are modelled again.
+TEST(SensorClockFilter, FallsBackToReceiptStampsWhenTheStreamDoesNotFit) {
+  ap::SensorClockFilter filter;
+  const std::vector<double> stamps = latentStamps(0.6, 3000, 5, kT0);
+  std::size_t first_unfiltered = stamps.size();
+  for (std::size_t n = 0; n < stamps.size(); ++n) {
+    const auto r = filter.filter(stamps[n]);
+    if (r.verdict == Verdict::Unfiltered && first_unfiltered == stamps.size()) {
+      first_unfiltered = n;
+    }
+    if (n > first_unfiltered) {
+      EXPECT_EQ(r.verdict, Verdict::Unfiltered) << n;
+      EXPECT_EQ(r.t, stamps[n]) << n;
+    }
+  }
+  EXPECT_LE(first_unfiltered, 50u);
+  EXPECT_TRUE(filter.misfit());
+  EXPECT_EQ(filter.fallbacks(), 1u);
+  EXPECT_GT(filter.jitter(), ap::kMisfitJitter * filter.period());
+  EXPECT_LE(filter.moved(), first_unfiltered);
+  // The same sensor, received with little spread, after a second: modelled again.
+  for (double t : latentStamps(0.02, 3000, 6, stamps.back() + 1.0)) filter.filter(t);
+  EXPECT_FALSE(filter.misfit());
+  EXPECT_EQ(filter.fallbacks(), 1u);
+  EXPECT_EQ(filter.filter(stamps.back() + 1.0 + 3000 * 0.02).verdict, Verdict::Modelled);
+
+  ap::SensorClockFilter fitting;
+  for (double t : latentStamps(0.02, 3000, 7, kT0)) fitting.filter(t);
+  EXPECT_FALSE(fitting.misfit());
+  EXPECT_EQ(fitting.fallbacks(), 0u);
+  EXPECT_LT(fitting.jitter(), ap::kFitAgainJitter * fitting.period());
+}
+
+// The account of moves: a stamp returned as it came is not moved; the largest moves later and
+// earlier are the largest differences seen, each on its own side.
+TEST(SensorClockFilter, CountsItsMovesOnEachSide) {
+  ap::SensorClockFilter filter;
+  std::uint64_t moved = 0;
+  double later = 0.0, earlier = 0.0;
+  for (double t : latentStamps(0.05, 2000, 8, kT0)) {
+    const double d = filter.filter(t).t - t;
+    moved += d != 0.0;
+    later = std::max(later, d);
+    earlier = std::max(earlier, -d);
+  }
+  EXPECT_EQ(filter.moved(), moved);
+  EXPECT_EQ(filter.largestLater(), later);
+  EXPECT_EQ(filter.largestEarlier(), earlier);
+  EXPECT_GT(later, 0.0);
+  EXPECT_GT(earlier, 0.0);
+}
+
 // reset() forgets the batches with the model: single samples after it are batches of one.
 TEST(SensorClockFilter, ResetForgetsTheBatchSize) {
   ap::SensorClockFilter filter;

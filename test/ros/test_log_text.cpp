@@ -91,7 +91,7 @@ constexpr ap::EngineNote::Kind kAllNotes[] = {
     ap::EngineNote::Stale,       ap::EngineNote::NonFinite,
     ap::EngineNote::OutOfRange,  ap::EngineNote::FailedStep,
     ap::EngineNote::PendingFull, ap::EngineNote::Deferred,
-    ap::EngineNote::HeldAhead};
+    ap::EngineNote::HeldAhead,   ap::EngineNote::StampFilterMisfit};
 
 }  // namespace
 
@@ -99,8 +99,8 @@ TEST(NoteText, EachKindCountsItsOwnCounter) {
   const std::string imu = ap::sourceName(ap::Source::Imu);
   EXPECT_EQ(noteLine(ap::EngineNote::Gap),
             imu +
-                ": gap longer than max_dt = 0.25 s before 1500000000.250000: not integrated "
-                "across, state held (11 gaps so far)");
+                ": gap longer than max_dt = 0.25 s or 5.5 periods of the stream before "
+                "1500000000.250000: not integrated across, state held (11 gaps so far)");
   EXPECT_EQ(noteLine(ap::EngineNote::StampsJumpedBack),
             imu +
                 ": stamps jumped back to 1500000000.250 and went on from there (looped bag, "
@@ -131,6 +131,15 @@ TEST(NoteText, EachKindCountsItsOwnCounter) {
   EXPECT_EQ(noteLine(ap::EngineNote::Deferred),
             "publishing fell behind ROS time at 1500000000.250 s: the rest of the grid follows "
             "on the next tick (20 so far)");
+  // The misfit names the figures the filter measured and the bounds it judged them by.
+  ap::EngineNote misfit = noteOf(ap::EngineNote::StampFilterMisfit);
+  misfit.jitter = 0.0375;
+  misfit.period = 0.02;
+  EXPECT_EQ(ap::noteText(misfit, distinctCounters(), ap::Parameters{}, false).text,
+            imu +
+                ": the stamps do not fit one sensor period (stamp jitter 37.5 ms against a "
+                "period of 20 ms, more than 0.25 periods): stamp_filter uses the receipt stamps "
+                "until they fit again (below 0.1 periods); diagnostics stamp_filter_misfit");
   EXPECT_EQ(noteLine(ap::EngineNote::HeldAhead),
             imu +
                 ": stamp 1500000000.250000 further ahead of ROS time than its stream by more "

@@ -66,6 +66,7 @@ struct Parameters {
   std::string rate_samples = "instantaneous";
   std::string average_stamp = "end";
   std::string stamp_filter = "none";
+  int max_gap_fill = 4;
   std::vector<double> gyro_bias{0.0, 0.0, 0.0};
   std::string fix_mode = "fuse";
   double fix_history = 1.0;
@@ -73,8 +74,8 @@ struct Parameters {
   double fix_stddev = 0.01;
   std::string fix_frame;  // empty: body_frame
   bool estimate_gyro_bias = false;
-  double gyro_bias_random_walk = 1e-6;
-  double gyro_bias_stddev = 2.424e-5;  // 5 deg/h
+  double gyro_bias_random_walk = 1e-5;
+  double gyro_bias_stddev = 0.01;  // 0.57 deg/s: a MEMS gyro (docs/parameters.md)
   bool use_accel = false;
   double accel_stddev = 0.1;
   bool use_mag = false;
@@ -164,6 +165,10 @@ void forEachParameter(P& p, F&& f) {
     "interval ends)");
   f("stamp_filter", p.stamp_filter, "",
     "`none` or `sensor_clock`: replace receipt stamps by a fitted sensor clock");
+  f("max_gap_fill", p.max_gap_fill, "samples",
+    "`interval_average`: lost samples in a row filled in from the neighbouring means when the "
+    "stamps prove the loss (regular intervals, a whole number of periods); 0: never; in [0, 4] "
+    "(a silence of more than 5.5 periods is a dropout, held)");
   f("gyro_bias", p.gyro_bias, "rad/s", "subtracted from every rate, [x, y, z] in the body frame");
   f("fix_mode", p.fix_mode, "",
     "what an absolute attitude fix does at its stamp: `fuse` (EKF update behind `fix_gate`) or "
@@ -182,11 +187,11 @@ void forEachParameter(P& p, F&& f) {
   f("estimate_gyro_bias", p.estimate_gyro_bias, "",
     "kinematic model: estimate the gyro bias from the fixes (subtracted on top of `gyro_bias`)");
   f("gyro_bias_random_walk", p.gyro_bias_random_walk, "rad/s/√s",
-    "`estimate_gyro_bias`: random walk of the bias; in [0, 1000]");
+    "`estimate_gyro_bias`: random walk of the bias (a MEMS gyro's; 1e-6 or less for a tactical "
+    "one); in [0, 1000]");
   f("gyro_bias_stddev", p.gyro_bias_stddev, "rad/s",
-    "`estimate_gyro_bias`: prior standard deviation of the bias per axis (5 °/h), and the ceiling "
-    "of its estimate's; "
-    "in [0, 10]");
+    "`estimate_gyro_bias`: prior standard deviation of the bias per axis (0.57 °/s, a MEMS "
+    "gyro's; 2.4e-5 for a tactical one), and the ceiling of its estimate's; in [0, 10]");
   f("use_accel", p.use_accel, "",
     "kinematic model, `rate_input: imu`: the IMU's `linear_acceleration` measures the gravity "
     "direction (roll and pitch); start-up only");
