@@ -715,6 +715,47 @@ TEST(Summary, RateChangesRepeatNoImuStampWithTheStampFilter) {
   EXPECT_EQ(repeated, 0u) << r.output;
 }
 
+// The quadrotor's stream: 50 Hz received with a latency spread of 0.6 periods (bursts and
+// pauses), and a dropout of 0.999 s, under max_dt. With the stamp filter on, the summary says it
+// fell back to the receipt stamps once and counts the dropout as a gap (held, not integrated
+// across: kGapPeriods); the attitude keeps no rotation from across it (the rate is 0.3 rad/s
+// before and 3 rad/s after, so integrating across would add 3 rad).
+TEST(Summary, StampFilterFallbackAndDropoutAreReported) {
+  TempDir dir;
+  const double period = 0.02;
+  {
+    rosbag::Bag bag(dir.file("in.bag"), rosbag::bagmode::Write);
+    std::mt19937 random(5);
+    std::normal_distribution<double> normal;
+    Stamp receipt = 0;
+    for (long k = 0; k < 1500; ++k) {
+      const double t = period * k + (k >= 750 ? 0.999 - period : 0.0);
+      receipt = std::max(receipt + 1000, stampAt(t + 0.6 * period * std::abs(normal(random))));
+      sensor_msgs::Imu m;
+      m.header.stamp = rosTime(receipt);
+      m.header.frame_id = "base_link";
+      m.angular_velocity.z = k < 750 ? 0.3 : 3.0;
+      bag.write("/imu/data_raw", m.header.stamp, m);
+    }
+  }
+  const RunResult r = run(kPropagate + " " + dir.file("in.bag") + " --csv " +
+                          dir.file("out.csv") + " --set stamp_filter=sensor_clock --no-progress");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find(" 1 gaps,"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("1 fallbacks to the receipt stamps (in one at the end"),
+            std::string::npos)
+      << r.output;
+  // Yaw at the first state after the dropout: what the rates before it turned, nothing more.
+  const auto rows = readCsv(dir.file("out.csv"));
+  ASSERT_EQ(rows.size(), 1500u) << r.output;
+  auto q = [&rows](std::size_t k) {
+    return Eigen::Quaterniond(std::stod(field(rows[k], "qw")), std::stod(field(rows[k], "qx")),
+                              std::stod(field(rows[k], "qy")), std::stod(field(rows[k], "qz")));
+  };
+  EXPECT_GT(std::stod(field(rows[750], "stamp")) - std::stod(field(rows[749], "stamp")), 0.9);
+  EXPECT_LT(ap::rotationAngle(q(749), q(750)), 1e-12) << r.output;
+}
+
 // ---------------------------------------------------------------------------------------------
 // --version, --dry-run, --help
 // ---------------------------------------------------------------------------------------------

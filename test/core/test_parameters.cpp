@@ -429,6 +429,26 @@ TEST(Parameters, QueueSizesAreCountsWithinTheirDocumentedRange) {
   }
 }
 
+// max_gap_fill: lost samples in a row filled, [0, 4] (docs/parameters.md), reaching the kinematic
+// model as given; -1 and 5 are refused naming the range.
+TEST(Parameters, MaxGapFillIsACountWithinItsDocumentedRange) {
+  for (const int v : {0, 4}) {
+    ap::Parameters p;
+    p.max_gap_fill = v;
+    EXPECT_EQ(ap::engineConfig(ap::validateParameters(p)).kinematic.max_gap_fill, v);
+  }
+  for (const int v : {-1, 5}) {
+    ap::Parameters p;
+    p.max_gap_fill = v;
+    expectRefused(p, "max_gap_fill");
+    try {
+      ap::validateParameters(p);
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("an integer in [0, 4]"), std::string::npos) << e.what();
+    }
+  }
+}
+
 // The table in docs/parameters.md is generated from the struct; this fails when they drift
 // apart and prints the table to paste.
 TEST(Parameters, DocsTableMatchesTheStruct) {

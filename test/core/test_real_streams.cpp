@@ -364,6 +364,20 @@ TEST(Dropouts, ASilenceOfMoreThanFiveAndAHalfPeriodsIsHeld) {
   }
 }
 
+// After a dropout the stream's period is learned afresh: a sensor that resumes at a tenth of its
+// rate loses the dropout only, and its new intervals (ten old periods each) are integrated.
+TEST(Dropouts, ThePeriodIsLearnedAfreshAfterOne) {
+  ap::KinematicPropagator propagator(configFor(Integrator::Exp, RateSamples::Instantaneous));
+  const Eigen::Vector3d w(0.0, 0.0, 1.0);
+  double t = 0.0;
+  for (int k = 0; k < 50; ++k, t += 0.01) propagator.addSample(t, w);
+  EXPECT_EQ(propagator.addSample(t + 0.2, w), ap::StampOutcome::HeldGap);
+  t += 0.2;
+  for (int k = 1; k <= 10; ++k) {
+    EXPECT_EQ(propagator.addSample(t + 0.1 * k, w), ap::StampOutcome::Advanced) << k;
+  }
+}
+
 // The quadrotor's case (47 Hz, a dropout of 0.999 s, under max_dt): held, not integrated
 // across with the rate after it; the intervals after the dropout are learned afresh.
 TEST(Dropouts, ASecondLongDropoutUnderMaxDtIsHeld) {
@@ -452,7 +466,7 @@ FifoRun runFifo(const std::vector<Sample>& samples, std::size_t settle) {
 
 }  // namespace
 
-// FIFO batches of 10 and 20 at 200 and 400 Hz, stamps repeated or spaced by the period, 0.2 ms
+// FIFO batches of 10, 20 and 24 at 200 and 400 Hz, stamps repeated or spaced by the period, 0.2 ms
 // of latency jitter per read: every sample is integrated (none stale), the filter neither
 // rejects nor restarts at the batch boundaries, and once settled (the filter's memory, 1000
 // samples) the error is within 2 sqrt(N) of the per-sample stream's with the same latency
@@ -460,7 +474,7 @@ FifoRun runFifo(const std::vector<Sample>& samples, std::size_t settle) {
 TEST(FifoBatches, EverySampleIntegratedAndTheErrorWithinTwoRootNOfPerSampleJitter) {
   const double sigma = 2e-4;
   for (double hz : {200.0, 400.0}) {
-    for (int batch : {10, 20}) {
+    for (int batch : {10, 20, 24}) {
       for (Fifo form : {Fifo::Repeated, Fifo::Spaced}) {
         const char* name = form == Fifo::Repeated ? "repeated" : "spaced";
         double log_ratio = 0.0;

@@ -191,7 +191,8 @@ void forEachParameter(P& p, F&& f) {
     "one); in [0, 1000]");
   f("gyro_bias_stddev", p.gyro_bias_stddev, "rad/s",
     "`estimate_gyro_bias`: prior standard deviation of the bias per axis (0.57 °/s, a MEMS "
-    "gyro's; 2.4e-5 for a tactical one), and the ceiling of its estimate's; in [0, 10]");
+    "gyro's; 2.4e-5 for a tactical one; the random walk grows it further while nothing "
+    "measures the bias); in [0, 10]");
   f("use_accel", p.use_accel, "",
     "kinematic model, `rate_input: imu`: the IMU's `linear_acceleration` measures the gravity "
     "direction (roll and pitch); start-up only");
