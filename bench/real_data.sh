@@ -124,9 +124,9 @@ for entry in "${present[@]}"; do
     echo '```'
     echo
     if grep -qi 'stamp\|filter' filter.log; then
-      filter_said="The summary reports the filter (above)."
+      filter_said="The summary reports what the filter did (above); from the two CSVs,"
     else
-      filter_said="The summary says nothing of what the filter did; from the two CSVs:"
+      filter_said="The summary says nothing of what the filter did; from the two CSVs,"
     fi
     /usr/bin/python3 - "$name.csv" "${name}_sensor_clock.csv" "$filter_said" filter.txt <<'PY'
 import csv
@@ -148,13 +148,13 @@ median = sorted(intervals)[len(intervals) // 2]
 moved = sorted(abs(a[0] - b[0]) for a, b in zip(plain, filtered))
 dot = min(1.0, abs(sum(x * y for x, y in zip(plain[-1][1], filtered[-1][1]))))
 longest = max(intervals)
-text = ("Gaps in the summary are intervals longer than `max_dt` (1 s by default), over which the "
-        "state is held: the states' stamps are %.2f ms apart at the median, %d intervals of "
-        "%d are longer than 2.5 of those, the longest %.3f s, %s. %s the filter moved the stamps "
-        "by %.3f ms at the median and %.1f ms at most (%d states in both), and the final "
-        "attitudes are %.3f° apart." %
+text = ("Gaps in the summary are intervals longer than `max_dt` (1 s by default) or than 5.5 "
+        "mean periods of the stream (a dropout), over which the state is held: the states' "
+        "stamps are %.2f ms apart at the median, %d intervals of %d are longer than 2.5 of "
+        "those, the longest %.3f s. %s the filter moved the stamps by %.3f ms at the median and "
+        "%.1f ms at most (%d states in both), and the final attitudes are %.3f° apart." %
         (1e3 * median, sum(1 for d in intervals if d > 2.5 * median), len(intervals), longest,
-         "all integrated across" if longest <= 1.0 else "the longer ones held", sys.argv[3],
+         sys.argv[3],
          1e3 * moved[len(moved) // 2], 1e3 * moved[-1], len(plain),
          math.degrees(2.0 * math.acos(dot))))
 # A number and its unit stay on one line.

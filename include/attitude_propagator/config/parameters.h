@@ -137,7 +137,9 @@ void forEachParameter(P& p, F&& f) {
   f("max_step", p.max_step, "s",
     "dynamic model: largest integration step, in [1e-5, 60] and at least max_dt / 1e5; "
     "0: 1/publish_rate");
-  f("max_dt", p.max_dt, "s", "largest gap between stamps integrated across, in [1e-6, 60]");
+  f("max_dt", p.max_dt, "s",
+    "largest gap between stamps integrated across (kinematic: a silence of more than 5.5 mean "
+    "periods of the rate stream is held even under it), in [1e-6, 60]");
   f("max_future", p.max_future, "s",
     "an input, bias sample, fix or `~set_state` stamped further ahead of ROS time is refused "
     "(counted); more than 0, at most 3600");
