@@ -47,42 +47,11 @@ import sys
 import rosbag
 import rospy
 
+# The quaternion helpers of the window errors' script, beside this one.
+from real_windows import angle, conj, log, mul, normalized
+
 FIXED_VARIANCE = 1.0  # rad²: the trace of P below which the fixes have taken hold
 STRIDE = 10  # drift: a window ends at every STRIDE-th message
-
-
-def mul(a, b):
-    """Hamilton product of (w, x, y, z) quaternions."""
-    aw, ax, ay, az = a
-    bw, bx, by, bz = b
-    return (aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw)
-
-
-def conj(q):
-    return (q[0], -q[1], -q[2], -q[3])
-
-
-def normalized(q):
-    n = math.sqrt(sum(x * x for x in q))
-    return tuple(x / n for x in q)
-
-
-def angle(a, b):
-    """The rotation angle between two unit quaternions (rad)."""
-    d = mul(conj(a), b)
-    return 2.0 * math.atan2(math.sqrt(d[1] ** 2 + d[2] ** 2 + d[3] ** 2), abs(d[0]))
-
-
-def log(q):
-    """The rotation vector of a unit quaternion (w, x, y, z)."""
-    if q[0] < 0:
-        q = tuple(-x for x in q)
-    v = math.sqrt(q[1] ** 2 + q[2] ** 2 + q[3] ** 2)
-    if v < 1e-12:
-        return (2 * q[1], 2 * q[2], 2 * q[3])
-    f = 2.0 * math.atan2(v, q[0]) / v
-    return (f * q[1], f * q[2], f * q[3])
 
 
 def options(argv, defaults):
