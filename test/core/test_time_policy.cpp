@@ -574,7 +574,9 @@ TEST(TimePolicy, ALeadThatPersistsIsTheSourcesNewLead) {
     const double t = 1.0 + 0.01 * k;
     engine.poll(at(t));
     engine.submit(rate(at(t + 5.0), kSpin));
-    if (k < ap::kJumpConfirmation) EXPECT_EQ(engine.counters().held_ahead, std::uint64_t(k));
+    if (k < ap::kJumpConfirmation) {
+      EXPECT_EQ(engine.counters().held_ahead, std::uint64_t(k));
+    }
   }
   EXPECT_EQ(engine.counters().held_ahead, std::uint64_t(ap::kJumpConfirmation - 1));
   EXPECT_EQ(engine.counters().accepted, 101u + 100u - (ap::kJumpConfirmation - 1));
