@@ -998,7 +998,8 @@ void BagPropagator::stampSummary(std::FILE* out, const KinematicPropagator& k) c
                  f->jitter() * 1e3, f->period() * 1e3, u(f->rejected()), u(f->restarts()));
   }
   if (k.rateSamples() == RateSamples::IntervalAverage) {
-    std::fprintf(out, "  interval averages: %llu means filled in for lost samples (max_gap_fill %d)\n",
+    std::fprintf(out,
+                 "  interval averages: %llu means filled in for lost samples (max_gap_fill %d)\n",
                  u(k.filledSamples()), config_.parameters.max_gap_fill);
   }
 }

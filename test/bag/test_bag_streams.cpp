@@ -738,8 +738,8 @@ TEST(Summary, StampFilterFallbackAndDropoutAreReported) {
       bag.write("/imu/data_raw", m.header.stamp, m);
     }
   }
-  const RunResult r = run(kPropagate + " " + dir.file("in.bag") + " --csv " +
-                          dir.file("out.csv") + " --set stamp_filter=sensor_clock --no-progress");
+  const RunResult r = run(kPropagate + " " + dir.file("in.bag") + " --csv " + dir.file("out.csv") +
+                          " --set stamp_filter=sensor_clock --no-progress");
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find(" 1 gaps,"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("1 fallbacks to the receipt stamps (in one at the end"),

@@ -57,7 +57,7 @@ inline GyroRun simulateGyro(double seconds, bool fixes, bool estimate_bias, doub
   config.fixes.mode = ap::FixMode::Fuse;
   config.fixes.estimate_gyro_bias = estimate_bias;
   config.fixes.gyro_bias_random_walk = 1e-7;  // the truth's bias is constant
-  config.fixes.gyro_bias_stddev = 2.424e-5;    // a tactical gyro's prior, 5 deg/h
+  config.fixes.gyro_bias_stddev = 2.424e-5;   // a tactical gyro's prior, 5 deg/h
   engine_fixtures::Recorder sink;
   sink.states.reserve(static_cast<std::size_t>(seconds / h) + 2);
   ap::AttitudeEngine engine(config, sink);

@@ -436,7 +436,9 @@ void judgeMotion(const Motion& motion) {
         "[ held-out ] %-6s %-27s %4.0f Hz  auto %-9.3g %-9s best %-5s %-9.3g cf4 %-9.3g x%.2f%s\n",
         motion.name.c_str(), spec.name.c_str(), spec.rate_hz, automatic, used.c_str(),
         ap::integratorName(best_method).c_str(), best, cf4, ratio,
-        ratio <= kBound ? "" : spec.known_miss ? "  MISS (known)" : "  MISS");
+        ratio <= kBound   ? ""
+        : spec.known_miss ? "  MISS (known)"
+                          : "  MISS");
     if (spec.known_miss) continue;
     EXPECT_LE(automatic, kBound * best)
         << motion.name << " " << spec.name << " at " << spec.rate_hz << " Hz: auto " << automatic

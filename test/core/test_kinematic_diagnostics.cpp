@@ -151,8 +151,9 @@ TEST_P(PolynomialSteps, ANonFiniteStepIsRefusedAndLeavesNoTrace) {
   ap::KinematicConfig config = configFor(GetParam());
   config.time_policy.max_dt = 1e301;  // so that the stamp 1e300 is an interval, not a gap
   ap::KinematicPropagator p(config), twin(config);
-  // Samples 0.1 us apart: intervals under 1 us are no period of the stream (kinematic_propagator.h),
-  // so no mean period is known and the stamp 1e300 is not a dropout either.
+  // Samples 0.1 us apart: intervals under 1 us are no period of the stream
+  // (kinematic_propagator.h), so no mean period is known and the stamp 1e300 is not a dropout
+  // either.
   const double dt = 1e-7;
   for (int k = 0; k <= 5; ++k) {  // the window is full and evicts on the next push
     p.addSample(dt * k, varyingRate(k));
