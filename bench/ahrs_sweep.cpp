@@ -24,7 +24,7 @@
 
 #include "../test/core/simulated_imu.h"
 #include "attitude_propagator/engine.h"
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/numerics/quaternion.h"
 #include "madgwick.h"
 
 namespace {

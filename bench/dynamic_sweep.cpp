@@ -5,10 +5,10 @@
 #include <optional>
 #include <stdexcept>
 
-#include "attitude_propagator/dynamic_propagator.h"
-#include "attitude_propagator/dynamic_step.h"
-#include "attitude_propagator/quaternion.h"
-#include "attitude_propagator/torque_free_motion.h"
+#include "attitude_propagator/models/dynamic_propagator.h"
+#include "attitude_propagator/numerics/dynamic_step.h"
+#include "attitude_propagator/numerics/quaternion.h"
+#include "attitude_propagator/numerics/torque_free_motion.h"
 #include "methods.h"
 #include "reference.h"
 

@@ -10,7 +10,7 @@
 
 #include <Eigen/Geometry>
 
-#include "attitude_propagator/coning_motion.h"
+#include "attitude_propagator/numerics/coning_motion.h"
 
 namespace bench {
 

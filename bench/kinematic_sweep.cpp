@@ -8,8 +8,8 @@
 #include <utility>
 
 #include "../test/core/gyro_streams.h"
-#include "attitude_propagator/kinematic_propagator.h"
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/models/kinematic_propagator.h"
+#include "attitude_propagator/numerics/quaternion.h"
 #include "methods.h"
 
 namespace bench {

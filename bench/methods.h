@@ -4,7 +4,7 @@
 
 #include <vector>
 
-#include "attitude_propagator/integrator.h"
+#include "attitude_propagator/numerics/integrator.h"
 
 namespace bench {
 

@@ -895,7 +895,7 @@ def stream_verdict(streams):
         "",
         "**On the real streams** (`real_streams.csv`, `bench_sweep --streams`; the streams in "
         "[real_streams.md](docs/real_streams.md)). `auto` chooses per stream "
-        "(`src/core/auto_integrator.cpp`): `cf4`, but `exp2` for the steps whose window holds "
+        "(`src/core/numerics/auto_integrator.cpp`): `cf4`, but `exp2` for the steps whose window holds "
         f"an interval mean filled in for a lost one, and {called('rk4', 'kinematic')} (point "
         "samples) or `exp2` "
         "(means) while the jitter measure J = σ_t |Δω|_rms / (h |ω|_rms) exceeds 2e-3 and "

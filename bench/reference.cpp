@@ -5,7 +5,7 @@
 
 #include <boost/numeric/odeint.hpp>
 
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/numerics/quaternion.h"
 
 namespace bench {
 

@@ -10,7 +10,7 @@
 
 #include <Eigen/Geometry>
 
-#include "attitude_propagator/dynamic_state.h"
+#include "attitude_propagator/numerics/dynamic_state.h"
 
 namespace bench {
 

@@ -20,16 +20,17 @@
 
 #include <Eigen/Geometry>
 
-#include "attitude_propagator/dynamic_propagator.h"
+#include "attitude_propagator/models/dynamic_propagator.h"
 #include "attitude_propagator/estimation/aiding.h"
 #include "attitude_propagator/estimation/error_state.h"
 #include "attitude_propagator/estimation/magnetic_heading.h"
 #include "attitude_propagator/estimation/measurement.h"
-#include "attitude_propagator/integrator.h"
-#include "attitude_propagator/kinematic_propagator.h"
-#include "attitude_propagator/propagator.h"
-#include "attitude_propagator/replay_budget.h"
-#include "attitude_propagator/source_timeline.h"
+#include "attitude_propagator/models/engine_config.h"
+#include "attitude_propagator/numerics/integrator.h"
+#include "attitude_propagator/models/kinematic_propagator.h"
+#include "attitude_propagator/models/propagator.h"
+#include "attitude_propagator/estimation/replay_budget.h"
+#include "attitude_propagator/time/source_timeline.h"
 
 namespace attitude_propagator {
 
@@ -45,32 +46,6 @@ class EngineSink {
   /// An input was applied; `state` is the state at its stamp (or where it took effect).
   virtual void inputApplied(const Input& input, const EngineState& state) = 0;
   virtual void note(const EngineNote& note) = 0;
-};
-
-/// What an absolute fix does at its stamp (docs/design.md §6.9).
-enum class FixMode {
-  Reset,  ///< the attitude at the fix's stamp is replaced, P_B becomes the fix's covariance
-  Fuse,   ///< a multiplicative EKF update at the fix's stamp, behind a chi-square gate
-};
-const char* fixModeName(FixMode mode);
-
-/// Absolute attitude fixes and the gyro bias estimate (docs/design.md §6.9, numerics.md §7.1).
-struct FixConfig {
-  FixMode mode = FixMode::Fuse;
-  /// Seconds of rate inputs kept to apply a late fix at its stamp, in (0, kMaxFixHistory];
-  /// kept only from the first fix on.
-  double history = 1.0;
-  /// Fuse: largest squared Mahalanobis distance r^T S^-1 r of an innovation accepted; the
-  /// default is the 99.9 % point of chi-square with 3 degrees of freedom.
-  double gate = 16.266;
-  /// rad per axis, for a fix that carries no covariance (all zero).
-  double stddev = 0.01;
-  /// The gyro bias joins the error state (6x6: attitude error, bias error).
-  bool estimate_gyro_bias = false;
-  /// rad/s/sqrt(s): the bias' random walk (a MEMS gyro's, docs/parameters.md)
-  double gyro_bias_random_walk = 1e-5;
-  /// rad/s: prior standard deviation per axis (0.57 deg/s: a MEMS gyro's, docs/parameters.md)
-  double gyro_bias_stddev = 0.01;
 };
 
 /// What became of a fix (the counters say the same: EngineCounters::fixes_*).
@@ -108,38 +83,6 @@ struct FixHistoryEntry {
   /// The state was not reached by a step (the newest one when the history started, a pinned
   /// state): restored, never replayed.
   bool base = false;
-};
-
-struct EngineConfig {
-  Model model = Model::Kinematic;  ///< Kinematic or Dynamic (resolved)
-  KinematicConfig kinematic;
-  std::optional<DynamicConfig> dynamic;
-  double publish_rate = 100.0;  ///< dynamic model: states at multiples of 1/publish_rate
-  double rate_stddev = 0.0;     ///< rad/s, for inputs without a covariance
-  /// Orientation uncertainty (rad) at an anchor of the initial state: P_B = stddev² I.
-  double initial_orientation_stddev = 0.0;
-  Eigen::Vector3d gyro_bias_B = Eigen::Vector3d::Zero();  ///< rad/s, until a bias sample
-  /// Seconds by which a rate is older than its stamp (an on-chip filter's group delay, a fixed
-  /// transport latency): rate stamps are moved back by it before anything else, so the states
-  /// (and imu/data) carry the instant the rate describes. At least 0, at most max_dt.
-  double rate_delay = 0.0;
-  /// Seconds an input (or set_state) may be stamped ahead of the clock; further is refused, so
-  /// tf never receives a stamp beyond it. Checked once a clock is known.
-  double max_future = 1.0;
-  /// Dynamic model: inputs stamped ahead of the clock wait, at most this many; past it the
-  /// one stamped furthest ahead is dropped (counted).
-  std::size_t max_pending = 4096;
-  /// Dynamic model: grid stamps handled per call at most; the rest wait for the next call.
-  std::size_t grid_budget = 1000;
-  /// Dynamic model: integrator work (steps; dopri5 attempts) per call at most, summed over
-  /// the grid stamps of the call: two propagator calls' worth (kDefaultStepBudget), well under
-  /// a second of CPU, so a starved node catching up still answers services and SIGINT. The
-  /// rest waits for the next call.
-  std::uint64_t work_budget = std::uint64_t{1} << 18;
-  /// Absolute attitude fixes and the gyro bias estimate.
-  FixConfig fixes;
-  /// Gravity and the magnetic field as measurements (kinematic model).
-  AidingConfig aiding;
 };
 
 /// Inputs arriving on average more than this many seconds away from the clock (behind, or

@@ -9,7 +9,7 @@
 #include <type_traits>
 #include <utility>
 
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/numerics/quaternion.h"
 #include "attitude_propagator/quoted_text.h"
 
 namespace attitude_propagator {

@@ -9,9 +9,9 @@
 
 #include "attitude_propagator/estimation/attitude_fix.h"
 #include "attitude_propagator/limits.h"
-#include "attitude_propagator/orientation_covariance.h"
-#include "attitude_propagator/publish_grid.h"
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/estimation/orientation_covariance.h"
+#include "attitude_propagator/time/publish_grid.h"
+#include "attitude_propagator/numerics/quaternion.h"
 
 namespace attitude_propagator {
 
@@ -104,7 +104,6 @@ bool validFixCovariance(const Eigen::Matrix3d& R) {
 
 }  // namespace
 
-const char* fixModeName(FixMode mode) { return mode == FixMode::Reset ? "reset" : "fuse"; }
 
 const char* fixOutcomeName(FixOutcome outcome) {
   switch (outcome) {

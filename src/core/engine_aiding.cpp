@@ -9,7 +9,7 @@
 #include "attitude_propagator/estimation/gravity_direction.h"
 #include "attitude_propagator/estimation/magnetic_heading.h"
 #include "attitude_propagator/limits.h"
-#include "attitude_propagator/orientation_covariance.h"
+#include "attitude_propagator/estimation/orientation_covariance.h"
 
 namespace attitude_propagator {
 

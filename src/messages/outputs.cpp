@@ -3,7 +3,7 @@
 #include <utility>
 
 #include "attitude_propagator/messages/conversions.h"
-#include "attitude_propagator/orientation_covariance.h"
+#include "attitude_propagator/estimation/orientation_covariance.h"
 
 namespace attitude_propagator {
 

@@ -2,8 +2,8 @@
 
 #include <string>
 
-#include "attitude_propagator/kinematic_propagator.h"
-#include "attitude_propagator/stamp_filter.h"
+#include "attitude_propagator/models/kinematic_propagator.h"
+#include "attitude_propagator/time/stamp_filter.h"
 
 namespace attitude_propagator {
 

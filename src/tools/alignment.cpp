@@ -7,7 +7,7 @@
 
 #include <Eigen/SVD>
 
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/numerics/quaternion.h"
 
 namespace attitude_propagator {
 namespace tools {

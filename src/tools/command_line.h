@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "attitude_propagator/source_timeline.h"
+#include "attitude_propagator/time/source_timeline.h"
 
 namespace attitude_propagator {
 namespace tools {

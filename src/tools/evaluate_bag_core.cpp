@@ -42,7 +42,7 @@
 #include "attitude_propagator/messages/conversions.h"
 #include "attitude_propagator/messages/fix_decoder.h"
 #include "attitude_propagator/messages/input_decoders.h"
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/numerics/quaternion.h"
 #include "bag_input.h"
 #include "command_line.h"
 #include "config_file.h"

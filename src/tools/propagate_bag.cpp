@@ -41,7 +41,7 @@
 #include "aiding_summary.h"
 #include "attitude_propagator/AttitudeState.h"
 #include "attitude_propagator/engine.h"
-#include "attitude_propagator/kinematic_propagator.h"
+#include "attitude_propagator/models/kinematic_propagator.h"
 #include "attitude_propagator/messages/conversions.h"
 #include "attitude_propagator/messages/fix_decoder.h"
 #include "attitude_propagator/messages/frame_source.h"

@@ -27,10 +27,10 @@
 #include <tf2_msgs/TFMessage.h>
 
 #include "../core/sampling.h"
-#include "attitude_propagator/coning_motion.h"
-#include "attitude_propagator/quaternion.h"
-#include "attitude_propagator/rigid_body.h"
-#include "attitude_propagator/torque_free_motion.h"
+#include "attitude_propagator/numerics/coning_motion.h"
+#include "attitude_propagator/numerics/quaternion.h"
+#include "attitude_propagator/numerics/rigid_body.h"
+#include "attitude_propagator/numerics/torque_free_motion.h"
 
 namespace ap = attitude_propagator;
 

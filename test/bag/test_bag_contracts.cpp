@@ -17,7 +17,7 @@
 #include <rosbag/view.h>
 #include <sensor_msgs/Imu.h>
 
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/numerics/quaternion.h"
 #include "scene_bags.h"
 
 namespace ap = attitude_propagator;

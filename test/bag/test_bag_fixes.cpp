@@ -20,8 +20,8 @@
 #include <boost/make_shared.hpp>
 
 #include "attitude_propagator/AttitudeState.h"
-#include "attitude_propagator/coning_motion.h"
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/numerics/coning_motion.h"
+#include "attitude_propagator/numerics/quaternion.h"
 #include "scene_bags.h"
 
 namespace ap = attitude_propagator;

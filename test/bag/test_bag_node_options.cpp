@@ -17,7 +17,7 @@
 #include <tf2_msgs/TFMessage.h>
 
 #include "attitude_propagator/AttitudeState.h"
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/numerics/quaternion.h"
 #include "scene_bags.h"
 
 namespace ap = attitude_propagator;

@@ -23,8 +23,8 @@
 
 #include "../../src/tools/alignment.h"
 #include "attitude_propagator/AttitudeState.h"
-#include "attitude_propagator/coning_motion.h"
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/numerics/coning_motion.h"
+#include "attitude_propagator/numerics/quaternion.h"
 #include "scene_bags.h"
 
 namespace ap = attitude_propagator;

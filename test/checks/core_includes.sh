@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # The core library includes only what it may: the C++ standard library, Eigen, Boost and its
-# own headers (include/attitude_propagator/*.h and its estimation room, not the ROS layer's); the config library
-# (node parameters, src/config) may also include its own (attitude_propagator/config/*.h). An allow-list, because
-# on Debian the ROS headers sit in /usr/include next to Boost's, where a stray include would
-# compile. The ROS layer's headers live outside the core's include directory
-# (src/ros/include), so the core's build cannot find them either.
+# own headers (include/attitude_propagator/, not the ROS layer's), each room only its own and
+# those of the rooms before it (below); the config library (node parameters, src/config) may
+# include any room and its own (attitude_propagator/config/*.h). An allow-list, because on
+# Debian the ROS headers sit in /usr/include next to Boost's, where a stray include would
+# compile. The ROS layer's headers live outside the core's include directory (src/ros/include),
+# so the core's build cannot find them either.
 cd "$(dirname "${BASH_SOURCE[0]}")/../.." || exit 1
 
 std_headers=" algorithm any array atomic bitset cassert cctype cerrno cfenv cfloat charconv \
@@ -16,35 +17,66 @@ scoped_allocator set shared_mutex sstream stack stdexcept streambuf string strin
 system_error thread tuple type_traits typeindex typeinfo unordered_map unordered_set utility \
 valarray variant vector "
 
-# The estimation room (the error state, the measurements) knows nothing of the engine, the
-# models or time beyond a stamp: it may include itself and these building blocks only.
-estimation_allows=" quaternion.h orientation_covariance.h limits.h source_timeline.h "
+# The rooms of the core (docs/design.md §2.4), each above the ones before it: a file may include
+# its own room's headers and those of the rooms listed before its own, never one after. The
+# top level (include/attitude_propagator/*.h, src/core/*.cpp) is the engine, which wires every
+# room, and two building blocks every room may use (limits.h, quoted_text.h).
+rooms=(numerics time estimation models)
+base_headers=" limits.h quoted_text.h "
+
+# room_of PATH: the room a file or header path lies in; "engine" at the top level, "config"
+# for the node parameters (src/config, attitude_propagator/config), which may include any room.
+room_of() {
+  local path=$1
+  path=${path#include/}
+  path=${path#src/core/}
+  path=${path#attitude_propagator/}
+  case "$path" in
+    src/config/* | config/*) echo config; return ;;
+  esac
+  local room
+  for room in "${rooms[@]}"; do
+    [[ "$path" == "$room"/* ]] && { echo "$room"; return; }
+  done
+  echo engine
+}
+
+# rank ROOM: its place in the order (the engine and config above every room).
+rank() {
+  local i
+  for i in "${!rooms[@]}"; do [ "${rooms[$i]}" = "$1" ] && { echo "$i"; return; }; done
+  echo 99
+}
+
+# own_header_allowed HEADER FILE: an attitude_propagator header that exists, in a room the
+# file may include (its own, one before, or a building block); config headers from config only.
+own_header_allowed() {
+  local path=${1//\"/} file=$2
+  [ -f "include/$path" ] || return 1
+  local name=${path#attitude_propagator/}
+  local from to
+  from=$(room_of "$file")
+  to=$(room_of "$path")
+  if [ "$to" = config ]; then
+    [ "$from" = config ]
+    return
+  fi
+  if [ "$to" = engine ]; then
+    # The top level: the engine's header, for the engine and config only; the building blocks
+    # for everyone.
+    [[ "$base_headers" == *" $name "* ]] && return 0
+    [ "$from" = engine ] || [ "$from" = config ]
+    return
+  fi
+  [ "$(rank "$to")" -le "$(rank "$from")" ]
+}
 
 allowed() {
   local header=$1 file=$2
-  case "$file" in
-    src/core/estimation/* | include/attitude_propagator/estimation/*)
-      case "$header" in
-        \"attitude_propagator/estimation/*.h\") ;;
-        \"attitude_propagator/*.h\")
-          local name=${header//\"/}
-          name=${name#attitude_propagator/}
-          [[ "$estimation_allows" == *" $name "* ]] || return 1 ;;
-      esac ;;
-  esac
-  case "$file" in
-    src/config/* | include/attitude_propagator/config/*)
-      [[ "$header" == \"attitude_propagator/config/*.h\" && -f "include/${header//\"/}" ]] && return 0 ;;
-  esac
   case "$header" in
     \<Eigen/*\> | \<unsupported/Eigen/*\> | \<boost/*\>) return 0 ;;
-    \"attitude_propagator/estimation/*.h\")
-      local path=${header//\"/}
-      [[ "$path" != attitude_propagator/estimation/*/* && -f "include/$path" ]]
-      return ;;
     \"attitude_propagator/*.h\")
-      local path=${header//\"/}
-      [[ "$path" != attitude_propagator/*/* && -f "include/$path" ]]
+      own_header_allowed "$header" "$file"
       return ;;
     \<*\>)
       local name=${header#<}
@@ -62,10 +94,9 @@ while IFS= read -r line; do
   lineno=${rest%%:*}
   header=$(sed -E 's/^[[:space:]]*#[[:space:]]*include[[:space:]]*([<"][^>"]*[>"]).*/\1/' <<<"${rest#*:}")
   if ! allowed "$header" "$file"; then
-    echo "$file:$lineno: $header is not allowed in the core (std, Eigen, Boost, attitude_propagator/*.h)"
+    echo "$file:$lineno: $header is not allowed here: the core takes std, Eigen, Boost and its own headers, each room its own and the rooms before it ($(room_of "$file") may not include $(room_of "${header//\"/}"); order: ${rooms[*]}, then the engine)"
     status=1
   fi
-done < <(grep -nHE '^[[:space:]]*#[[:space:]]*include' src/core/*.cpp src/core/estimation/*.cpp \
-  include/attitude_propagator/*.h include/attitude_propagator/estimation/*.h \
-  src/config/*.cpp include/attitude_propagator/config/*.h)
+done < <(find src/core include/attitude_propagator src/config -name '*.h' -o -name '*.cpp' |
+  sort | xargs grep -nHE '^[[:space:]]*#[[:space:]]*include')
 exit $status

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The lists of integrators kept by hand outside the core name the methods of its table
-# (src/core/integrator.cpp), in the table's order: the reconfigure enum
+# (src/core/numerics/integrator.cpp), in the table's order: the reconfigure enum
 # (cfg/AttitudePropagator.cfg), evaluate_bag_core's --integrators default in its help text
 # (src/tools/evaluate_bag_core.cpp, whose default list itself reads the table), evaluate_bag's
 # colours (nodes/evaluate_bag, those of the benchmark charts: bench/plot.py's PALETTE in the

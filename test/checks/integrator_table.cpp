@@ -3,7 +3,7 @@
 // space-separated. Reads only the core's API (integrator.h).
 #include <iostream>
 
-#include "attitude_propagator/integrator.h"
+#include "attitude_propagator/numerics/integrator.h"
 
 int main() {
   namespace ap = attitude_propagator;

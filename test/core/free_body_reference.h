@@ -7,7 +7,7 @@
 #include <Eigen/Geometry>
 #include <boost/numeric/odeint.hpp>
 
-#include "attitude_propagator/dynamic_state.h"
+#include "attitude_propagator/numerics/dynamic_state.h"
 #include "reference_dynamics.h"
 
 namespace free_body_reference {

@@ -8,7 +8,7 @@
 
 #include <gtest/gtest.h>
 
-#include "attitude_propagator/integrator.h"
+#include "attitude_propagator/numerics/integrator.h"
 
 namespace integrator_cases {
 

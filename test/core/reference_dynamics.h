@@ -19,8 +19,8 @@
 
 #include <Eigen/Geometry>
 
-#include "attitude_propagator/dynamic_state.h"
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/numerics/dynamic_state.h"
+#include "attitude_propagator/numerics/quaternion.h"
 
 namespace reference_dynamics {
 

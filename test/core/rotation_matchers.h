@@ -5,7 +5,7 @@
 
 #include <Eigen/Geometry>
 
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/numerics/quaternion.h"
 #include "sampling.h"
 
 /// Compares two rotations by the angle of a^c b, so that q and -q are equal.

@@ -11,9 +11,9 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 
-#include "attitude_propagator/coning_motion.h"
+#include "attitude_propagator/numerics/coning_motion.h"
 #include "attitude_propagator/engine.h"
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/numerics/quaternion.h"
 #include "engine_fixtures.h"
 
 namespace simulated_gyro {

@@ -13,7 +13,7 @@
 #include <Eigen/Geometry>
 
 #include "attitude_propagator/estimation/gravity_direction.h"
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/numerics/quaternion.h"
 
 namespace simulated_imu {
 

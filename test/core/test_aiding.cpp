@@ -14,7 +14,7 @@
 #include "attitude_propagator/estimation/attitude_fix.h"
 #include "attitude_propagator/estimation/gravity_direction.h"
 #include "attitude_propagator/estimation/magnetic_heading.h"
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/numerics/quaternion.h"
 #include "engine_fixtures.h"
 #include "simulated_imu.h"
 

@@ -25,11 +25,11 @@
 #include <string>
 #include <vector>
 
-#include "attitude_propagator/coning_motion.h"
-#include "attitude_propagator/kinematic_propagator.h"
-#include "attitude_propagator/quaternion.h"
-#include "attitude_propagator/rigid_body.h"
-#include "attitude_propagator/torque_free_motion.h"
+#include "attitude_propagator/numerics/coning_motion.h"
+#include "attitude_propagator/models/kinematic_propagator.h"
+#include "attitude_propagator/numerics/quaternion.h"
+#include "attitude_propagator/numerics/rigid_body.h"
+#include "attitude_propagator/numerics/torque_free_motion.h"
 #include "gyro_streams.h"
 #include "sampling.h"
 

@@ -12,10 +12,10 @@
 #include <set>
 #include <vector>
 
-#include "attitude_propagator/auto_integrator.h"
-#include "attitude_propagator/coning_motion.h"
-#include "attitude_propagator/kinematic_propagator.h"
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/numerics/auto_integrator.h"
+#include "attitude_propagator/numerics/coning_motion.h"
+#include "attitude_propagator/models/kinematic_propagator.h"
+#include "attitude_propagator/numerics/quaternion.h"
 #include "sampling.h"
 
 namespace ap = attitude_propagator;

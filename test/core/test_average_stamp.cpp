@@ -8,8 +8,8 @@
 #include <optional>
 #include <vector>
 
-#include "attitude_propagator/average_stamp.h"
-#include "attitude_propagator/coning_motion.h"
+#include "attitude_propagator/time/average_stamp.h"
+#include "attitude_propagator/numerics/coning_motion.h"
 #include "attitude_propagator/engine.h"
 #include "engine_fixtures.h"
 #include "rotation_matchers.h"

@@ -8,7 +8,7 @@
 #include <cmath>
 #include <vector>
 
-#include "attitude_propagator/dynamic_step.h"
+#include "attitude_propagator/numerics/dynamic_step.h"
 #include "free_body_reference.h"
 #include "integrator_cases.h"
 #include "rotation_matchers.h"

@@ -11,7 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "attitude_propagator/engine.h"
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/numerics/quaternion.h"
 #include "engine_fixtures.h"
 #include "free_body_reference.h"
 #include "integrator_cases.h"

@@ -8,8 +8,8 @@
 #include <stdexcept>
 #include <vector>
 
-#include "attitude_propagator/dynamic_propagator.h"
-#include "attitude_propagator/torque_free_motion.h"
+#include "attitude_propagator/models/dynamic_propagator.h"
+#include "attitude_propagator/numerics/torque_free_motion.h"
 #include "integrator_cases.h"
 #include "reference_dynamics.h"
 #include "rk4_sphere.h"

@@ -11,8 +11,8 @@
 #include <utility>
 #include <vector>
 
-#include "attitude_propagator/dynamic_step.h"
-#include "attitude_propagator/torque_free_motion.h"
+#include "attitude_propagator/numerics/dynamic_step.h"
+#include "attitude_propagator/numerics/torque_free_motion.h"
 #include "integrator_cases.h"
 #include "reference_dynamics.h"
 #include "rk4_sphere.h"

@@ -13,8 +13,8 @@
 
 #include <boost/math/tools/toms748_solve.hpp>
 
-#include "attitude_propagator/dynamic_propagator.h"
-#include "attitude_propagator/torque_free_motion.h"
+#include "attitude_propagator/models/dynamic_propagator.h"
+#include "attitude_propagator/numerics/torque_free_motion.h"
 #include "landau_lifshitz.h"
 
 namespace ap = attitude_propagator;

@@ -12,7 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "attitude_propagator/engine.h"
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/numerics/quaternion.h"
 #include "engine_fixtures.h"
 
 namespace {

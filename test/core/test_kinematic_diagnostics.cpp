@@ -9,7 +9,7 @@
 #include <limits>
 #include <vector>
 
-#include "attitude_propagator/kinematic_propagator.h"
+#include "attitude_propagator/models/kinematic_propagator.h"
 #include "integrator_cases.h"
 
 namespace ap = attitude_propagator;

@@ -9,8 +9,8 @@
 #include <utility>
 #include <vector>
 
-#include "attitude_propagator/kinematic_propagator.h"
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/models/kinematic_propagator.h"
+#include "attitude_propagator/numerics/quaternion.h"
 #include "integrator_cases.h"
 #include "rotation_matchers.h"
 

@@ -11,8 +11,8 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 
-#include "attitude_propagator/orientation_covariance.h"
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/estimation/orientation_covariance.h"
+#include "attitude_propagator/numerics/quaternion.h"
 #include "rotation_matchers.h"
 #include "sampling.h"
 

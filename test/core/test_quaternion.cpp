@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/numerics/quaternion.h"
 #include "rotation_matchers.h"
 
 namespace ap = attitude_propagator;

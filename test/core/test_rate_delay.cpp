@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <vector>
 
-#include "attitude_propagator/coning_motion.h"
+#include "attitude_propagator/numerics/coning_motion.h"
 #include "attitude_propagator/engine.h"
 #include "engine_fixtures.h"
 #include "gyro_streams.h"

@@ -1,6 +1,6 @@
 // Kinematic propagation on the streams real gyros deliver: interval-averaged rates, stamps with
 // receipt jitter, lost samples, a gyro bias. The truths are the coning motion's closed form
-// (include/attitude_propagator/coning_motion.h) and its interval means by Gauss-Legendre
+// (include/attitude_propagator/numerics/coning_motion.h) and its interval means by Gauss-Legendre
 // quadrature, never a figure of the code under test.
 #include <gtest/gtest.h>
 
@@ -12,11 +12,11 @@
 #include <limits>
 #include <vector>
 
-#include "attitude_propagator/coning_motion.h"
-#include "attitude_propagator/kinematic_propagator.h"
-#include "attitude_propagator/kinematic_step.h"
-#include "attitude_propagator/quaternion.h"
-#include "attitude_propagator/stamp_filter.h"
+#include "attitude_propagator/numerics/coning_motion.h"
+#include "attitude_propagator/models/kinematic_propagator.h"
+#include "attitude_propagator/numerics/kinematic_step.h"
+#include "attitude_propagator/numerics/quaternion.h"
+#include "attitude_propagator/time/stamp_filter.h"
 #include "gyro_streams.h"
 #include "integrator_cases.h"
 #include "rotation_matchers.h"

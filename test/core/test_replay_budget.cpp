@@ -8,7 +8,7 @@
 #include <map>
 #include <string>
 
-#include "attitude_propagator/replay_budget.h"
+#include "attitude_propagator/estimation/replay_budget.h"
 #include "engine_fixtures.h"
 
 namespace ap = attitude_propagator;

@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "attitude_propagator/rigid_body.h"
+#include "attitude_propagator/numerics/rigid_body.h"
 #include "rotation_matchers.h"
 
 namespace ap = attitude_propagator;

@@ -16,7 +16,7 @@
 
 #include "attitude_propagator/config/parameters.h"
 #include "attitude_propagator/engine.h"
-#include "attitude_propagator/source_timeline.h"
+#include "attitude_propagator/time/source_timeline.h"
 #include "engine_fixtures.h"
 #include "rotation_matchers.h"
 

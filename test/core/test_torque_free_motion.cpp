@@ -10,7 +10,7 @@
 #include <cmath>
 #include <vector>
 
-#include "attitude_propagator/torque_free_motion.h"
+#include "attitude_propagator/numerics/torque_free_motion.h"
 #include "free_body_reference.h"
 #include "landau_lifshitz.h"
 #include "rotation_matchers.h"

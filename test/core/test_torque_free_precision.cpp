@@ -8,7 +8,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "attitude_propagator/torque_free_motion.h"
+#include "attitude_propagator/numerics/torque_free_motion.h"
 #include "free_body_reference.h"
 #include "rotation_matchers.h"
 

@@ -7,7 +7,7 @@
 #include <stdexcept>
 
 #include "attitude_propagator/config/parameters.h"
-#include "attitude_propagator/world_convention.h"
+#include "attitude_propagator/numerics/world_convention.h"
 #include "engine_fixtures.h"
 #include "refused_parameters.h"
 #include "rotation_matchers.h"

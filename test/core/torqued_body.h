@@ -7,8 +7,8 @@
 
 #include <Eigen/Geometry>
 
-#include "attitude_propagator/dynamic_state.h"
-#include "attitude_propagator/rigid_body.h"
+#include "attitude_propagator/numerics/dynamic_state.h"
+#include "attitude_propagator/numerics/rigid_body.h"
 
 namespace torqued_body {
 

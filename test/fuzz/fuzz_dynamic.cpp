@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "attitude_propagator/dynamic_propagator.h"
-#include "attitude_propagator/integrator.h"
+#include "attitude_propagator/models/dynamic_propagator.h"
+#include "attitude_propagator/numerics/integrator.h"
 #include "fuzz_support.h"
 
 namespace ap = attitude_propagator;

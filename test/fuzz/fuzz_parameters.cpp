@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "attitude_propagator/config/parameters.h"
-#include "attitude_propagator/integrator.h"
+#include "attitude_propagator/numerics/integrator.h"
 #include "fuzz_support.h"
 
 namespace ap = attitude_propagator;

@@ -21,7 +21,7 @@
 #include "attitude_propagator/messages/conversions.h"
 #include "attitude_propagator/messages/fix_decoder.h"
 #include "attitude_propagator/messages/outputs.h"
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/numerics/quaternion.h"
 #include "serialized_message.h"
 
 namespace ap = attitude_propagator;

@@ -68,7 +68,7 @@ HERE = pathlib.Path(__file__).resolve().parent
 KEYS = ("id", "file", "bug", "original", "mutant", "tests")
 # Each list and where its mutants may live.
 LISTS = {
-    "mutants.txt": re.compile(r"^src/(core|core/estimation|config)/[A-Za-z0-9_]+\.cpp$"),
+    "mutants.txt": re.compile(r"^src/(core|core/(numerics|time|estimation|models)|config)/[A-Za-z0-9_]+\.cpp$"),
     "mutants_messages.txt": re.compile(r"^src/messages/[A-Za-z0-9_]+\.cpp$"),
     "mutants_tools.txt": re.compile(r"^src/tools/[A-Za-z0-9_]+\.cpp$"),
     "mutants_ros.txt": re.compile(r"^src/ros/[A-Za-z0-9_]+\.cpp$"),

@@ -10,11 +10,16 @@ import tf2_ros
 from geometry_msgs.msg import (Quaternion, TransformStamped, TwistStamped, Vector3, Wrench,
                                WrenchStamped)
 from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import Imu
 
-from ap_test_util import (Diagnostics, Node, as_tuple, axis_angle, lookup, make_tf_buffer,
-                          rotation_angle, wait_connected, wait_for)
+from ap_test_util import (Diagnostics, Node, Recorder, as_tuple, axis_angle, lookup, make_imu,
+                          make_tf_buffer, rotation_angle, wait_connected, wait_for)
 
 PERIOD_NS = 20 * 10 ** 6  # 1 / publish_rate (50 Hz)
+
+
+def stamp(seconds):
+    return rospy.Time(0, int(round(seconds * 1e9)))
 
 
 class DynamicTest(unittest.TestCase):
@@ -23,18 +28,21 @@ class DynamicTest(unittest.TestCase):
         rospy.init_node("test_dynamic")
         cls.clock_pub = rospy.Publisher("/clock", Clock, queue_size=10000)
         cls.now = 10.0
-        wait_for(lambda: cls.clock_pub.get_num_connections() >= 4, 30.0, "4 nodes on /clock")
+        wait_for(lambda: cls.clock_pub.get_num_connections() >= 5, 30.0, "5 nodes on /clock")
         cls.set_clock(cls.now)
         cls.tf_buffer, cls.tf_listener = make_tf_buffer()
         cls.diag = Diagnostics()
-        cls.nodes = {ns: Node(ns) for ns in ("sph", "trq", "trqu", "rate")}
+        cls.nodes = {ns: Node(ns) for ns in ("sph", "trq", "trqu", "rate", "late")}
         for node in cls.nodes.values():
             node.wait_ready()
         cls.torque_pub = rospy.Publisher("/trq/torque", WrenchStamped, queue_size=100)
         cls.torque_unstamped_pub = rospy.Publisher("/trqu/torque", Wrench, queue_size=100)
         cls.rate_pub = rospy.Publisher("/rate/body_twist", TwistStamped, queue_size=100)
-        for pub in (cls.torque_pub, cls.torque_unstamped_pub, cls.rate_pub):
+        cls.imu_pub = rospy.Publisher("/late/imu/data_raw", Imu, queue_size=100)
+        cls.imu_out = Recorder("/late/imu/data", Imu)
+        for pub in (cls.torque_pub, cls.torque_unstamped_pub, cls.rate_pub, cls.imu_pub):
             wait_connected(pub)
+        wait_for(lambda: cls.imu_out.sub.get_num_connections() > 0, 20.0, "/late/imu/data")
 
     @classmethod
     def set_clock(cls, seconds):
@@ -148,6 +156,23 @@ class DynamicTest(unittest.TestCase):
         self.run_clock(t0 + 2.0)
         state = node.state.wait_at(rospy.Time(0, int(round((t0 + 2.0) * 1e9))))
         self.assertRotation(as_tuple(state.orientation), axis_angle((1, 0, 0), -0.4), 1e-7)
+
+    def test_3c_a_late_rate_goes_out_with_the_orientation_at_its_own_stamp(self):
+        # Spinning at 1 rad/s about z from the first rate; the grid reaches t0 + 0.1 s, then a
+        # rate stamped t0 + 0.05 s arrives. It acts from the grid point, and its message goes
+        # out on imu/data with the orientation at its own stamp: 0.05 rad about z (the closed
+        # form), not the 0.1 rad of the model's time.
+        self.run_clock(math.floor(self.now) + 1.0)
+        t0 = self.now
+        before = self.diag.counter("/late/attitude_propagator", "late") or 0
+        self.imu_pub.publish(make_imu(stamp(t0), (0.0, 0.0, 1.0), frame_id="body_late"))
+        self.imu_out.wait_at(stamp(t0))  # applied: it anchored the model
+        self.run_clock(t0 + 0.1)
+        self.nodes["late"].state.wait_at(stamp(t0 + 0.1))
+        self.imu_pub.publish(make_imu(stamp(t0 + 0.05), (0.0, 0.0, 1.0), frame_id="body_late"))
+        late = self.imu_out.wait_at(stamp(t0 + 0.05))
+        self.diag.wait_counter("/late/attitude_propagator", "late", before + 1)
+        self.assertRotation(as_tuple(late.orientation), axis_angle((0, 0, 1), 0.05), 1e-9)
 
     def test_4_clock_jumping_back_resets(self):
         node = self.nodes["sph"]

@@ -9,7 +9,7 @@
 #include <Eigen/Core>
 
 #include "attitude_propagator/limits.h"
-#include "attitude_propagator/source_timeline.h"
+#include "attitude_propagator/time/source_timeline.h"
 
 namespace attitude_propagator {
 

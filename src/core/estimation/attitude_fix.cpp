@@ -1,7 +1,7 @@
 #include "attitude_propagator/estimation/attitude_fix.h"
 
-#include "attitude_propagator/orientation_covariance.h"
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/estimation/orientation_covariance.h"
+#include "attitude_propagator/numerics/quaternion.h"
 
 namespace attitude_propagator {
 

@@ -4,8 +4,8 @@
 
 #include "attitude_propagator/estimation/measurement.h"
 #include "attitude_propagator/limits.h"
-#include "attitude_propagator/orientation_covariance.h"
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/estimation/orientation_covariance.h"
+#include "attitude_propagator/numerics/quaternion.h"
 
 namespace attitude_propagator {
 

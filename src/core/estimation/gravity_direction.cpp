@@ -2,8 +2,8 @@
 
 #include <cmath>
 
-#include "attitude_propagator/orientation_covariance.h"
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/estimation/orientation_covariance.h"
+#include "attitude_propagator/numerics/quaternion.h"
 
 namespace attitude_propagator {
 

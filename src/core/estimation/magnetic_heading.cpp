@@ -5,8 +5,8 @@
 
 #include "attitude_propagator/estimation/gravity_direction.h"
 #include "attitude_propagator/limits.h"
-#include "attitude_propagator/orientation_covariance.h"
-#include "attitude_propagator/quaternion.h"
+#include "attitude_propagator/estimation/orientation_covariance.h"
+#include "attitude_propagator/numerics/quaternion.h"
 
 namespace attitude_propagator {
 

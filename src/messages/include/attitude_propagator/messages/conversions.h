@@ -11,7 +11,7 @@
 #include <geometry_msgs/Vector3.h>
 #include <Eigen/Geometry>
 
-#include "attitude_propagator/source_timeline.h"
+#include "attitude_propagator/time/source_timeline.h"
 
 namespace attitude_propagator {
 

@@ -8,7 +8,7 @@
 #include <sensor_msgs/Imu.h>
 
 #include "attitude_propagator/engine.h"
-#include "attitude_propagator/orientation_covariance.h"
+#include "attitude_propagator/estimation/orientation_covariance.h"
 
 namespace attitude_propagator {
 

@@ -56,7 +56,7 @@
 #include "attitude_propagator/engine.h"
 #include "attitude_propagator/messages/frame_ids.h"
 #include "attitude_propagator/messages/frame_source.h"
-#include "attitude_propagator/orientation_covariance.h"
+#include "attitude_propagator/estimation/orientation_covariance.h"
 
 namespace attitude_propagator {
 

@@ -6,7 +6,7 @@
 
 #include "attitude_propagator/SetState.h"
 #include "attitude_propagator/engine.h"
-#include "attitude_propagator/world_convention.h"
+#include "attitude_propagator/numerics/world_convention.h"
 
 namespace attitude_propagator {
 

@@ -8,7 +8,7 @@
 
 #include <ros/time.h>
 
-#include "attitude_propagator/propagator.h"
+#include "attitude_propagator/models/propagator.h"
 
 namespace attitude_propagator {
 

@@ -9,7 +9,7 @@
 #include "attitude_propagator/AttitudePropagatorConfig.h"
 #include "attitude_propagator/config/parameters.h"
 #include "attitude_propagator/engine.h"
-#include "attitude_propagator/integrator.h"
+#include "attitude_propagator/numerics/integrator.h"
 #include "attitude_propagator/ros/log_text.h"
 
 namespace attitude_propagator {

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "attitude_propagator/config/parameters.h"
-#include "attitude_propagator/propagator.h"
+#include "attitude_propagator/models/propagator.h"
 #include "attitude_propagator/ros/log_text.h"
 
 namespace attitude_propagator {

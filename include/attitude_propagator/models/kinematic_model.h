@@ -1,0 +1,57 @@
+// The kinematic model behind the engine: a KinematicPropagator whose rate inputs stamp the
+// states. Each input is integrated when it arrives and the state at its stamp (or where the
+// stamp filter or the average's stamp put it) is published; the orientation covariance follows
+// each step.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include "attitude_propagator/models/kinematic_propagator.h"
+#include "attitude_propagator/models/propagator.h"
+
+namespace attitude_propagator {
+
+class KinematicModel final : public Propagator {
+ public:
+  /// Throws std::invalid_argument (from KinematicPropagator) for an invalid configuration.
+  KinematicModel(const EngineConfig& config, PropagatorHost& host);
+
+  void submit(const Input& input) override;
+  void publishDue(bool /*skip_intermediate*/) override {}
+  void setState(double t, const Eigen::Quaterniond& q_WB, const Eigen::Vector3d& w_B) override {
+    kinematic_.setState(t, q_WB, w_B);
+  }
+  void reset() override { kinematic_.reset(); }
+  bool restartInputOrder(Source source) override;
+  void reconfigure(const EngineConfig& next) override;
+
+  EngineState state() const override;
+  std::size_t pending() const override { return 0; }
+  Model model() const override { return Model::Kinematic; }
+  bool takesRepeatedRateStamps() const override { return kinematic_.stampFilter() != nullptr; }
+  const std::string& modelName() const override { return model_name_; }
+  Integrator integrator() const override { return kinematic_.integrator(); }
+  double energyDrift() const override { return 0.0; }
+  double momentumDrift() const override { return 0.0; }
+  const KinematicPropagator* kinematic() const override { return &kinematic_; }
+
+  std::optional<double> savedTime() const override;
+  void save(ModelSnapshot& into) const override { into = kinematic_; }
+  void restore(const ModelSnapshot& from) override;
+  bool advanceForFix(double /*t*/) override { return false; }  // a step needs the next sample
+  void correctOrientation(const Eigen::Quaterniond& q_WB) override {
+    kinematic_.correctOrientation(q_WB);
+  }
+  void replay(const ModelStep& step) override { apply(step.input); }
+
+ private:
+  /// One input through the propagator: the covariance, the state published.
+  void apply(const Input& input);
+
+  PropagatorHost& host_;
+  KinematicPropagator kinematic_;
+  std::string model_name_ = "kinematic";
+};
+
+}  // namespace attitude_propagator

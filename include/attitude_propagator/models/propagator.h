@@ -1,0 +1,307 @@
+// The model behind the engine: one interface, Propagator, implemented by the kinematic model
+// (KinematicModel, kinematic_model.h) and the dynamic one (DynamicScheduler,
+// dynamic_scheduler.h), and the types an input and a state travel in. The engine judges an
+// input against its source and the clock, subtracts the bias and moves rate stamps by
+// rate_delay; what the input then does to the state, when a state is published and at which
+// stamp, is the model's, which reports back through PropagatorHost (the engine: core time,
+// the counters, the sink). See docs/design.md §2 and §5.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <variant>
+
+#include <Eigen/Geometry>
+
+#include "attitude_propagator/models/dynamic_propagator.h"
+#include "attitude_propagator/numerics/dynamic_state.h"
+#include "attitude_propagator/estimation/aiding.h"
+#include "attitude_propagator/numerics/integrator.h"
+#include "attitude_propagator/models/kinematic_propagator.h"
+#include "attitude_propagator/time/source_timeline.h"
+#include "attitude_propagator/time/time_policy.h"
+
+namespace attitude_propagator {
+
+struct EngineConfig;
+
+/// Where an input came from; chooses what it means and how it is logged.
+enum class Source { Imu, Twist, Torque };
+const char* sourceName(Source source);
+
+/// A decoded input: a body rate w_B (rad/s) from Imu or Twist, or a torque (N m) in `frame`.
+struct Input {
+  Source source = Source::Imu;
+  Stamp stamp = 0;
+  Eigen::Vector3d value = Eigen::Vector3d::Zero();
+  TorqueFrame frame = TorqueFrame::Body;
+  /// Rate noise covariance in the body frame (rad²/s²); zero: the configured default.
+  Eigen::Matrix3d rate_covariance_B = Eigen::Matrix3d::Zero();
+  /// Carried through untouched and handed back with the applied input (the node keeps the
+  /// IMU message here, to republish it with the orientation at its stamp).
+  std::shared_ptr<const void> payload;
+};
+
+/// What moved a model's state: kept in the fix history and repeated by a replay of a late fix
+/// (docs/design.md §6.9). An input handed to the model, or (dynamic model) its advance to a
+/// grid stamp, `input.stamp`.
+struct ModelStep {
+  Input input;
+  bool advance = false;
+};
+
+/// The dynamic model's whole state for a replay: the propagator (knots, grid, held torque) and
+/// the torque sample it holds. Inputs still waiting for the clock are not part of it: they
+/// have not acted yet.
+struct DynamicReplayState {
+  DynamicPropagator dynamic;
+  std::optional<Input> held_torque;
+};
+
+/// A model's whole state, saved after each step while fixes are on (plain values, copied into
+/// reused slots): the kinematic propagator, or the dynamic one.
+using ModelSnapshot = std::variant<std::monostate, KinematicPropagator, DynamicReplayState>;
+
+/// The state to publish at a stamp.
+struct EngineState {
+  Stamp stamp = 0;
+  Eigen::Quaterniond q_WB = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d w_B = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d P_B = Eigen::Matrix3d::Zero();  ///< orientation error covariance, body frame
+  double norm_error = 0.0;
+  std::uint64_t steps = 0;
+  // Dynamic model only (zero in the kinematic model).
+  Eigen::Vector3d M_B = Eigen::Vector3d::Zero();  ///< angular momentum, body frame
+  double kinetic_energy = 0.0;
+  /// estimate_gyro_bias (kinematic model): the estimated gyro bias (rad/s, body frame),
+  /// subtracted from the rates on top of the configured one, and its standard deviation per
+  /// axis; zero when the bias is not estimated (docs/design.md §6.9).
+  Eigen::Vector3d gyro_bias_estimate_B = Eigen::Vector3d::Zero();
+  Eigen::Vector3d gyro_bias_stddev_B = Eigen::Vector3d::Zero();
+};
+
+/// What happened to input and time, for diagnostics. Every counter only grows.
+struct EngineCounters {
+  std::uint64_t received = 0;  ///< every input submitted or rejected
+  std::uint64_t accepted = 0;
+  std::uint64_t rejected_non_finite = 0;
+  std::uint64_t rejected_out_of_range = 0;
+  std::uint64_t rejected_no_rate = 0;     ///< REP-145: angular_velocity_covariance[0] == -1
+  std::uint64_t rejected_type = 0;        ///< a message type the topic does not take
+  std::uint64_t rejected_covariance = 0;  ///< not symmetric, negative or huge
+  /// At or before the newest input of its source (a straggler, by any amount; a run from an
+  /// earlier time that broke before it was a jump, counted when it broke; a rate older than a
+  /// set_state). The inputs of a run are counted when it breaks or is a jump (then as used).
+  std::uint64_t dropped_stale = 0;
+  std::uint64_t dropped_no_tf = 0;
+  std::uint64_t dropped_no_time = 0;
+  std::uint64_t late = 0;        ///< dynamic: arrived after the clock passed its stamp
+  std::uint64_t gaps = 0;        ///< longer than max_dt: state held
+  std::uint64_t resets = 0;      ///< the state back to the initial one: time went back, reset()
+  std::uint64_t jumps_back = 0;  ///< a source's stamps went back, and persisted
+  /// Two timelines recognised on the clock (ClockTimeline: two /clock publishers): the later
+  /// one followed, the other's ticks ignored, no reset.
+  std::uint64_t clock_conflicts = 0;
+  std::uint64_t rejected_future = 0;  ///< stamped more than max_future ahead of the clock
+  /// Jumped ahead of its source and of the clock by more than backward_jump beyond its source's
+  /// usual lead, and not yet
+  /// confirmed by kJumpConfirmation in a row: dropped (SourceTimeline::heldAhead).
+  std::uint64_t held_ahead = 0;
+  /// Dynamic: queued inputs a reset dropped (reset(), ROS time jumping back).
+  std::uint64_t dropped_on_reset = 0;
+  std::uint64_t failed_steps = 0;      ///< the integrator could not complete an interval
+  std::uint64_t pending_overflow = 0;  ///< dynamic: queue full, the furthest ahead dropped
+  std::uint64_t deferred_ticks = 0;    ///< dynamic: grid stamps left for the next call (budget)
+  /// Gyro bias samples refused: non-finite, too large, another frame, or stamped more than
+  /// max_future ahead of the clock.
+  std::uint64_t rejected_bias = 0;
+  std::uint64_t bias_queue_full = 0;  ///< 64 bias samples waiting: the furthest ahead dropped
+  std::uint64_t bias_applied = 0;     ///< bias samples that took effect (a rate reached them)
+  // Absolute attitude fixes (AttitudeEngine::submitFix, docs/design.md §6.9).
+  std::uint64_t fixes_accepted = 0;  ///< applied (fused, or as a reset)
+  std::uint64_t fixes_reset = 0;     ///< of those, applied as a reset (fix_mode reset, or a run)
+  std::uint64_t fixes_rejected_gate = 0;   ///< fuse: the innovation beyond the chi-square gate
+  std::uint64_t fixes_too_old = 0;         ///< stamped before the history (or before the anchor)
+  std::uint64_t fixes_bad_quaternion = 0;  ///< non-finite, or not of unit norm
+  std::uint64_t fixes_bad_covariance = 0;  ///< non-finite, asymmetric, negative or above pi^2
+  std::uint64_t fixes_queue_full = 0;      ///< ahead of the newest rate, the queue full: dropped
+  std::uint64_t fixes_future = 0;          ///< stamped more than max_future ahead of the clock
+  std::uint64_t fixes_over_budget = 0;     ///< late, its replay beyond the second's budget
+  // Gravity (use_accel) and the magnetic field (use_mag) as measurements (docs/design.md §6.10),
+  // named accel_* and mag_* after AidingCounters::forEach.
+  AidingCounters accel;
+  AidingCounters mag;
+};
+
+/// Calls f(name, value) for each of the engine's fix counters, without their `fixes_` prefix,
+/// in the order of docs/node.md's table: the one list the diagnostics, propagate_bag's summary
+/// and the sums of fixes not applied follow.
+template <class F>
+void forEachFixCounter(const EngineCounters& c, F&& f) {
+  f("accepted", c.fixes_accepted);
+  f("reset", c.fixes_reset);
+  f("rejected_gate", c.fixes_rejected_gate);
+  f("too_old", c.fixes_too_old);
+  f("bad_quaternion", c.fixes_bad_quaternion);
+  f("bad_covariance", c.fixes_bad_covariance);
+  f("queue_full", c.fixes_queue_full);
+  f("future", c.fixes_future);
+  f("over_budget", c.fixes_over_budget);
+}
+
+/// The fixes the engine took and did not apply: every counter of forEachFixCounter but
+/// `accepted` and `reset` (the applied ones, resets among them).
+inline std::uint64_t fixesNotApplied(const EngineCounters& c) {
+  std::uint64_t n = 0;
+  forEachFixCounter(c, [&n](const char* name, std::uint64_t value) {
+    const std::string counter(name);
+    if (counter != "accepted" && counter != "reset") n += value;
+  });
+  return n;
+}
+
+/// Something the node should log (throttled per kind).
+struct EngineNote {
+  enum Kind {
+    Gap,               ///< an input or the clock moved on by more than max_dt: state held
+    StampsJumpedBack,  ///< a source's stamps went back by more than the threshold, and persisted
+    Future,            ///< an input stamped more than max_future ahead of the clock: refused
+    ClockJumpedBack,   ///< ROS time went back by more than the threshold: reset
+    /// ROS time takes turns between two timelines (ClockTimeline): the later one followed, no
+    /// reset; stamp: the tick of the other timeline.
+    ClockTwoTimelines,
+    Stale,
+    NonFinite,
+    OutOfRange,
+    FailedStep,
+    PendingFull,
+    Deferred,
+    HeldAhead,  ///< an input further ahead of the clock than its source's others: dropped
+    /// The rates' stamps stopped fitting the stamp filter's model (SensorClockFilter::misfit()):
+    /// their receipt stamps are used until they fit again.
+    StampFilterMisfit,
+  };
+  Kind kind = Gap;
+  std::optional<Source> source;  ///< empty: the clock
+  Stamp stamp = 0;
+  /// StampFilterMisfit: the stamps' jitter and the sensor period the filter measured (s).
+  double jitter = 0.0, period = 0.0;
+};
+
+/// What a model needs from the engine that drives it. Implemented by AttitudeEngine; called
+/// synchronously from the model's methods (and may call back into the model: a gap far from
+/// the origin re-pins the state, a non-finite state resets it).
+class PropagatorHost {
+ public:
+  /// Seconds since the origin (whole seconds; the first stamp sets it).
+  virtual double coreTime(Stamp stamp) = 0;
+  /// The stamp of core time t; empty while no origin is set.
+  virtual std::optional<Stamp> stampAt(double t) const = 0;
+  /// Counts and notes a propagator outcome (source empty: the clock); true when the state
+  /// holds at the stamp.
+  virtual bool handleOutcome(StampOutcome outcome, std::optional<Source> source, Stamp stamp) = 0;
+  /// Publishes the state at `stamp` (once per stamp, increasing).
+  virtual void emitState(Stamp stamp) = 0;
+  /// Hands an applied input on with the state at `stamp`.
+  virtual void inputApplied(const Input& input, Stamp stamp) = 0;
+  /// Hands an applied input on with the state it took effect at, `at` (an input placed before
+  /// the model's time: the state at its own stamp, not the model's newest).
+  virtual void inputAppliedAt(const Input& input, Stamp stamp, const DynamicState& at) = 0;
+  virtual void note(const EngineNote& note) = 0;
+  virtual EngineCounters& mutableCounters() = 0;
+  /// The latest ROS time seen; empty before the first.
+  virtual std::optional<Stamp> clock() const = 0;
+  /// The stamp of the last state published; empty before one (or after time was forgotten).
+  virtual std::optional<Stamp> lastPublished() const = 0;
+  /// The orientation covariance: propagated over a step of length h with the step's rate
+  /// w_step and the input's rate covariance (zero: the configured one), or back to the
+  /// initial one (an anchor).
+  virtual void propagateCovariance(double h, const Eigen::Vector3d& w_step,
+                                   const Eigen::Matrix3d& rate_covariance_B) = 0;
+  virtual void anchorCovariance() = 0;
+  /// The model took a step (kept for late fixes; the model calls it after each input it
+  /// handled, whatever became of it, and after each advance to a grid stamp).
+  virtual void stepTaken(const ModelStep& step) = 0;
+
+ protected:
+  ~PropagatorHost() = default;
+};
+
+/// A model: what an input does to the state and when states are published. Every call but
+/// setState and reconfigure never throws.
+class Propagator {
+ public:
+  virtual ~Propagator() = default;
+
+  /// An input in order for its source, not ahead of the clock by more than max_future, bias
+  /// subtracted, rate stamps moved by rate_delay. Kinematic: integrated now, the state at its
+  /// stamp published. Dynamic: applied when the clock reaches its stamp (at once when the
+  /// propagator has already passed it).
+  virtual void submit(const Input& input) = 0;
+  /// Publishes what is due up to the clock (host clock()): the dynamic model's grid stamps,
+  /// within the budgets; skip_intermediate: only the newest (the clock jumped by a gap).
+  /// Kinematic: nothing (its states follow the inputs).
+  virtual void publishDue(bool skip_intermediate) = 0;
+
+  /// Pins the state at core time t (a new anchor). Throws std::invalid_argument, leaving the
+  /// state unchanged, for a state the propagator refuses.
+  virtual void setState(double t, const Eigen::Quaterniond& q_WB, const Eigen::Vector3d& w_B) = 0;
+  /// Back to the initial state, waiting for an anchor; queued inputs are dropped (counted).
+  virtual void reset() = 0;
+  /// A source's stamps went back, and persisted. True when the model's time is the inputs'
+  /// (kinematic: the engine starts time again, from the initial state); otherwise the model
+  /// goes on, the source's inputs acting late.
+  virtual bool restartInputOrder(Source source) = 0;
+  /// A new propagator from `next` (same model), started from the current state at the current
+  /// time; queued inputs and a held torque stay. Throws std::invalid_argument, leaving
+  /// everything unchanged, when `next` is refused.
+  virtual void reconfigure(const EngineConfig& next) = 0;
+
+  /// The state at the propagator's newest stamp (stamp and P_B left to the engine).
+  virtual EngineState state() const = 0;
+  /// Inputs waiting for the clock (dynamic model).
+  virtual std::size_t pending() const = 0;
+  virtual Model model() const = 0;
+  /// "kinematic" or the dynamic propagator's model name.
+  virtual const std::string& modelName() const = 0;
+  virtual Integrator integrator() const = 0;
+  /// Relative drifts of energy and |M| since the anchor (dynamic model; 0 otherwise).
+  virtual double energyDrift() const = 0;
+  virtual double momentumDrift() const = 0;
+  /// True when the model gives each of several rate samples stamped alike its own stamp (the
+  /// sensor-clock filter's FIFO reads): the engine then lets a repeated stamp through.
+  virtual bool takesRepeatedRateStamps() const { return false; }
+  /// The kinematic propagator, for its diagnostics; nullptr in the dynamic model.
+  virtual const KinematicPropagator* kinematic() const { return nullptr; }
+
+  // Late fixes (docs/design.md §6.9): the engine saves the model after each step, sets it back
+  // to a saved state, corrects it there and repeats the steps since.
+  /// The model's core time when it has a state to save (anchored); empty otherwise.
+  virtual std::optional<double> savedTime() const = 0;
+  /// Saves the whole state into `into` (reusing its storage when it holds this model's).
+  virtual void save(ModelSnapshot& into) const = 0;
+  /// Back to a state saved by this model (a snapshot of another kind is ignored).
+  virtual void restore(const ModelSnapshot& from) = 0;
+  /// Moves a restored model on to core time t, short of its next saved step, so that a fix
+  /// stamped there acts at its own stamp. False when the model moves only by its steps
+  /// (kinematic: a step needs the next sample; the fix is then carried back to the model's
+  /// time along the geodesic).
+  virtual bool advanceForFix(double t) = 0;
+  /// Replaces the orientation at the model's time; everything else (the rate, the sample
+  /// window, the knots and grid, the held torque) stays.
+  virtual void correctOrientation(const Eigen::Quaterniond& q_WB) = 0;
+  /// Repeats a saved step in a replay (the host then neither counts nor publishes).
+  virtual void replay(const ModelStep& step) = 0;
+};
+
+/// The time policy of the model `config` asks for.
+const TimePolicy& timePolicyOf(const EngineConfig& config);
+
+/// The model `config` asks for. Throws std::invalid_argument (from the propagators) for an
+/// invalid configuration.
+std::unique_ptr<Propagator> makePropagator(const EngineConfig& config, PropagatorHost& host);
+
+}  // namespace attitude_propagator

@@ -1,0 +1,283 @@
+#include "attitude_propagator/models/dynamic_scheduler.h"
+
+#include <algorithm>
+#include <exception>
+#include <iterator>
+#include <stdexcept>
+#include <utility>
+#include <variant>
+
+#include "attitude_propagator/models/engine_config.h"
+
+namespace attitude_propagator {
+
+namespace {
+
+const DynamicConfig& dynamicConfig(const EngineConfig& config) {
+  if (!config.dynamic) throw std::invalid_argument("model: dynamic needs a dynamic config");
+  return *config.dynamic;
+}
+
+}  // namespace
+
+DynamicScheduler::DynamicScheduler(const EngineConfig& config, PropagatorHost& host)
+    : host_(host),
+      dynamic_(dynamicConfig(config)),
+      model_name_(dynamic_.modelName()),
+      publish_rate_(config.publish_rate),
+      max_pending_(config.max_pending),
+      grid_budget_(config.grid_budget),
+      work_budget_(config.work_budget) {
+  pending_.reserve(max_pending_);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Inputs
+// ---------------------------------------------------------------------------------------------
+
+void DynamicScheduler::submit(const Input& input) {
+  const double t = host_.coreTime(input.stamp);
+  // Not anchored: the input anchors, unless the clock is known and behind its stamp; then the
+  // clock's next grid stamp anchors, and the input waits for its stamp like any other (an
+  // input stamped in the year 2100 must not carry the propagator away from the clock).
+  const std::optional<Stamp> clock = host_.clock();
+  const bool wait_for_clock = !dynamic_.anchored() && clock && input.stamp > *clock;
+  if (!wait_for_clock && (!dynamic_.anchored() || t <= dynamic_.time())) {
+    applyDynamic(input);  // anchors, or late (the core places it), or a jump back
+    return;
+  }
+  // Ahead of the propagator: held until the clock reaches its stamp, so the state published
+  // at a grid stamp sees exactly the inputs stamped up to it.
+  if (pending_.size() >= max_pending_) {
+    // Full: the input stamped furthest ahead of the clock goes (applying one early would carry
+    // the propagator ahead of the clock, and nothing could be published until it caught up).
+    ++host_.mutableCounters().pending_overflow;
+    host_.note({EngineNote::PendingFull, input.source, input.stamp});
+    if (input.stamp >= pending_.back().stamp) return;
+    pending_.pop_back();
+  }
+  const auto at =
+      std::upper_bound(pending_.begin(), pending_.end(), input.stamp,
+                       [](Stamp stamp, const Input& other) { return stamp < other.stamp; });
+  pending_.insert(at, input);
+}
+
+void DynamicScheduler::applyDynamic(const Input& input) {
+  const double t = host_.coreTime(input.stamp);
+  // The core places an input that arrives after the clock passed its stamp (transport
+  // latency) at the last grid point, and drops one not newer than the stream's previous one.
+  const bool late = dynamic_.anchored() && t < dynamic_.time();
+  // Before it acts: the state at its own stamp, where the clock had already passed.
+  const std::optional<DynamicState> at_stamp = late ? recent_.at(t) : std::nullopt;
+  const StampOutcome outcome = applyToModel(input);
+  if (late && outcome == StampOutcome::Advanced) ++host_.mutableCounters().late;
+  if (host_.handleOutcome(outcome, input.source, input.stamp)) {
+    if (at_stamp) {
+      host_.inputAppliedAt(input, input.stamp, *at_stamp);
+    } else {
+      host_.inputApplied(input, input.stamp);
+    }
+  }
+  host_.stepTaken(ModelStep{input, false});
+}
+
+StampOutcome DynamicScheduler::applyToModel(const Input& input) {
+  const double t = host_.coreTime(input.stamp);
+  StampOutcome outcome;
+  try {
+    outcome = input.source == Source::Torque ? dynamic_.setTorque(t, input.value, input.frame)
+                                             : dynamic_.setRate(t, input.value);
+  } catch (const std::exception&) {
+    // The exact torque-free model refuses a non-zero torque: the configuration excludes it
+    // (no torque subscription), so this is a programming error caught rather than propagated.
+    outcome = StampOutcome::RejectedNonFinite;
+  }
+  if (input.source == Source::Torque && stateHoldsAtStamp(outcome)) held_torque_ = input;
+  return outcome;
+}
+
+void DynamicScheduler::applyPendingUpTo(Stamp stamp) {
+  std::size_t n = 0;
+  while (n < pending_.size() && pending_[n].stamp <= stamp) ++n;
+  if (n == 0) return;
+  // Moved out first: applying may reset the engine, which clears the queue.
+  std::vector<Input> due(std::make_move_iterator(pending_.begin()),
+                         std::make_move_iterator(pending_.begin() + n));
+  pending_.erase(pending_.begin(), pending_.begin() + n);
+  for (const Input& input : due) applyDynamic(input);
+}
+
+bool DynamicScheduler::restartInputOrder(Source source) {
+  // The dynamic model's time is the clock's, which did not go back: the source's inputs go on
+  // as late inputs. Its queued inputs from the old timeline would come after them: dropped.
+  const auto old = std::remove_if(pending_.begin(), pending_.end(),
+                                  [source](const Input& i) { return i.source == source; });
+  host_.mutableCounters().dropped_stale += static_cast<std::uint64_t>(pending_.end() - old);
+  pending_.erase(old, pending_.end());
+  dynamic_.restartInputOrder();
+  return false;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The publish grid
+// ---------------------------------------------------------------------------------------------
+
+void DynamicScheduler::publishDue(bool skip_intermediate) {
+  const std::optional<Stamp> clock = host_.clock();
+  if (!clock) return;
+  const std::optional<Stamp> last_published = host_.lastPublished();
+  const std::int64_t k_now = gridIndexAtOrBefore(*clock, publish_rate_);
+  std::int64_t k = k_now;
+  if (last_published && !skip_intermediate) {
+    k = std::min(gridIndexAtOrBefore(*last_published, publish_rate_) + 1, k_now);
+  }
+  std::size_t handled = 0;
+  std::uint64_t work = 0;
+  for (; k <= k_now; ++k) {
+    if (handled++ == grid_budget_ || work >= work_budget_) {
+      // Bounded work per call: the rest is published on the next tick or poll.
+      ++host_.mutableCounters().deferred_ticks;
+      host_.note({EngineNote::Deferred, std::nullopt, gridStamp(k, publish_rate_)});
+      return;
+    }
+    publishGridStamp(gridStamp(k, publish_rate_));
+    work += dynamic_.lastCallWork();
+  }
+}
+
+void DynamicScheduler::publishGridStamp(Stamp stamp) {
+  applyPendingUpTo(stamp);
+  const std::optional<Stamp> last_published = host_.lastPublished();
+  if (last_published && stamp <= *last_published) return;
+  const double t = host_.coreTime(stamp);
+  if (dynamic_.anchored() && t < dynamic_.time()) return;  // set_state pinned a later time
+  if (!dynamic_.anchored() || t > dynamic_.time()) {
+    const StampOutcome outcome = dynamic_.advanceTo(t);
+    const bool holds = host_.handleOutcome(outcome, std::nullopt, stamp);
+    Input grid;
+    grid.stamp = stamp;
+    host_.stepTaken(ModelStep{grid, true});
+    if (!holds) return;
+  }
+  recent_.push(dynamic_.time(), dynamic_.state());
+  host_.emitState(stamp);  // also when an input stamped exactly here brought the state to it
+}
+
+void DynamicScheduler::RecentStates::push(double t, const DynamicState& state) {
+  if (size_ > 0 && !(t > entry(size_ - 1).t)) return;  // one per time, increasing
+  if (size_ < kKept) {
+    ring_[(head_ + size_++) % kKept] = {t, state};
+  } else {
+    ring_[head_] = {t, state};
+    head_ = (head_ + 1) % kKept;
+  }
+}
+
+std::optional<DynamicState> DynamicScheduler::RecentStates::at(double t) const {
+  for (std::size_t i = 1; i < size_; ++i) {
+    const Entry& a = entry(i - 1);
+    const Entry& b = entry(i);
+    if (t < a.t || t > b.t) continue;
+    const double s = (t - a.t) / (b.t - a.t);
+    DynamicState x;
+    x.q_WB = a.state.q_WB.slerp(s, b.state.q_WB);
+    x.w_B = (1.0 - s) * a.state.w_B + s * b.state.w_B;
+    return x;
+  }
+  return std::nullopt;
+}
+
+// ---------------------------------------------------------------------------------------------
+// State
+// ---------------------------------------------------------------------------------------------
+
+void DynamicScheduler::setState(double t, const Eigen::Quaterniond& q_WB,
+                                const Eigen::Vector3d& w_B) {
+  dynamic_.setState(t, DynamicState{q_WB, w_B});
+  recent_.clear();
+}
+
+void DynamicScheduler::reset() {
+  host_.mutableCounters().dropped_on_reset += pending_.size();  // every input is accounted for
+  dynamic_.reset();
+  pending_.clear();
+  held_torque_.reset();
+  recent_.clear();
+}
+
+void DynamicScheduler::reconfigure(const EngineConfig& next) {
+  DynamicPropagator d(dynamicConfig(next));
+  if (dynamic_.anchored()) {
+    const double t = dynamic_.time();
+    d.setState(t, dynamic_.state());
+    const double timeout = next.dynamic->torque_timeout;
+    if (held_torque_ && !(timeout > 0.0 && t - host_.coreTime(held_torque_->stamp) >= timeout)) {
+      // At its own stamp, behind the new anchor: it acts from the anchor, and a torque in
+      // transit stamped after it is still newer, not stale.
+      d.setTorque(host_.coreTime(held_torque_->stamp), held_torque_->value, held_torque_->frame);
+    }
+  }
+  dynamic_ = std::move(d);
+  recent_.clear();
+  model_name_ = dynamic_.modelName();
+  publish_rate_ = next.publish_rate;
+  max_pending_ = next.max_pending;
+  grid_budget_ = next.grid_budget;
+  work_budget_ = next.work_budget;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Late fixes (docs/design.md §6.9): the steps are the inputs applied and the advances to grid
+// stamps, so a replay repeats exactly the calls that made the state; the knots depend only on
+// them (§4.4), so the state after a replay is the one a fix on time would have given.
+// ---------------------------------------------------------------------------------------------
+
+std::optional<double> DynamicScheduler::savedTime() const {
+  if (!dynamic_.anchored()) return std::nullopt;
+  return dynamic_.time();
+}
+
+void DynamicScheduler::save(ModelSnapshot& into) const {
+  if (auto* saved = std::get_if<DynamicReplayState>(&into)) {
+    saved->dynamic = dynamic_;  // into the slot's own storage
+    saved->held_torque = held_torque_;
+    return;
+  }
+  into = DynamicReplayState{dynamic_, held_torque_};
+}
+
+void DynamicScheduler::restore(const ModelSnapshot& from) {
+  if (const auto* saved = std::get_if<DynamicReplayState>(&from)) {
+    dynamic_ = saved->dynamic;
+    held_torque_ = saved->held_torque;
+    recent_.clear();
+  }
+}
+
+bool DynamicScheduler::advanceForFix(double t) {
+  // From a saved state short of the next step: no input acts in between, so the state at t is
+  // the last knot advanced to t, as the live model had it there.
+  if (dynamic_.anchored() && t > dynamic_.time()) dynamic_.advanceTo(t);
+  return true;
+}
+
+void DynamicScheduler::replay(const ModelStep& step) {
+  if (step.advance) {
+    dynamic_.advanceTo(host_.coreTime(step.input.stamp));
+    return;
+  }
+  applyToModel(step.input);
+}
+
+EngineState DynamicScheduler::state() const {
+  EngineState s;
+  s.q_WB = dynamic_.state().q_WB;
+  s.w_B = dynamic_.state().w_B;
+  s.norm_error = dynamic_.normError();
+  s.steps = dynamic_.steps();
+  s.M_B = dynamic_.angularMomentum_B();
+  s.kinetic_energy = dynamic_.kineticEnergy();
+  return s;
+}
+
+}  // namespace attitude_propagator

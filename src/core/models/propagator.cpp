@@ -1,0 +1,30 @@
+#include "attitude_propagator/models/propagator.h"
+
+#include "attitude_propagator/models/dynamic_scheduler.h"
+#include "attitude_propagator/models/engine_config.h"
+#include "attitude_propagator/models/kinematic_model.h"
+
+namespace attitude_propagator {
+
+const char* sourceName(Source source) {
+  switch (source) {
+    case Source::Imu:
+      return "imu/data_raw";
+    case Source::Twist:
+      return "body_twist";
+    case Source::Torque:
+      return "torque";
+  }
+  return "input";
+}
+
+const TimePolicy& timePolicyOf(const EngineConfig& config) {
+  return config.dynamic ? config.dynamic->time_policy : config.kinematic.time_policy;
+}
+
+std::unique_ptr<Propagator> makePropagator(const EngineConfig& config, PropagatorHost& host) {
+  if (config.model == Model::Dynamic) return std::make_unique<DynamicScheduler>(config, host);
+  return std::make_unique<KinematicModel>(config, host);
+}
+
+}  // namespace attitude_propagator
