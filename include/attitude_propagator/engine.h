@@ -20,16 +20,16 @@
 
 #include <Eigen/Geometry>
 
-#include "attitude_propagator/models/dynamic_propagator.h"
 #include "attitude_propagator/estimation/aiding.h"
 #include "attitude_propagator/estimation/error_state.h"
 #include "attitude_propagator/estimation/magnetic_heading.h"
 #include "attitude_propagator/estimation/measurement.h"
+#include "attitude_propagator/estimation/replay_budget.h"
+#include "attitude_propagator/models/dynamic_propagator.h"
 #include "attitude_propagator/models/engine_config.h"
-#include "attitude_propagator/numerics/integrator.h"
 #include "attitude_propagator/models/kinematic_propagator.h"
 #include "attitude_propagator/models/propagator.h"
-#include "attitude_propagator/estimation/replay_budget.h"
+#include "attitude_propagator/numerics/integrator.h"
 #include "attitude_propagator/time/source_timeline.h"
 
 namespace attitude_propagator {
@@ -83,6 +83,8 @@ struct FixHistoryEntry {
   /// The state was not reached by a step (the newest one when the history started, a pinned
   /// state): restored, never replayed.
   bool base = false;
+  /// Names the entry while it is kept, wherever insertions and drops move it.
+  std::uint64_t id = 0;
 };
 
 /// Inputs arriving on average more than this many seconds away from the clock (behind, or
@@ -264,6 +266,19 @@ class AttitudeEngine : private PropagatorHost {
     Eigen::Quaterniond q_WB;
     Eigen::Matrix3d R_B;
   };
+  /// An applied fix, and the entries it changed in place as they were before it: the one it
+  /// acted at and, when it acted between two, the next one (the geodesic's other end).
+  struct AppliedFix {
+    PendingFix fix;
+    std::vector<FixHistoryEntry> before;
+  };
+  /// Applied fixes taken out to be applied again after an earlier fix or measurement, the
+  /// entries they had changed set back, and those entries as they were, should nothing be
+  /// applied after all.
+  struct TakenFixes {
+    std::vector<AppliedFix> fixes;
+    std::vector<FixHistoryEntry> replaced;
+  };
   /// Hands a rate input to the model, the bias estimate subtracted.
   void submitToModel(const Input& input);
   /// Appends the model's state after `step` to the history, drops what is too old.
@@ -281,16 +296,23 @@ class AttitudeEngine : private PropagatorHost {
   /// Applies a fix stamped at or before the newest entry, then again the fixes applied earlier
   /// that are stamped after it, in stamp order: the order they would have had on time.
   FixOutcome applyInStampOrder(const PendingFix& fix);
-  /// Applies a fix stamped at or before the newest entry.
-  FixOutcome applyFix(const PendingFix& fix);
+  /// Applies a fix stamped at or before the newest entry; when applied, `before` receives the
+  /// entries it changed in place, as they were.
+  FixOutcome applyFix(const PendingFix& fix, std::vector<FixHistoryEntry>& before);
   /// The first applied fix stamped after `stamp` (fixes of equal stamps keep their order).
-  std::vector<PendingFix>::iterator firstAppliedAfter(Stamp stamp);
-  /// The applied fixes stamped after `stamp`, taken out of those kept, in stamp order.
-  std::vector<PendingFix> takeAppliedAfter(Stamp stamp);
+  std::vector<AppliedFix>::iterator firstAppliedAfter(Stamp stamp);
+  /// The applied fixes stamped after `stamp`, taken out of those kept, in stamp order, and the
+  /// entries they changed set back to what they were before them (the latest first), so that
+  /// a fix or measurement stamped before them acts without them, and none counts twice.
+  TakenFixes takeAppliedAfter(Stamp stamp);
+  /// Undoes takeAppliedAfter: the entries as they were, the fixes kept again.
+  void putBack(TakenFixes&& taken);
   /// Applies fixes again after an earlier fix or measurement, keeping those applied.
-  void applyAgain(const std::vector<PendingFix>& fixes);
+  void applyAgain(const std::vector<AppliedFix>& fixes);
   /// Keeps an applied fix (stamped at or after those kept) to be applied again.
-  void keepApplied(const PendingFix& fix);
+  void keepApplied(AppliedFix&& applied);
+  /// The index of the history entry named `id`; empty when it is no longer kept.
+  std::optional<std::size_t> findHistoryEntry(std::uint64_t id);
   /// Saves the model's state after a replayed step into its entry.
   void saveReplayed(FixHistoryEntry& entry);
   /// Whether a fix or measurement at `stamp`, its replay and the re-applications after it fit
@@ -350,7 +372,6 @@ class AttitudeEngine : private PropagatorHost {
   std::unique_ptr<Propagator> propagator_;
   Eigen::Matrix3d default_R_B_;
   ErrorState error_;  // P_B, and the bias estimate with its covariances
-  Eigen::Matrix3d& P_B_ = error_.P_B;
   Eigen::Vector3d gyro_bias_B_ = Eigen::Vector3d::Zero();
   std::vector<std::pair<Stamp, Eigen::Vector3d>> pending_gyro_bias_;  // sorted by stamp, bounded
 
@@ -373,7 +394,8 @@ class AttitudeEngine : private PropagatorHost {
   std::size_t history_head_ = 0;
   std::size_t history_size_ = 0;
   std::vector<PendingFix> pending_fixes_;  // sorted by stamp, at most kMaxPendingFixes
-  std::vector<PendingFix> applied_fixes_;  // the newest applied, by stamp, kMaxFixesReapplied
+  std::vector<AppliedFix> applied_fixes_;  // the newest applied, by stamp, kMaxFixesReapplied
+  std::uint64_t last_history_id_ = 0;      // the id of the newest entry recorded or inserted
   ReplayBudget replay_budget_;             // states replayed per second of stamp time
   std::optional<Stamp> forgotten_fix_;     // the newest applied fix's stamp no longer kept
   int rejected_in_a_row_ = 0;

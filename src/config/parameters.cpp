@@ -229,7 +229,6 @@ void applyStreamParameters(const Parameters& p, KinematicConfig& kinematic) {
   kinematic.average_stamp = averageStampFromName(p.average_stamp);
   kinematic.stamp_filter = stampFilterFromName(p.stamp_filter);
   kinematic.max_gap_fill = p.max_gap_fill;
-  kinematic.gyro_bias_B = Eigen::Vector3d(p.gyro_bias[0], p.gyro_bias[1], p.gyro_bias[2]);
 }
 
 // Gravity and the field are measurements of the kinematic model only (the dynamic model's
@@ -412,10 +411,9 @@ EngineConfig engineConfig(const NodeConfig& node) {
   config.rate_delay = node.parameters.rate_delay;
   config.rate_stddev = node.parameters.angular_velocity_stddev;
   config.initial_orientation_stddev = node.parameters.initial_orientation_stddev;
-  // The engine subtracts the bias (the parameter, then the bias topic) for both models.
-  config.gyro_bias_B = node.kinematic.gyro_bias_B;
-  config.kinematic.gyro_bias_B.setZero();
   const Parameters& p = node.parameters;
+  // The engine subtracts the bias (the parameter, then the bias topic) for both models.
+  config.gyro_bias_B = Eigen::Vector3d(p.gyro_bias[0], p.gyro_bias[1], p.gyro_bias[2]);
   config.fixes.mode = p.fix_mode == "reset" ? FixMode::Reset : FixMode::Fuse;
   config.fixes.history = p.fix_history;
   config.fixes.gate = p.fix_gate;

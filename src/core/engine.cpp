@@ -8,10 +8,10 @@
 #include <Eigen/Cholesky>
 
 #include "attitude_propagator/estimation/attitude_fix.h"
-#include "attitude_propagator/limits.h"
 #include "attitude_propagator/estimation/orientation_covariance.h"
-#include "attitude_propagator/time/publish_grid.h"
+#include "attitude_propagator/limits.h"
 #include "attitude_propagator/numerics/quaternion.h"
+#include "attitude_propagator/time/publish_grid.h"
 
 namespace attitude_propagator {
 
@@ -104,7 +104,6 @@ bool validFixCovariance(const Eigen::Matrix3d& R) {
 
 }  // namespace
 
-
 const char* fixOutcomeName(FixOutcome outcome) {
   switch (outcome) {
     case FixOutcome::Accepted:
@@ -156,7 +155,7 @@ AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink)
   if (config_.fixes.estimate_gyro_bias && config_.model != Model::Kinematic) {
     throw std::invalid_argument("estimate_gyro_bias: accepted: true with the kinematic model only");
   }
-  P_B_ = initialCovariance();
+  error_.P_B = initialCovariance();
   resetBiasState();
 }
 
@@ -173,7 +172,7 @@ Eigen::Vector3d AttitudeEngine::gyroBiasStddev() const {
 }
 
 void AttitudeEngine::anchorCovariance() {
-  P_B_ = initialCovariance();
+  error_.P_B = initialCovariance();
   error_.P_Bb.setZero();  // the initial attitude's error owes nothing to the bias
 }
 
@@ -505,7 +504,7 @@ bool AttitudeEngine::handleOutcome(StampOutcome outcome, std::optional<Source> s
 
 EngineState AttitudeEngine::state() const {
   EngineState s = propagator_->state();
-  s.P_B = P_B_;
+  s.P_B = error_.P_B;
   if (config_.fixes.estimate_gyro_bias) {
     s.gyro_bias_estimate_B = error_.bias_B;
     s.gyro_bias_stddev_B = gyroBiasStddev();
@@ -552,7 +551,7 @@ void AttitudeEngine::propagateCovariance(double h, const Eigen::Vector3d& w_step
                                          const Eigen::Matrix3d& rate_covariance_B) {
   const Eigen::Matrix3d& R_B = rate_covariance_B.isZero(0.0) ? default_R_B_ : rate_covariance_B;
   if (!config_.fixes.estimate_gyro_bias) {
-    P_B_ = propagateOrientationCovariance(P_B_, h, w_step, R_B);
+    error_.P_B = propagateOrientationCovariance(error_.P_B, h, w_step, R_B);
     return;
   }
   // The error state (dtheta_B, db), numerics.md §7.1: the rate used is the measured one less
@@ -592,7 +591,7 @@ void AttitudeEngine::capBiasCovariance(ErrorState& e) {
 
 void AttitudeEngine::resetState(bool forget_time) {
   propagator_->reset();  // queued inputs dropped, counted
-  P_B_ = initialCovariance();
+  error_.P_B = initialCovariance();
   error_.P_Bb.setZero();  // the bias estimate stays: it belongs to the gyro, not to the timeline
   clearHistory();
   // Waiting fixes are stamped before the new anchor now: too old (docs/design.md §6.9), not
@@ -663,7 +662,7 @@ std::string AttitudeEngine::setState(Stamp stamp, const Eigen::Quaterniond& q_WB
   } catch (const std::exception& e) {
     return e.what();
   }
-  P_B_.setZero();  // pinned: the state is what the caller says it is
+  error_.P_B.setZero();  // pinned: the state is what the caller says it is
   error_.P_Bb.setZero();
   tilt_known_ = true;
   clearHistory();  // a fix stamped before the pin is too old
@@ -787,6 +786,7 @@ void AttitudeEngine::recordHistory(const ModelStep& step, bool base) {
   fillEntry(*slot);
   slot->stamp = *stamp;
   slot->base = base;
+  slot->id = ++last_history_id_;
   // Keep the newest entry at or before newest - fix_history (a fix stamped exactly there needs
   // it), drop the ones before it.
   const Stamp span = static_cast<Stamp>(std::llround(config_.fixes.history * 1e9));
@@ -820,44 +820,74 @@ FixHistoryEntry& AttitudeEngine::nextHistorySlot() {
 FixOutcome AttitudeEngine::applyInStampOrder(const PendingFix& fix) {
   if (forgotten_fix_ && fix.stamp < *forgotten_fix_) return FixOutcome::TooOld;
   if (!replayAffordable(fix.stamp)) return FixOutcome::OverBudget;
-  std::vector<PendingFix> again = takeAppliedAfter(fix.stamp);
-  const FixOutcome outcome = applyFix(fix);
+  TakenFixes again = takeAppliedAfter(fix.stamp);
+  std::vector<FixHistoryEntry> before;
+  const FixOutcome outcome = applyFix(fix, before);
   if (outcome != FixOutcome::Accepted && outcome != FixOutcome::Reset) {
-    applied_fixes_.insert(applied_fixes_.end(), again.begin(), again.end());  // untouched
+    putBack(std::move(again));  // untouched
     return outcome;
   }
-  keepApplied(fix);
-  applyAgain(again);
+  keepApplied({fix, std::move(before)});
+  applyAgain(again.fixes);
   return outcome;
 }
 
-std::vector<AttitudeEngine::PendingFix>::iterator AttitudeEngine::firstAppliedAfter(Stamp stamp) {
+std::vector<AttitudeEngine::AppliedFix>::iterator AttitudeEngine::firstAppliedAfter(Stamp stamp) {
   return std::upper_bound(applied_fixes_.begin(), applied_fixes_.end(), stamp,
-                          [](Stamp t, const PendingFix& other) { return t < other.stamp; });
+                          [](Stamp t, const AppliedFix& other) { return t < other.fix.stamp; });
 }
 
-std::vector<AttitudeEngine::PendingFix> AttitudeEngine::takeAppliedAfter(Stamp stamp) {
+// A fix corrects the entry it acts at in place (and the replay rewrites the ones after it). A
+// fix or measurement stamped before it that acts at the same entry must find that entry as it
+// was without it, or the later fix, applied again after it, would count twice.
+AttitudeEngine::TakenFixes AttitudeEngine::takeAppliedAfter(Stamp stamp) {
   const auto later = firstAppliedAfter(stamp);
-  std::vector<PendingFix> taken(later, applied_fixes_.end());
+  TakenFixes taken;
+  taken.fixes.assign(std::make_move_iterator(later), std::make_move_iterator(applied_fixes_.end()));
   applied_fixes_.erase(later, applied_fixes_.end());
+  for (auto g = taken.fixes.rbegin(); g != taken.fixes.rend(); ++g) {
+    for (const FixHistoryEntry& was : g->before) {
+      if (const std::optional<std::size_t> i = findHistoryEntry(was.id)) {
+        taken.replaced.push_back(historyEntry(*i));
+        historyEntry(*i) = was;
+      }
+    }
+  }
   return taken;
 }
 
-void AttitudeEngine::applyAgain(const std::vector<PendingFix>& fixes) {
+void AttitudeEngine::putBack(TakenFixes&& taken) {
+  for (auto e = taken.replaced.rbegin(); e != taken.replaced.rend(); ++e) {
+    if (const std::optional<std::size_t> i = findHistoryEntry(e->id)) historyEntry(*i) = *e;
+  }
+  applied_fixes_.insert(applied_fixes_.end(), std::make_move_iterator(taken.fixes.begin()),
+                        std::make_move_iterator(taken.fixes.end()));
+}
+
+std::optional<std::size_t> AttitudeEngine::findHistoryEntry(std::uint64_t id) {
+  for (std::size_t i = history_size_; i > 0; --i) {
+    if (historyEntry(i - 1).id == id) return i - 1;
+  }
+  return std::nullopt;
+}
+
+void AttitudeEngine::applyAgain(const std::vector<AppliedFix>& fixes) {
   // Not counted again; one the gate now rejects is dropped; the gate's run of rejections is the
   // arrivals'.
   const int rejected_in_a_row = rejected_in_a_row_;
-  for (const PendingFix& g : fixes) {
-    const FixOutcome o = applyFix(g);
-    if (o == FixOutcome::Accepted || o == FixOutcome::Reset) keepApplied(g);
+  for (const AppliedFix& g : fixes) {
+    std::vector<FixHistoryEntry> before;
+    const FixOutcome o = applyFix(g.fix, before);
+    if (o == FixOutcome::Accepted || o == FixOutcome::Reset)
+      keepApplied({g.fix, std::move(before)});
   }
   rejected_in_a_row_ = rejected_in_a_row;
 }
 
-void AttitudeEngine::keepApplied(const PendingFix& fix) {
-  applied_fixes_.push_back(fix);
+void AttitudeEngine::keepApplied(AppliedFix&& applied) {
+  applied_fixes_.push_back(std::move(applied));
   if (applied_fixes_.size() > kMaxFixesReapplied) {
-    forgotten_fix_ = applied_fixes_.front().stamp;
+    forgotten_fix_ = applied_fixes_.front().fix.stamp;
     applied_fixes_.erase(applied_fixes_.begin());
   }
 }
@@ -896,7 +926,7 @@ std::optional<AttitudeEngine::Located> AttitudeEngine::locate(Stamp stamp) {
   return at;
 }
 
-FixOutcome AttitudeEngine::applyFix(const PendingFix& fix) {
+FixOutcome AttitudeEngine::applyFix(const PendingFix& fix, std::vector<FixHistoryEntry>& before) {
   const std::optional<Located> at = locate(fix.stamp);
   if (!at) return FixOutcome::TooOld;
   const AttitudeFix measurement(fix.q_WB, fix.R_B, config_.fixes.gate);
@@ -915,7 +945,10 @@ FixOutcome AttitudeEngine::applyFix(const PendingFix& fix) {
   rejected_in_a_row_ = 0;
 
   // The corrected state replaces the saved one (moved to the fix's stamp when the model moved
-  // there), and the steps since are repeated from it.
+  // there), and the steps since are repeated from it. The entries as they were are kept with the
+  // fix, for a fix or measurement stamped before it that arrives later (takeAppliedAfter).
+  before.assign(1, historyEntry(at->k));
+  if (at->k + 1 < history_size_) before.push_back(historyEntry(at->k + 1));
   propagator_->correctOrientation(q * at->D.conjugate());
   error_ = moveErrorState(e, at->D.conjugate());
   saveReplayed(historyEntry(at->k));

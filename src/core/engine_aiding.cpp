@@ -8,8 +8,8 @@
 #include "attitude_propagator/engine.h"
 #include "attitude_propagator/estimation/gravity_direction.h"
 #include "attitude_propagator/estimation/magnetic_heading.h"
-#include "attitude_propagator/limits.h"
 #include "attitude_propagator/estimation/orientation_covariance.h"
+#include "attitude_propagator/limits.h"
 
 namespace attitude_propagator {
 
@@ -195,14 +195,19 @@ AidingOutcome AttitudeEngine::applyMeasurement(const PendingMeasurement& pm) {
   // Late: applied where it belongs, the steps since repeated, and the fixes applied after its
   // stamp applied again after it (as a late fix does), when its second can afford the replay.
   if (!replayAffordable(pm.stamp)) return AidingOutcome::OverBudget;
+  TakenFixes again = takeAppliedAfter(pm.stamp);
   const std::optional<Located> at = locate(pm.stamp);
-  if (!at) return AidingOutcome::TooOld;
+  if (!at) {
+    putBack(std::move(again));
+    return AidingOutcome::TooOld;
+  }
   Eigen::Quaterniond q = at->q_k * at->D;
   ErrorState e = moveErrorState(historyEntry(at->k).error, at->D);
   bool reset = false;
   const AidingOutcome outcome = decideMeasurement(*pm.measurement, pm.stamp, pm.value, q, e, reset);
   if (outcome == AidingOutcome::RejectedGate) {
     propagator_->restore(live_);
+    putBack(std::move(again));
     return outcome;
   }
   const Stamp base_stamp = historyEntry(at->k).stamp;
@@ -218,7 +223,7 @@ AidingOutcome AttitudeEngine::applyMeasurement(const PendingMeasurement& pm) {
   fillEntry(entry);
   entry.stamp = base_stamp;
   replayFrom(pos + 1);
-  applyAgain(takeAppliedAfter(pm.stamp));
+  applyAgain(again.fixes);
   return outcome;
 }
 
@@ -250,6 +255,7 @@ FixHistoryEntry& AttitudeEngine::insertHistoryEntry(std::size_t& pos) {
                      history_.begin() + static_cast<std::ptrdiff_t>(history_size_),
                      history_.begin() + static_cast<std::ptrdiff_t>(history_size_) + 1);
   ++history_size_;
+  history_[pos].id = ++last_history_id_;
   return history_[pos];
 }
 

@@ -12,8 +12,8 @@
 #include <limits>
 #include <vector>
 
-#include "attitude_propagator/numerics/coning_motion.h"
 #include "attitude_propagator/models/kinematic_propagator.h"
+#include "attitude_propagator/numerics/coning_motion.h"
 #include "attitude_propagator/numerics/kinematic_step.h"
 #include "attitude_propagator/numerics/quaternion.h"
 #include "attitude_propagator/time/stamp_filter.h"
@@ -390,22 +390,6 @@ TEST(Dropouts, ASecondLongDropoutUnderMaxDtIsHeld) {
             ap::StampOutcome::HeldGap);
   EXPECT_LT(ap::rotationAngle(propagator.orientation(), before), 1e-15);
   EXPECT_EQ(propagator.steps(), 0u);
-}
-
-TEST(GyroBias, IsSubtractedBeforeIntegration) {
-  const Eigen::Vector3d bias(0.01, -0.02, 0.005), w(0.3, 0.0, -0.2);
-  ap::KinematicConfig config = configFor(Integrator::Exp, RateSamples::Instantaneous);
-  config.initial_q_WB = Eigen::Quaterniond::Identity();
-  config.gyro_bias_B = bias;
-  ap::KinematicPropagator propagator(config);
-  for (int k = 0; k <= 100; ++k) propagator.addSample(0.01 * k, w + bias);
-  EXPECT_ROTATION_NEAR(propagator.orientation(),
-                       Eigen::Quaterniond(Eigen::AngleAxisd(w.norm(), w.normalized())), 1e-14);
-  EXPECT_EQ(propagator.gyroBias(), bias);
-  EXPECT_THROW(propagator.setGyroBias(Eigen::Vector3d(NAN, 0, 0)), std::invalid_argument);
-  EXPECT_EQ(propagator.gyroBias(), bias);
-  config.gyro_bias_B.x() = INFINITY;
-  EXPECT_THROW(ap::KinematicPropagator{config}, std::invalid_argument);
 }
 
 namespace {

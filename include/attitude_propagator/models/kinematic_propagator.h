@@ -10,9 +10,9 @@
 #include <Eigen/Geometry>
 
 #include "attitude_propagator/numerics/auto_integrator.h"
-#include "attitude_propagator/time/average_stamp.h"
 #include "attitude_propagator/numerics/integrator.h"
 #include "attitude_propagator/numerics/kinematic_step.h"
+#include "attitude_propagator/time/average_stamp.h"
 #include "attitude_propagator/time/stamp_filter.h"
 #include "attitude_propagator/time/time_policy.h"
 
@@ -46,8 +46,6 @@ struct KinematicConfig {
   int max_gap_fill = kMaxGapFill;
   /// Replace receipt stamps by the sensor-clock model's (SensorClockFilter).
   StampFilter stamp_filter = StampFilter::None;
-  /// Gyro bias (rad/s, body frame), subtracted from every rate before integration.
-  Eigen::Vector3d gyro_bias_B = Eigen::Vector3d::Zero();
 };
 
 class KinematicPropagator {
@@ -56,14 +54,14 @@ class KinematicPropagator {
   /// non-finite max_dt or backward_jump, or a zero / non-finite initial orientation.
   explicit KinematicPropagator(const KinematicConfig& config);
 
-  /// Feeds the body rate w_B measured at time t (the gyro bias is subtracted; with the stamp
-  /// filter on, t is a receipt stamp and the filtered stamp is used, and the orientation
-  /// follows the filter's later stamps of the samples before, RestampCorrection). The first
-  /// sample anchors time: the state at its stamp is the initial (or set) state. The orientation
-  /// then holds at the newest stamp; a stamp at or before it is DroppedStale, however far back
-  /// (a persistent jump back is the engine's to recognise: reset()). A NaN or infinite stamp or
-  /// rate is RejectedNonFinite, |w_B| > kMaxBodyRate (limits.h) RejectedOutOfRange; neither changes
-  /// the state. Never throws.
+  /// Feeds the body rate w_B measured at time t, its gyro bias already subtracted (the engine
+  /// owns the bias, for both models). With the stamp filter on, t is a receipt stamp and the
+  /// filtered stamp is used, and the orientation follows the filter's later stamps of the
+  /// samples before (RestampCorrection). The first sample anchors time: the state at its stamp
+  /// is the initial (or set) state. The orientation then holds at the newest stamp; a stamp at or
+  /// before it is DroppedStale, however far back (a persistent jump back is the engine's to
+  /// recognise: reset()). A NaN or infinite stamp or rate is RejectedNonFinite, |w_B| >
+  /// kMaxBodyRate (limits.h) RejectedOutOfRange; neither changes the state. Never throws.
   StampOutcome addSample(double t, const Eigen::Vector3d& w_B);
 
   /// Back to the initial orientation, waiting for an anchoring sample.
@@ -85,7 +83,7 @@ class KinematicPropagator {
   /// Stamp the state holds at (0 before the first sample).
   double time() const { return window_.size() > 0 ? window_.newest().t : 0.0; }
   const Eigen::Quaterniond& orientation() const { return q_WB_; }
-  /// Body rate of the newest sample (bias subtracted; interval-averaged: the interval's mean).
+  /// Body rate of the newest sample (as fed; interval-averaged: the interval's mean).
   Eigen::Vector3d rate() const {
     return window_.size() > 0 ? window_.newest().w_B : Eigen::Vector3d::Zero();
   }
@@ -99,11 +97,6 @@ class KinematicPropagator {
   /// The rule `auto` chooses by, or nullptr when a method was configured.
   const KinematicAutoRule* autoRule() const { return automatic_ ? &auto_rule_ : nullptr; }
   RateSamples rateSamples() const { return rate_samples_; }
-
-  /// Subtracted from the rates of the samples that follow. Throws std::invalid_argument for
-  /// non-finite values.
-  void setGyroBias(const Eigen::Vector3d& bias_B);
-  const Eigen::Vector3d& gyroBias() const { return gyro_bias_B_; }
 
   /// Samples filled in for lost ones (interval-averaged samples only), since construction.
   std::uint64_t filledSamples() const { return filled_samples_; }
@@ -157,7 +150,6 @@ class KinematicPropagator {
   RestampCorrection restamp_;  // after clock_, whose memory it shares
   AverageStamp average_stamp_;
   IntervalEnds interval_ends_;
-  Eigen::Vector3d gyro_bias_B_;
   std::uint64_t filled_samples_ = 0;
   std::array<double, 5> intervals_{};  // the last intervals integrated, for the nominal period
   std::size_t interval_count_ = 0;     // since the anchor

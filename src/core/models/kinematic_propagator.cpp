@@ -53,13 +53,6 @@ constexpr std::uint64_t kMeanIntervals = 16;
 // Intervals shorter than this (s) are stamps bunched together, not a stream's period (1 MHz).
 constexpr double kShortestInterval = 1e-6;
 
-Eigen::Vector3d checkedBias(const Eigen::Vector3d& bias_B) {
-  if (!bias_B.allFinite()) {
-    throw std::invalid_argument("gyro_bias: must be finite, [x, y, z] rad/s in the body frame");
-  }
-  return bias_B;
-}
-
 // Mean over [a, b] of s^p, p = 0..k-1: (b^(p+1) - a^(p+1)) / ((p + 1)(b - a)).
 Eigen::RowVector4d powerMeans(double a, double b, int k) {
   Eigen::RowVector4d means = Eigen::RowVector4d::Zero();
@@ -110,8 +103,7 @@ KinematicPropagator::KinematicPropagator(const KinematicConfig& config)
       stamp_filter_(config.stamp_filter),
       restamp_(clock_.memory()),
       average_stamp_(config.average_stamp),
-      interval_ends_(config.average_stamp),
-      gyro_bias_B_(checkedBias(config.gyro_bias_B)) {
+      interval_ends_(config.average_stamp) {
   checkPolicy(policy_);
   if (average_stamp_ != AverageStamp::End && rate_samples_ != RateSamples::IntervalAverage) {
     throw std::invalid_argument("average_stamp: '" + averageStampName(average_stamp_) +
@@ -137,7 +129,7 @@ StampOutcome KinematicPropagator::addFiltered(double t, const Eigen::Vector3d& w
   }
   const SensorClockFilter::Result clock = clock_.filter(t);
   const StampOutcome outcome = addStamped(clock.t, w_B);
-  restamp(clock, w_B - gyro_bias_B_, outcome);
+  restamp(clock, w_B, outcome);
   return outcome;
 }
 
@@ -163,32 +155,27 @@ StampOutcome KinematicPropagator::addStamped(double t, const Eigen::Vector3d& w_
   if (!std::isfinite(t) || !w_B.allFinite()) return StampOutcome::RejectedNonFinite;
   // The door bound of limits.h: |w| h stays far inside the doubles, so no step turns NaN.
   if (!(w_B.norm() <= kMaxBodyRate)) return StampOutcome::RejectedOutOfRange;
-  const Eigen::Vector3d w = w_B - gyro_bias_B_;
   if (!anchored_) {
-    anchor(t, w);
+    anchor(t, w_B);
     return StampOutcome::Anchored;
   }
   switch (classifyStamp(time(), t, policy_)) {
     case StampClass::Stale:
       return StampOutcome::DroppedStale;
     case StampClass::Gap:
-      anchor(t, w);  // the orientation is held across the gap
+      anchor(t, w_B);  // the orientation is held across the gap
       return StampOutcome::HeldGap;
     case StampClass::Forward:
       break;
   }
   if (dropout(t - time())) {
-    anchor(t, w);  // held, as across a gap longer than max_dt
+    anchor(t, w_B);  // held, as across a gap longer than max_dt
     return StampOutcome::HeldGap;
   }
   if (rate_samples_ == RateSamples::IntervalAverage && max_gap_fill_ > 0) {
-    return fillAndIntegrate({t, w});
+    return fillAndIntegrate({t, w_B});
   }
-  return integrate({t, w});
-}
-
-void KinematicPropagator::setGyroBias(const Eigen::Vector3d& bias_B) {
-  gyro_bias_B_ = checkedBias(bias_B);
+  return integrate({t, w_B});
 }
 
 void KinematicPropagator::reset() {
