@@ -124,6 +124,13 @@ struct Given {
   std::vector<std::string> configs, sets;
 };
 
+/// The items with commas between them (a default list as --help shows it).
+std::string joined(const std::vector<std::string>& items) {
+  std::string text;
+  for (const std::string& item : items) text += (text.empty() ? "" : ",") + item;
+  return text;
+}
+
 /// A time option: seconds within the range of ROS time.
 std::function<void(const std::string&)> seconds(const char* option, double& field) {
   return [option, &field](const std::string& v) {
@@ -218,7 +225,8 @@ time, in whatever order they are given.
                      o.truth_gap =
                          parseNumber("--truth-gap", v, kMaxSeconds, "the range of ROS time");
                    }),
-       valueOption("--integrators", "LIST", "comma-separated (default euler,rk4,exp,exp2,cf4)",
+       valueOption("--integrators", "LIST",
+                   "comma-separated (default " + joined(o.integrators) + ")",
                    [&o](const std::string& v) { o.integrators = splitList(v); }),
        valueOption("--rate-samples", "LIST",
                    "comma-separated (default instantaneous,interval_average)",
