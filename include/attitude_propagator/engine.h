@@ -174,6 +174,12 @@ class AttitudeEngine : private PropagatorHost {
   /// Publishes grid stamps left over by a call that ran out of budget, up to the last time
   /// seen; the clock itself is not read.
   void drain();
+  /// The ticks that bring the clock from `last` (the previous tick; none: this is the first)
+  /// to `now` where no clock record exists and the inputs' stamps drive the clock: steps of
+  /// at most half grid_budget grid periods, so no grid stamp is ever deferred by the budget,
+  /// and `now` last. A jump longer than max_dt, or not ahead, is the one tick `now` (a gap, or
+  /// a jump back, as clockTick judges a clock record's). Defined in engine_clock_ticks.cpp.
+  std::vector<Stamp> clockTicksTo(std::optional<Stamp> last, Stamp now) const;
 
   /// Live reconfiguration (same model): the rate noise, the time policy, the torque timeout
   /// and the integrator. A new propagator is built from `next` and started from the current

@@ -9,6 +9,7 @@
 #include "attitude_propagator/AttitudeState.h"
 #include "attitude_propagator/messages/aiding_counters.h"
 #include "attitude_propagator/messages/conversions.h"
+#include "attitude_propagator/messages/imu_input.h"
 #include "attitude_propagator/messages/outputs.h"
 #include "attitude_propagator/messages/set_state_request.h"
 #include "attitude_propagator/ros/input_text.h"
@@ -20,16 +21,6 @@
 #include "attitude_propagator/ros/parameter_loader.h"
 
 namespace attitude_propagator {
-
-namespace {
-
-/// An IMU message kept with an input until the engine applies it, and its sensor mount.
-struct ImuPayload {
-  sensor_msgs::Imu::ConstPtr msg;
-  Eigen::Quaterniond q_BS;
-};
-
-}  // namespace
 
 AttitudePropagatorRos::AttitudePropagatorRos(ros::NodeHandle nh, ros::NodeHandle pnh)
     : nh_(nh),

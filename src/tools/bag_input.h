@@ -1,20 +1,18 @@
 // Reading bags: opening them with one clear error each (after the structure check, bag_check.h),
-// several bags read as one stream, the topics and their types, decoding a bag message into a
-// reused message, the stamp of an unstamped message, and the loop that visits every message.
+// several bags read as one stream, the topics and their types, and the loop that visits every
+// message. A message is decoded, and an unstamped one stamped, by the message layer's rules
+// (input_decoders.h: deserializeInto, stampOf), as the node does.
 #pragma once
 
 #include <cstdint>
-#include <cstring>
 #include <memory>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
-#include <ros/serialization.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
-#include <tf2_msgs/TFMessage.h>
 
 #include "attitude_propagator/messages/conversions.h"
 #include "interrupts.h"
@@ -90,45 +88,6 @@ template <class M>
 bool isType(const rosbag::MessageInstance& m) {
   return m.getDataType() == ros::message_traits::datatype<M>() &&
          m.getMD5Sum() == ros::message_traits::md5sum<M>();
-}
-
-/// Deserialises a bag message into an existing message through a reused buffer: a steady
-/// stream allocates nothing here (instantiate() allocates a message each time).
-template <class M>
-void decodeInto(const rosbag::MessageInstance& m, std::vector<std::uint8_t>& buffer, M& out) {
-  const std::uint32_t size = m.size();
-  buffer.resize(size);
-  ros::serialization::OStream write(buffer.data(), size);
-  m.write(write);
-  ros::serialization::IStream read(buffer.data(), size);
-  ros::serialization::deserialize(read, out);
-}
-
-/// A TFMessage's transform count is checked against the message's size first: deserialising
-/// makes room for that many transforms before reading them, and a damaged count would ask for
-/// up to 2^32 of them. A transform takes at least 76 bytes (header: seq, stamp and an empty
-/// frame_id; an empty child_frame_id; translation and rotation).
-inline void decodeInto(const rosbag::MessageInstance& m, std::vector<std::uint8_t>& buffer,
-                       tf2_msgs::TFMessage& out) {
-  const std::uint32_t size = m.size();
-  buffer.resize(size);
-  ros::serialization::OStream write(buffer.data(), size);
-  m.write(write);
-  std::uint32_t count = 0;
-  if (size >= 4) std::memcpy(&count, buffer.data(), 4);
-  constexpr std::uint64_t kLeastTransformBytes = 4 + 8 + 4 + 4 + 24 + 32;
-  if (size < 4 || std::uint64_t(count) * kLeastTransformBytes > size - 4) {
-    throw ros::serialization::StreamOverrunException(
-        "tf2_msgs/TFMessage: " + std::to_string(count) + " transforms cannot fit in " +
-        std::to_string(size) + " bytes");
-  }
-  ros::serialization::IStream read(buffer.data(), size);
-  ros::serialization::deserialize(read, out);
-}
-
-/// A header stamp, or the record time for an unstamped message (the node's receipt time).
-inline Stamp stampOr(const ros::Time& header, const ros::Time& record) {
-  return toStamp(header.isZero() ? record : header);
 }
 
 /// Visits every message of `view` in order, counting into `count`, with the progress line and

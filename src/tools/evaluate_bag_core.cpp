@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <cstring>
 #include <deque>
+#include <functional>
 #include <iostream>
 #include <limits>
 #include <memory>
@@ -54,87 +55,6 @@
 namespace attitude_propagator {
 namespace tools {
 namespace {
-
-const char* const kUsage =
-    R"(usage: evaluate_bag_core IN.bag [IN2.bag ...] --rates TOPIC
-                         (--truth TOPIC | --truth-tf PARENT CHILD) [options]
-
-Runs every kinematic integrator with each rate_samples choice over the rate topic, compares
-each with the truth attitude at the truth's stamps (the method's states interpolated to them)
-and reports, per method: largest and RMS attitude error, error drift rate, relative rotation
-error over 1 s, 10 s and the ranking window, cost per sample, the rate_delay it ran with, and a
-recommendation.
-Several bags (the parts of `rosbag record --split`) are read as one stream merged by record
-time, in whatever order they are given.
-
-  --rates TOPIC        sensor_msgs/Imu, geometry_msgs/Twist or TwistStamped (default /imu/data_raw)
-  --truth TOPIC        geometry_msgs/PoseStamped, PoseWithCovarianceStamped, TransformStamped,
-                       sensor_msgs/Imu (its orientation; REP-145's "none" refused; may be the
-                       rates' own topic: an IMU's AHRS) or nav_msgs/Odometry (with a warning:
-                       odometry yaw is rarely a truth)
-  --truth-tf P C       the transform P -> C from tf2_msgs/TFMessage on --tf-topic (default /tf)
-  --fixes TOPIC        absolute attitude fixes (the node's orientation_fix types), given to every
-                       method between the rates they were recorded between; the truth must be
-                       another topic, in the fixes' fixed frame (no world alignment then)
-  --mag TOPIC          magnetometer (sensor_msgs/MagneticField, the node's imu/mag), given to
-                       every method like the fixes, with use_mag (default /imu/mag); in the
-                       rates' own frame, as the rates are read. With use_accel the rates' Imu
-                       messages give the accelerometer, in their frame too
-  --mount X Y Z W      q_ST, the truth body's orientation in the rate sensor's frame
-                       (default: estimated from the data)
-  --truth-clock same|separate
-                       separate (default): the truth's clock is unknown; the offset found is
-                       the clocks' and holds any rate delay, which the data cannot tell apart
-                       (none is estimated or recommended). same: your statement that the truth
-                       is stamped at its instants on the rates' clock, so the offset found is
-                       the rates' lag (an on-chip filter's group delay): estimated, recommended
-                       as rate_delay, every method run with it and compared at offset 0. When
-                       the data contradict it (a truth found later than the rates, or a lag
-                       beyond max_dt), the run is compared as `separate`, says so, and exits 5
-  --offset S           truth stamp minus rate stamp of the same instant, s (default:
-                       estimated); every method compared at it, with the configured rate_delay
-  --max-offset S       offsets searched, +-S (default 0.5)
-  --calibration S      seconds of truth used to estimate offset and mount (default 60)
-  --truth-gap S        truth samples further apart are not differentiated across when
-                       aligning (default 2.5 truth periods)
-  --integrators LIST   comma-separated (default euler,rk4,exp,exp2,cf4)
-  --rate-samples LIST  comma-separated (default instantaneous,interval_average)
-  --config FILE.yaml   node parameters shared by every method (e.g. stamp_filter, gyro_bias)
-  --set name=value     one node parameter; repeatable
-  --csv PREFIX         writes PREFIX.csv and PREFIX_series.csv (default IN.evaluation, after
-                       the first input)
-  --no-progress        no progress line
-  --version            the package version
-
-Times (--offset, --max-offset, --calibration, --truth-gap) are limited to +-2^32 s, the range
-of ROS time. The offset search tries only offsets at which rates and truth overlap, on at most
-about 5e7 / (calibration samples) points. Rate samples with a non-finite component, and truth
-samples that are no rotation, are skipped and counted.
-
-The truth is refused (exit 4) when it has no orientation, when more than 1 % of its quaternions
-are not unit, or when it turns more than twice as far as the rates, or less than half as far.
-
-A method is scored when at least half of the truth samples its states meet, and at least 100,
-are compared with states integrated one from the other (not across a gap longer than max_dt or
-a reset; with --fixes, from the first state after the first applied fix); only scored methods
-are recommended, ranked by their RMS relative error over the ranking window (from 10 periods of
-the slower stream, doubling to 10 s: the shortest at which the smallest error is above what the
-truth resolves): among those within 10 % of the lowest (or of the smallest error the truth
-resolves), the cheapest, costs within the timing noise counting as equal, ties in the
-integrator table's order, instantaneous first.
-
-Exit codes:
-  0    the table and both CSVs are complete, with a recommendation
-  1    the bag could not be read (missing, truncated, damaged) or a CSV not written
-  2    usage: bad options or parameters, an output that is an input, an input given twice
-  3    the bag was read, but no method was scored (the report says why): no recommendation,
-       no CSV written
-  4    the truth cannot be one (no orientation, non-unit quaternions, a rotation the rates do
-       not make; the message says which): no CSV written
-  5    the table and both CSVs are complete, but --truth-clock same was contradicted by the
-       data: compared as with the truth's clock unknown
-  128+N  stopped by signal N (130: Ctrl-C); nothing written
-)";
 
 constexpr double kNs = 1e-9;
 constexpr std::size_t kBatch = 512;
@@ -198,70 +118,169 @@ std::vector<std::string> splitList(const std::string& text) {
   return items;
 }
 
-Options parseOptions(int argc, char** argv) {
+/// The command line as given, before it is checked and combined (parseOptions).
+struct Given {
   Options o;
   std::vector<std::string> configs, sets;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "-h" || a == "--help") {
-      std::cout << kUsage;
-      std::exit(0);
-    } else if (a == "--version") {
-      std::cout << "evaluate_bag (attitude_propagator) " << AP_VERSION << "\n";
-      std::exit(0);
-    } else if (a == "--rates") {
-      o.rates_topic = optionValue(argc, argv, i);
-    } else if (a == "--truth") {
-      o.truth_topic = optionValue(argc, argv, i);
-    } else if (a == "--fixes") {
-      o.fixes_topic = optionValue(argc, argv, i);
-    } else if (a == "--mag") {
-      o.mag_topic = optionValue(argc, argv, i);
-    } else if (a == "--truth-tf") {
-      o.tf_parent = optionValue(argc, argv, i);
-      o.tf_child = optionValue(argc, argv, i);
-    } else if (a == "--tf-topic") {
-      o.tf_topic = optionValue(argc, argv, i);
-    } else if (a == "--mount") {
-      double c[4];
-      for (double& x : c) x = parseNumber(a, optionValue(argc, argv, i));
-      const auto q = safeNormalized(Eigen::Quaterniond(c[3], c[0], c[1], c[2]));
-      if (!q) throw UsageError("--mount: a zero quaternion");
-      o.mount = *q;
-    } else if (a == "--offset") {
-      o.offset = parseNumber(a, optionValue(argc, argv, i), kMaxSeconds, "the range of ROS time");
-    } else if (a == "--truth-clock") {
-      const std::string v = optionValue(argc, argv, i);
-      if (v != "same" && v != "separate") throw UsageError("--truth-clock: same or separate");
-      o.truth_clock_same = v == "same";
-    } else if (a == "--max-offset") {
-      o.max_offset =
-          parseNumber(a, optionValue(argc, argv, i), kMaxSeconds, "the range of ROS time");
-    } else if (a == "--calibration") {
-      o.calibration =
-          parseNumber(a, optionValue(argc, argv, i), kMaxSeconds, "the range of ROS time");
-    } else if (a == "--truth-gap") {
-      o.truth_gap =
-          parseNumber(a, optionValue(argc, argv, i), kMaxSeconds, "the range of ROS time");
-    } else if (a == "--integrators") {
-      o.integrators = splitList(optionValue(argc, argv, i));
-    } else if (a == "--rate-samples") {
-      o.rate_samples = splitList(optionValue(argc, argv, i));
-    } else if (a == "--config") {
-      configs.push_back(optionValue(argc, argv, i));
-    } else if (a == "--set") {
-      sets.push_back(optionValue(argc, argv, i));
-    } else if (a == "--csv") {
-      o.prefix = optionValue(argc, argv, i);
-    } else if (a == "--no-progress") {
-      o.progress = false;
-    } else if (!a.empty() && a[0] == '-') {
-      throw UsageError(a + ": unknown option (see --help)");
-    } else {
-      o.inputs.push_back(a);
-      o.input += (o.input.empty() ? "" : ", ") + a;
-    }
-  }
+};
+
+/// The items with commas between them (a default list as --help shows it).
+std::string joined(const std::vector<std::string>& items) {
+  std::string text;
+  for (const std::string& item : items) text += (text.empty() ? "" : ",") + item;
+  return text;
+}
+
+/// A time option: seconds within the range of ROS time.
+std::function<void(const std::string&)> seconds(const char* option, double& field) {
+  return [option, &field](const std::string& v) {
+    field = parseNumber(option, v, kMaxSeconds, "the range of ROS time");
+  };
+}
+
+CommandLine commandLine(Given& g) {
+  Options& o = g.o;
+  auto to = [](std::string& field) { return [&field](const std::string& v) { field = v; }; };
+  return {
+      std::string("evaluate_bag (attitude_propagator) ") + AP_VERSION,
+      20,
+      {helpParagraph(R"(usage: evaluate_bag_core IN.bag [IN2.bag ...] --rates TOPIC
+                         (--truth TOPIC | --truth-tf PARENT CHILD) [options]
+
+Runs every kinematic integrator with each rate_samples choice over the rate topic, compares
+each with the truth attitude at the truth's stamps (the method's states interpolated to them)
+and reports, per method: largest and RMS attitude error, error drift rate, relative rotation
+error over 1 s, 10 s and the ranking window, cost per sample, the rate_delay it ran with, and a
+recommendation.
+Several bags (the parts of `rosbag record --split`) are read as one stream merged by record
+time, in whatever order they are given.
+
+)"),
+       valueOption("--rates", "TOPIC",
+                   "sensor_msgs/Imu, geometry_msgs/Twist or TwistStamped (default /imu/data_raw)",
+                   to(o.rates_topic)),
+       valueOption("--truth", "TOPIC",
+                   "geometry_msgs/PoseStamped, PoseWithCovarianceStamped, TransformStamped,\n"
+                   "sensor_msgs/Imu (its orientation; REP-145's \"none\" refused; may be the\n"
+                   "rates' own topic: an IMU's AHRS) or nav_msgs/Odometry (with a warning:\n"
+                   "odometry yaw is rarely a truth)",
+                   to(o.truth_topic)),
+       valuesOption("--truth-tf", "P C",
+                    "the transform P -> C from tf2_msgs/TFMessage on --tf-topic (default /tf)",
+                    [&o](const std::vector<std::string>& v) {
+                      o.tf_parent = v[0];
+                      o.tf_child = v[1];
+                    }),
+       valueOption("--fixes", "TOPIC",
+                   "absolute attitude fixes (the node's orientation_fix types), given to every\n"
+                   "method between the rates they were recorded between; the truth must be\n"
+                   "another topic, in the fixes' fixed frame (no world alignment then)",
+                   to(o.fixes_topic)),
+       valueOption("--mag", "TOPIC",
+                   "magnetometer (sensor_msgs/MagneticField, the node's imu/mag), given to\n"
+                   "every method like the fixes, with use_mag (default /imu/mag); in the\n"
+                   "rates' own frame, as the rates are read. With use_accel the rates' Imu\n"
+                   "messages give the accelerometer, in their frame too",
+                   to(o.mag_topic)),
+       valuesOption("--mount", "X Y Z W",
+                    "q_ST, the truth body's orientation in the rate sensor's frame\n"
+                    "(default: estimated from the data)",
+                    [&o](const std::vector<std::string>& v) {
+                      double c[4];
+                      for (int k = 0; k < 4; ++k) c[k] = parseNumber("--mount", v[k]);
+                      const auto q = safeNormalized(Eigen::Quaterniond(c[3], c[0], c[1], c[2]));
+                      if (!q) throw UsageError("--mount: a zero quaternion");
+                      o.mount = *q;
+                    }),
+       valueOption("--truth-clock", "same|separate",
+                   "separate (default): the truth's clock is unknown; the offset found is\n"
+                   "the clocks' and holds any rate delay, which the data cannot tell apart\n"
+                   "(none is estimated or recommended). same: your statement that the truth\n"
+                   "is stamped at its instants on the rates' clock, so the offset found is\n"
+                   "the rates' lag (an on-chip filter's group delay): estimated, recommended\n"
+                   "as rate_delay, every method run with it and compared at offset 0. When\n"
+                   "the data contradict it (a truth found later than the rates, or a lag\n"
+                   "beyond max_dt), the run is compared as `separate`, says so, and exits 5",
+                   [&o](const std::string& v) {
+                     if (v != "same" && v != "separate") {
+                       throw UsageError("--truth-clock: same or separate");
+                     }
+                     o.truth_clock_same = v == "same";
+                   }),
+       valueOption("--offset", "S",
+                   "truth stamp minus rate stamp of the same instant, s (default:\n"
+                   "estimated); every method compared at it, with the configured rate_delay",
+                   [&o](const std::string& v) {
+                     o.offset = parseNumber("--offset", v, kMaxSeconds, "the range of ROS time");
+                   }),
+       valueOption("--max-offset", "S", "offsets searched, +-S (default 0.5)",
+                   seconds("--max-offset", o.max_offset)),
+       valueOption("--calibration", "S",
+                   "seconds of truth used to estimate offset and mount (default 60)",
+                   seconds("--calibration", o.calibration)),
+       valueOption("--truth-gap", "S",
+                   "truth samples further apart are not differentiated across when\n"
+                   "aligning (default 2.5 truth periods)",
+                   [&o](const std::string& v) {
+                     o.truth_gap =
+                         parseNumber("--truth-gap", v, kMaxSeconds, "the range of ROS time");
+                   }),
+       valueOption("--integrators", "LIST",
+                   "comma-separated (default " + joined(o.integrators) + ")",
+                   [&o](const std::string& v) { o.integrators = splitList(v); }),
+       valueOption("--rate-samples", "LIST",
+                   "comma-separated (default instantaneous,interval_average)",
+                   [&o](const std::string& v) { o.rate_samples = splitList(v); }),
+       valueOption("--config", "FILE.yaml",
+                   "node parameters shared by every method (e.g. stamp_filter, gyro_bias)",
+                   [&g](const std::string& v) { g.configs.push_back(v); }),
+       valueOption("--set", "name=value", "one node parameter; repeatable",
+                   [&g](const std::string& v) { g.sets.push_back(v); }),
+       valueOption("--csv", "PREFIX",
+                   "writes PREFIX.csv and PREFIX_series.csv (default IN.evaluation, after\n"
+                   "the first input)",
+                   to(o.prefix)),
+       flagOption("--no-progress", "no progress line", [&o] { o.progress = false; }),
+       versionOption("the package version"),
+       helpParagraph(R"(
+Times (--offset, --max-offset, --calibration, --truth-gap) are limited to +-2^32 s, the range
+of ROS time. The offset search tries only offsets at which rates and truth overlap, on at most
+about 5e7 / (calibration samples) points. Rate samples with a non-finite component, and truth
+samples that are no rotation, are skipped and counted.
+
+The truth is refused (exit 4) when it has no orientation, when more than 1 % of its quaternions
+are not unit, or when it turns more than twice as far as the rates, or less than half as far.
+
+A method is scored when at least half of the truth samples its states meet, and at least 100,
+are compared with states integrated one from the other (not across a gap longer than max_dt or
+a reset; with --fixes, from the first state after the first applied fix); only scored methods
+are recommended, ranked by their RMS relative error over the ranking window (from 10 periods of
+the slower stream, doubling to 10 s: the shortest at which the smallest error is above what the
+truth resolves): among those within 10 % of the lowest (or of the smallest error the truth
+resolves), the cheapest, costs within the timing noise counting as equal, ties in the
+integrator table's order, instantaneous first.
+
+Exit codes:
+  0    the table and both CSVs are complete, with a recommendation
+  1    the bag could not be read (missing, truncated, damaged) or a CSV not written
+  2    usage: bad options or parameters, an output that is an input, an input given twice
+  3    the bag was read, but no method was scored (the report says why): no recommendation,
+       no CSV written
+  4    the truth cannot be one (no orientation, non-unit quaternions, a rotation the rates do
+       not make; the message says which): no CSV written
+  5    the table and both CSVs are complete, but --truth-clock same was contradicted by the
+       data: compared as with the truth's clock unknown
+  128+N  stopped by signal N (130: Ctrl-C); nothing written
+)")}};
+}
+
+Options parseOptions(int argc, char** argv) {
+  Given g;
+  Options& o = g.o;
+  o.inputs = parseCommandLine(commandLine(g), argc, argv);
+  for (const std::string& input : o.inputs) o.input += (o.input.empty() ? "" : ", ") + input;
+  std::vector<std::string>& configs = g.configs;
+  std::vector<std::string>& sets = g.sets;
   if (o.inputs.empty()) throw UsageError("no input bag (see --help)");
   if (o.truth_topic.empty() == o.tf_parent.empty()) {
     throw UsageError("give the truth as --truth TOPIC or --truth-tf PARENT CHILD (one of them)");
@@ -319,7 +338,7 @@ Options parseOptions(int argc, char** argv) {
   inputs.insert(inputs.end(), o.inputs.begin(), o.inputs.end());
   for (const char* suffix : {".csv", "_series.csv"})
     refuseOutputOverInput(o.prefix + suffix, inputs);
-  return o;
+  return std::move(o);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1056,7 +1075,7 @@ bool Evaluation::decodeRate(const rosbag::MessageInstance& m, RateSample& out) {
   // body_twist's first message kept, a zero stamp taken as the record time.
   Decoded<Reading> read;
   if (isType<sensor_msgs::Imu>(m)) {
-    decodeInto(m, buffer_, imu_);
+    deserializeInto(m, buffer_, imu_);
     read = readImu(imu_, record_);
   } else {
     read = decoders_.readTwistTopic(m, record_);
@@ -1074,34 +1093,37 @@ bool Evaluation::decodeRate(const rosbag::MessageInstance& m, RateSample& out) {
 }
 
 bool Evaluation::decodeTruth(const rosbag::MessageInstance& m, TruthSample& out) {
+  // The node's stamp rule (stampOf): the header stamp, or the record time, which rosbag never
+  // writes as zero.
+  auto stamp = [this](const ros::Time& header) { return stampOf(header, record_).value_or(0); };
   if (isType<geometry_msgs::PoseStamped>(m)) {
-    decodeInto(m, buffer_, pose_);
-    out = {stampOr(pose_.header.stamp, record_), toEigen(pose_.pose.orientation)};
+    deserializeInto(m, buffer_, pose_);
+    out = {stamp(pose_.header.stamp), toEigen(pose_.pose.orientation)};
   } else if (isType<geometry_msgs::PoseWithCovarianceStamped>(m)) {
-    decodeInto(m, buffer_, pose_cov_);
-    out = {stampOr(pose_cov_.header.stamp, record_), toEigen(pose_cov_.pose.pose.orientation)};
+    deserializeInto(m, buffer_, pose_cov_);
+    out = {stamp(pose_cov_.header.stamp), toEigen(pose_cov_.pose.pose.orientation)};
   } else if (isType<geometry_msgs::TransformStamped>(m)) {
-    decodeInto(m, buffer_, transform_);
-    out = {stampOr(transform_.header.stamp, record_), rotationOf(transform_)};
+    deserializeInto(m, buffer_, transform_);
+    out = {stamp(transform_.header.stamp), rotationOf(transform_)};
   } else if (isType<nav_msgs::Odometry>(m)) {
-    decodeInto(m, buffer_, odometry_);
-    out = {stampOr(odometry_.header.stamp, record_), toEigen(odometry_.pose.pose.orientation)};
+    deserializeInto(m, buffer_, odometry_);
+    out = {stamp(odometry_.header.stamp), toEigen(odometry_.pose.pose.orientation)};
   } else if (isType<sensor_msgs::Imu>(m)) {
-    decodeInto(m, buffer_, imu_);
+    deserializeInto(m, buffer_, imu_);
     // REP-145: orientation_covariance[0] == -1 says the message has no orientation.
     if (imu_.orientation_covariance[0] == -1.0) {
       ++truth_no_orientation_;
       return false;
     }
-    out = {stampOr(imu_.header.stamp, record_), toEigen(imu_.orientation)};
+    out = {stamp(imu_.header.stamp), toEigen(imu_.orientation)};
   } else {
-    decodeInto(m, buffer_, tf_);
+    deserializeInto(m, buffer_, tf_);
     const auto it =
         std::find_if(tf_.transforms.begin(), tf_.transforms.end(), [this](const auto& t) {
           return t.header.frame_id == o_.tf_parent && t.child_frame_id == o_.tf_child;
         });
     if (it == tf_.transforms.end()) return false;
-    out = {stampOr(it->header.stamp, record_), rotationOf(*it)};
+    out = {stamp(it->header.stamp), rotationOf(*it)};
   }
   const auto q = safeNormalized(out.q);
   if (!q) {
@@ -1124,7 +1146,7 @@ void Evaluation::addFix(const rosbag::MessageInstance& m) {
 
 void Evaluation::addMag(const rosbag::MessageInstance& m) {
   ++mag_count_;
-  decodeInto(m, buffer_, mag_);
+  deserializeInto(m, buffer_, mag_);
   const Decoded<Reading> read = readMagneticField(mag_, record_);
   if (!read) return;  // no time: as the node drops it
   fixes_.push_back({rate_count_, Fix{}, BodyVector{read->stamp, read->value, read->covariance}});
@@ -1624,8 +1646,7 @@ void Evaluation::writeCsv(const std::string& summary_path, const std::string& se
 
 int run(int argc, char** argv) {
   catchInterrupts();
-  SplitArguments words(argc, argv);  // --key=value as --key value
-  const Options o = parseOptions(words.argc(), words.argv());
+  const Options o = parseOptions(argc, argv);
   BagSet bags(o.inputs);
   PendingFile summary(o.prefix + ".csv"), series(o.prefix + "_series.csv");
   Evaluation evaluation(o);

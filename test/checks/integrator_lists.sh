@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The lists of integrators kept by hand outside the core name the methods of its table
 # (src/core/numerics/integrator.cpp), in the table's order: the reconfigure enum
-# (cfg/AttitudePropagator.cfg), evaluate_bag_core's --integrators default in its help text
-# (src/tools/evaluate_bag_core.cpp, whose default list itself reads the table), evaluate_bag's
+# (cfg/AttitudePropagator.cfg), evaluate_bag_core's --integrators default in its --help (printed
+# from its option table, from the default list, which reads the table), evaluate_bag's
 # colours (nodes/evaluate_bag, those of the benchmark charts: bench/plot.py's PALETTE in the
 # sweep's order, kinematic methods first), the fuzz targets' integrator codes (fuzz_support.h, in
 # the order of their codes, not the table's) and seeds (test/fuzz/make_seeds.py, its corpus
@@ -21,7 +21,10 @@ if [ ! -x "$program" ]; then
   exit 1
 fi
 table="$("$program")" || { echo "integrator lists: $program failed"; exit 1; }
-TABLE="$table" /usr/bin/python3 - <<'PY'
+# evaluate_bag_core's help is printed from its option table: read as the user reads it.
+core_help="$("$(dirname "$program")/evaluate_bag_core" --help)" ||
+  { echo "integrator lists: evaluate_bag_core --help failed"; exit 1; }
+TABLE="$table" CORE_HELP="$core_help" /usr/bin/python3 - <<'PY'
 import ast
 import os
 import pathlib
@@ -74,9 +77,12 @@ default = one_match(core, r"std::vector<std::string> integrators\b[^;]*;")
 if default is not None and "integratorsFor(Model::Kinematic)" not in default:
     errors.append("%s: the --integrators default is not the table's kinematic methods: %s"
                   % (core, default))
-help_list = one_match(core, r"--integrators LIST +comma-separated \(default ([a-z0-9_,]+)\)")
-if help_list is not None:
-    expect(core + " --integrators help", help_list.split(","), kinematic)
+help_lists = re.findall(r"--integrators LIST +comma-separated \(default ([a-z0-9_,]+)\)",
+                        os.environ["CORE_HELP"])
+if len(help_lists) != 1:
+    errors.append("evaluate_bag_core --help: %d --integrators lines, expected 1" % len(help_lists))
+else:
+    expect("evaluate_bag_core --help --integrators", help_lists[0].split(","), kinematic)
 
 # The benchmark charts give each method the next PALETTE entry in the order it first appears in
 # the sweep (kinematic methods, then the dynamic ones not yet seen), then one more to the dynamic

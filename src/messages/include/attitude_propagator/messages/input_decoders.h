@@ -34,6 +34,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstring>
 #include <optional>
 #include <string>
 #include <utility>
@@ -49,6 +50,7 @@
 #include <ros/time.h>
 #include <sensor_msgs/Imu.h>
 #include <sensor_msgs/MagneticField.h>
+#include <tf2_msgs/TFMessage.h>
 
 #include <Eigen/Geometry>
 
@@ -157,15 +159,44 @@ Decoded<Reading> readTwist(const geometry_msgs::TwistStamped& msg, const ros::Ti
 Decoded<Reading> readWrench(const geometry_msgs::Wrench& msg, const ros::Time& arrival);
 Decoded<Reading> readWrench(const geometry_msgs::WrenchStamped& msg, const ros::Time& arrival);
 
-/// Deserialises a serialised message (topic_tools::ShapeShifter, rosbag::MessageInstance)
-/// into an existing one through a reused buffer: a steady stream allocates nothing here.
-template <class Serialized, class M>
-void deserializeInto(const Serialized& message, std::vector<std::uint8_t>& buffer, M& out) {
+/// The bytes of a serialised message (topic_tools::ShapeShifter, rosbag::MessageInstance),
+/// copied into `buffer` (resized to them).
+template <class Serialized>
+void serializedBytes(const Serialized& message, std::vector<std::uint8_t>& buffer) {
   const std::uint32_t size = message.size();
   buffer.resize(size);
   ros::serialization::OStream write(buffer.data(), size);
   message.write(write);
-  ros::serialization::IStream read(buffer.data(), size);
+}
+
+/// Deserialises a serialised message (topic_tools::ShapeShifter, rosbag::MessageInstance)
+/// into an existing one through a reused buffer: a steady stream allocates nothing here.
+template <class Serialized, class M>
+void deserializeInto(const Serialized& message, std::vector<std::uint8_t>& buffer, M& out) {
+  serializedBytes(message, buffer);
+  ros::serialization::IStream read(buffer.data(), static_cast<std::uint32_t>(buffer.size()));
+  ros::serialization::deserialize(read, out);
+}
+
+/// A TFMessage's transform count is checked against the message's size first: deserialising
+/// makes room for that many transforms before reading them, and a damaged count (a damaged
+/// bag) would ask for up to 2^32 of them. A transform takes at least 76 bytes (header: seq,
+/// stamp and an empty frame_id; an empty child_frame_id; translation and rotation). Throws
+/// ros::serialization::StreamOverrunException, as a message too short for its fields does.
+template <class Serialized>
+void deserializeInto(const Serialized& message, std::vector<std::uint8_t>& buffer,
+                     tf2_msgs::TFMessage& out) {
+  serializedBytes(message, buffer);
+  const std::size_t size = buffer.size();
+  std::uint32_t count = 0;
+  if (size >= 4) std::memcpy(&count, buffer.data(), 4);
+  constexpr std::uint64_t kLeastTransformBytes = 4 + 8 + 4 + 4 + 24 + 32;
+  if (size < 4 || std::uint64_t(count) * kLeastTransformBytes > size - 4) {
+    throw ros::serialization::StreamOverrunException(
+        "tf2_msgs/TFMessage: " + std::to_string(count) + " transforms cannot fit in " +
+        std::to_string(size) + " bytes");
+  }
+  ros::serialization::IStream read(buffer.data(), static_cast<std::uint32_t>(size));
   ros::serialization::deserialize(read, out);
 }
 
