@@ -205,7 +205,7 @@ PY
   # One row of the overview: the first try, the run with its setting, the filter, the windows.
   accepted="$(sed -n 's/.*), \([0-9]*\) accepted, .*/\1/p' plain.log | head -1)"
   total="$(sed -n 's/^propagate_bag: \([0-9]*\) messages.*/\1/p' plain.log | head -1)"
-  gaps="$(sed -n 's/.* \([0-9]*\) gaps, .*/\1/p' plain.log | head -1)"
+  gaps="$(sed -n 's/.* gaps \([0-9]*\), .*/\1/p' plain.log | head -1)"
   first="exit $first_rc"
   [ -z "$frame" ] || first="$first, asks for \`--set body_frame=$frame\`"
   lowest="no AHRS: none"

@@ -91,11 +91,7 @@ std::string FixInput::warning(const EngineCounters& c) {
 
 void FixInput::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status,
                         const AttitudeEngine& engine) const {
-  const EngineCounters& c = engine.counters();
   const FixRefusals& r = decoder_.refusals();
-  forEachFixCounter(c, [&status](const char* name, std::uint64_t value) {
-    status.add(std::string("fixes_") + name, value);
-  });
   status.add("fixes_refused", r.total());
   status.add(fixRefusedCounter(Refused::NoTransform), r.no_tf);
   status.add(fixRefusedCounter(Refused::WrongType), r.type);

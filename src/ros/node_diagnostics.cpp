@@ -1,8 +1,7 @@
 #include "attitude_propagator/ros/node_diagnostics.h"
 
 #include <cmath>
-
-#include "attitude_propagator/messages/aiding_counters.h"
+#include <cstdint>
 
 namespace attitude_propagator {
 
@@ -75,29 +74,14 @@ void NodeDiagnostics::diagnose(const ros::WallTime& now, const NodeConfig& confi
   status.add("model", engine.modelName());
   status.add("integrator", integratorName(engine.integrator()));
   status.add("input_rate_hz", input_rate);
-  status.add("received", c.received);
-  status.add("accepted", c.accepted);
+  // Every engine counter under its name, in the core table's order (docs/node.md, "Counters").
+  forEachEngineCounter(
+      c, [&status](const CounterInfo& info, std::uint64_t value) { status.add(info.name, value); });
   status.add("pending", engine.pending());
-  status.add("rejected_non_finite", c.rejected_non_finite);
-  status.add("rejected_out_of_range", c.rejected_out_of_range);
-  status.add("rejected_no_rate", c.rejected_no_rate);
-  status.add("rejected_type", c.rejected_type);
-  status.add("rejected_covariance", c.rejected_covariance);
-  status.add("dropped_stale", c.dropped_stale);
-  status.add("dropped_no_tf", c.dropped_no_tf);
-  status.add("dropped_no_time", c.dropped_no_time);
-  status.add("late", c.late);
-  status.add("gaps", c.gaps);
-  status.add("resets", c.resets);
-  status.add("jumps_back", c.jumps_back);
-  status.add("clock_conflicts", c.clock_conflicts);
   if (const std::optional<Stamp> other = engine.otherClock()) {
     status.add("clock_other_timeline_s", static_cast<double>(*other) * 1e-9);
     status.add("clock_sources", clock_sources_);
   }
-  status.add("rejected_future", c.rejected_future);
-  status.add("held_ahead", c.held_ahead);
-  status.add("dropped_on_reset", c.dropped_on_reset);
   // Mean ROS time minus stamp on arrival: a constant skew between the sensor's clock and
   // this machine's shows here (WARN above kInputLagWarning).
   for (Source source : {Source::Imu, Source::Twist, Source::Torque}) {
@@ -105,22 +89,13 @@ void NodeDiagnostics::diagnose(const ros::WallTime& now, const NodeConfig& confi
       status.add(source == Source::Torque ? "torque_lag_s" : "rate_lag_s", *lag);
     }
   }
-  status.add("failed_steps", c.failed_steps);
-  status.add("pending_overflow", c.pending_overflow);
-  status.add("deferred_ticks", c.deferred_ticks);
   status.add("callback_errors", callback_errors);
-  status.add("rejected_bias", c.rejected_bias);
-  status.add("bias_queue_full", c.bias_queue_full);
-  status.add("bias_applied", c.bias_applied);
   status.add("tf_conflicts", tf.conflicts());
   status.add("tf_stopped", tf.stopped());
   status.add("tf_resumes", tf.resumes());
   const Eigen::Vector3d& b = engine.gyroBias();
   status.addf("gyro_bias", "[%g, %g, %g]", b.x(), b.y(), b.z());
   fixes.diagnose(status, engine);
-  // Gravity and the field (use_accel, use_mag): accel_* and mag_*, the core's one list.
-  forEachAidingCounter(
-      c, [&status](const std::string& name, std::uint64_t value) { status.add(name, value); });
   status.add("tilt_known", engine.tiltKnown());
   if (const KinematicPropagator* k = kinematic) {
     status.add("rate_samples", config.parameters.rate_samples);

@@ -891,6 +891,17 @@ std::optional<std::string> BagPropagator::nothingUsable() const {
   return std::nullopt;
 }
 
+/// "name value, name value": the counters under the diagnostics' names (the core's table).
+std::string countersText(const EngineCounters& c,
+                         std::initializer_list<std::uint64_t EngineCounters::*> fields) {
+  std::string text;
+  for (std::uint64_t EngineCounters::*field : fields) {
+    text += (text.empty() ? "" : ", ") + std::string(counterName(field)) + " " +
+            std::to_string(c.*field);
+  }
+  return text;
+}
+
 void BagPropagator::summary(std::FILE* out, bool written) const {
   const EngineCounters& c = engine_->counters();
   std::string by_topic;
@@ -899,37 +910,24 @@ void BagPropagator::summary(std::FILE* out, bool written) const {
   }
   std::string dropped;
   std::uint64_t dropped_total = 0;
-  auto add = [&](const char* name, std::uint64_t n) {
+  // Every way an input leaves the engine unused, under the diagnostics' names (the core's
+  // counter table): with `accepted` and pending() these add up to `received` (each rate or
+  // torque message read is submitted or rejected exactly once).
+  forEachEngineCounter(c, [&](const CounterInfo& info, std::uint64_t n) {
+    if (!countsUnusedInput(info)) return;
     dropped_total += n;
-    if (n > 0)
-      dropped += (dropped.empty() ? "" : ", ") + std::string(name) + " " + std::to_string(n);
-  };
-  // Every way an input leaves the engine unused: with `accepted` and pending() these add up to
-  // `received` (each rate or torque message read is submitted or rejected exactly once).
-  // Note: the engine has no such sum or list of the input drops yet (the fixes have theirs,
-  // forEachFixCounter and fixesNotApplied, used below); this one belongs beside them.
-  add("stale", c.dropped_stale);
-  add("future", c.rejected_future);
-  add("ahead", c.held_ahead);
-  add("reset", c.dropped_on_reset);
-  add("queue-full", c.pending_overflow);
-  add("non-finite", c.rejected_non_finite);
-  add("out-of-range", c.rejected_out_of_range);
-  add("no-rate", c.rejected_no_rate);
-  add("type", c.rejected_type);
-  add("covariance", c.rejected_covariance);
-  add("no-tf", c.dropped_no_tf);
-  add("no-time", c.dropped_no_time);
+    if (n > 0) dropped += (dropped.empty() ? "" : ", ") + info.name + " " + std::to_string(n);
+  });
   const std::uint64_t accepted = o_.io_floor ? floor_accepted_ : c.accepted;
   std::fprintf(
       out,
-      "propagate_bag: %llu messages (%s), %llu accepted, dropped: %s; %llu resets, "
-      "%llu jumps back, %llu gaps, %llu late; %llu states -> %s; %.3f s wall, %.0f "
-      "msg/s, %.0fx real time%s\n",
+      "propagate_bag: %llu messages (%s), %llu accepted, dropped: %s; %s; %llu states -> %s; "
+      "%.3f s wall, %.0f msg/s, %.0fx real time%s\n",
       static_cast<unsigned long long>(messages_), by_topic.c_str(),
       static_cast<unsigned long long>(accepted), dropped.empty() ? "none" : dropped.c_str(),
-      static_cast<unsigned long long>(c.resets), static_cast<unsigned long long>(c.jumps_back),
-      static_cast<unsigned long long>(c.gaps), static_cast<unsigned long long>(c.late),
+      countersText(c, {&EngineCounters::resets, &EngineCounters::jumps_back, &EngineCounters::gaps,
+                       &EngineCounters::late})
+          .c_str(),
       static_cast<unsigned long long>(states_), written ? o_.output.c_str() : "nothing written",
       wall_, wall_ > 0 ? double(messages_) / wall_ : 0.0, wall_ > 0 ? bag_seconds_ / wall_ : 0.0,
       o_.io_floor ? " (I/O floor: no propagation)" : "");
@@ -954,20 +952,19 @@ void BagPropagator::summary(std::FILE* out, bool written) const {
   std::fputc('\n', out);
   if (engine_->dynamicModel()) {
     std::fprintf(out,
-                 "  dynamic: %llu failed steps, %llu inputs pending (stamped after the last "
-                 "clock tick), %llu deferred ticks\n",
-                 static_cast<unsigned long long>(c.failed_steps),
+                 "  dynamic: %s, pending %llu (inputs stamped after the last clock tick), %s\n",
+                 countersText(c, {&EngineCounters::failed_steps}).c_str(),
                  static_cast<unsigned long long>(pending),
-                 static_cast<unsigned long long>(c.deferred_ticks));
+                 countersText(c, {&EngineCounters::deferred_ticks}).c_str());
   }
   if (const KinematicPropagator* k = engine_->kinematic()) stampSummary(out, *k);
   if (!bias_.empty()) {
     std::fprintf(out,
-                 "  gyro bias: %llu used, %llu refused (non-finite, too large, another frame, "
-                 "beyond max_future), %llu dropped (queue full)\n",
-                 static_cast<unsigned long long>(c.bias_applied),
-                 static_cast<unsigned long long>(c.rejected_bias),
-                 static_cast<unsigned long long>(c.bias_queue_full));
+                 "  gyro bias: %s (refused: non-finite, too large, another frame, beyond "
+                 "max_future; queue full: 64 waiting, the furthest ahead dropped)\n",
+                 countersText(c, {&EngineCounters::bias_applied, &EngineCounters::rejected_bias,
+                                  &EngineCounters::bias_queue_full})
+                     .c_str());
   }
   if (!fixes_.empty()) fixSummary(out);
   std::uint64_t mag_read = 0;

@@ -473,9 +473,9 @@ TEST(BagSafety, NothingAcceptedExitsThree) {
   for (const char* option : {" -o ", " --csv "}) {
     const RunResult r = run(kPropagate + " " + dir.file("in.bag") + option + dir.file("out"));
     EXPECT_EQ(r.status, 3) << r.output;
-    EXPECT_NE(
-        r.output.find(n + " messages (/imu/data_raw " + n + "), 0 accepted, dropped: no-tf " + n),
-        std::string::npos)
+    EXPECT_NE(r.output.find(n + " messages (/imu/data_raw " + n +
+                            "), 0 accepted, dropped: dropped_no_tf " + n),
+              std::string::npos)
         << r.output;
     EXPECT_NE(r.output.find("nothing written"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("no input accepted (no transform"), std::string::npos) << r.output;

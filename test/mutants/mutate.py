@@ -82,12 +82,12 @@ ROS_LIST = "mutants_ros.txt"
 TOOL_NAMES = ("propagate_bag", "evaluate_bag_core")
 BAG_SUITE_FILES = ("alignment",)
 # What the build and the suites read: the sources, the headers, the suites, this folder, the
-# files the parameter tests compare against (the tables in docs/parameters.md and docs/node.md,
-# config/*.yaml),
+# files the parameter and counter tests compare against (the tables in docs/parameters.md and
+# docs/node.md, the summary's drops in docs/bag_tools.md, config/*.yaml),
 # evaluate_bag (the bag suite runs it) and package.xml (the tools' --version).
 SYNCED = ("src/core", "src/config", "src/messages", "src/tools", "include", "test/core",
           "test/messages", "test/bag", "test/mutants", "config", "nodes")
-SYNCED_FILES = ("docs/parameters.md", "docs/node.md", "package.xml")
+SYNCED_FILES = ("docs/parameters.md", "docs/node.md", "docs/bag_tools.md", "package.xml")
 
 
 class ListError(Exception):

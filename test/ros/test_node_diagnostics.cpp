@@ -1,8 +1,11 @@
 // The node's diagnostics (src/ros/node_diagnostics.cpp, input_window.cpp) against their
 // documented rules (docs/node.md, diagnostics): each WARN rule on both sides of its boundary,
 // the order of the rules, and what the input window blames. Wall times are given, not read.
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -223,4 +226,37 @@ TEST(NodeDiagnostics, TheInputRateAndTheWrappersCounts) {
   diagnostics.diagnose(at(3), config, engine, fixes, tf, 7, later);
   EXPECT_EQ(std::stod(value(later, "input_rate_hz")), 0.0);
   EXPECT_EQ(later.message, "no rate input in the last second");  // 1.5 s since
+}
+
+// Every engine counter is published once, under the core table's name and in its order, with
+// the counter's value; no key is published twice (the fix and aiding counters among them).
+TEST(NodeDiagnostics, EveryEngineCounterOnceUnderItsTableName) {
+  const ap::NodeConfig config = ap::validateParameters({});
+  engine_fixtures::DiscardingSink sink;
+  ap::AttitudeEngine engine(ap::engineConfig(config), sink);
+  ap::InstanceLog log;
+  ap::FixInput fixes(config, log);
+  ap::TfConflictWatch tf;
+  ap::NodeDiagnostics diagnostics(at(0));
+  ap::Input straggler;
+  for (std::int64_t ms : {100, 200, 150}) {  // the third at or before the newest: stale
+    straggler.stamp = 1000000000LL * 100 + ms * 1000000LL;
+    engine.submit(straggler);
+  }
+  diagnostic_updater::DiagnosticStatusWrapper status;
+  diagnostics.diagnose(at(1), config, engine, fixes, tf, 0, status);
+  std::vector<std::string> keys, counters;
+  for (const auto& kv : status.values) {
+    EXPECT_EQ(std::count(keys.begin(), keys.end(), kv.key), 0) << "twice: " << kv.key;
+    keys.push_back(kv.key);
+    for (const ap::CounterInfo& info : ap::engineCounterTable()) {
+      if (info.name == kv.key) counters.push_back(kv.key);
+    }
+  }
+  std::vector<std::string> table;
+  for (const ap::CounterInfo& info : ap::engineCounterTable()) table.push_back(info.name);
+  EXPECT_EQ(counters, table);
+  EXPECT_EQ(value(status, "received"), "3");
+  EXPECT_EQ(value(status, "accepted"), "2");
+  EXPECT_EQ(value(status, "dropped_stale"), "1");
 }

@@ -64,14 +64,11 @@ PACE_TIMEOUT = 20.0
 # After the transform that first gives the mount: the listener's own thread stores it.
 LISTENER_SETTLE = 2.0
 
-# propagate_bag's names for its drops (the summary) and the node's diagnostic keys.
-DROP_KEYS = {
-    "stale": "dropped_stale", "future": "rejected_future", "ahead": "held_ahead", "reset": "dropped_on_reset",
-    "queue-full": "pending_overflow", "non-finite": "rejected_non_finite",
-    "out-of-range": "rejected_out_of_range", "no-rate": "rejected_no_rate",
-    "type": "rejected_type", "covariance": "rejected_covariance", "no-tf": "dropped_no_tf",
-    "no-time": "dropped_no_time",
-}
+# The drops propagate_bag's summary may name (under the node's diagnostics keys, the core's
+# counter table): each is 0 when the summary names none.
+DROPS = ("rejected_non_finite", "rejected_out_of_range", "rejected_no_rate", "rejected_type",
+         "rejected_covariance", "dropped_stale", "dropped_no_tf", "dropped_no_time",
+         "rejected_future", "held_ahead", "dropped_on_reset", "pending_overflow")
 
 
 def rotation_angle_exact(a, b):
@@ -248,28 +245,30 @@ def dynamic_scene():
     return s
 
 
+def named_counts(text):
+    """{name: n} of a summary's "name n, name n" list ("none": empty)."""
+    if text == "none":
+        return {}
+    return {name: int(n) for name, n in (part.rsplit(" ", 1) for part in text.split(", "))}
+
+
 def tool_summary(text):
-    """propagate_bag's counters, named as the node's diagnostics name them."""
-    c = {}
-    m = re.search(r"(\d+) accepted, dropped: ([^;]*); (\d+) resets, (\d+) jumps back, (\d+) gaps, "
-                  r"(\d+) late; (\d+) states", text)
+    """propagate_bag's counters: its summary names them as the node's diagnostics do."""
+    c = {key: 0 for key in DROPS}
+    m = re.search(r"(\d+) accepted, dropped: ([^;]*); ([^;]*); (\d+) states", text)
     assert m, text
     c["accepted"] = int(m.group(1))
-    c.update({key: 0 for key in DROP_KEYS.values()})
-    if m.group(2) != "none":
-        for part in m.group(2).split(", "):
-            name, n = part.rsplit(" ", 1)
-            c[DROP_KEYS[name]] = int(n)
-    c["resets"], c["jumps_back"], c["gaps"], c["late"] = (int(m.group(i)) for i in range(3, 7))
+    c.update(named_counts(m.group(2)))
+    c.update(named_counts(m.group(3)))  # resets, jumps_back, gaps, late
     m = re.search(r"inputs: (\d+) = \d+ accepted \+ \d+ dropped \+ (\d+) pending", text)
     assert m, text
     c["received"], c["pending"] = int(m.group(1)), int(m.group(2))
-    m = re.search(r"dynamic: (\d+) failed steps, .*?, (\d+) deferred ticks", text)
+    m = re.search(r"dynamic: (failed_steps \d+), pending \d+ \(.*?\), (deferred_ticks \d+)", text)
     if m:
-        c["failed_steps"], c["deferred_ticks"] = int(m.group(1)), int(m.group(2))
-    m = re.search(r"gyro bias: (\d+) used, (\d+) refused", text)
+        c.update(named_counts(m.group(1) + ", " + m.group(2)))
+    m = re.search(r"gyro bias: ([^(]*) \(", text)
     if m:
-        c["bias_used"], c["rejected_bias"] = int(m.group(1)), int(m.group(2))
+        c.update(named_counts(m.group(1)))  # bias_applied, rejected_bias, bias_queue_full
     return c
 
 
@@ -474,8 +473,7 @@ class NodeVsBagTest(unittest.TestCase):
     def counter_differences(self, name, node, tool):
         print("%s: propagate_bag's counters %s" % (name, sorted(tool.items())))
         return ["%s: node %s, propagate_bag %d" % (key, node.get(key), value)
-                for key, value in sorted(tool.items())
-                if key != "bias_used" and node.get(key) != str(value)]
+                for key, value in sorted(tool.items()) if node.get(key) != str(value)]
 
     def assertAgree(self, name, node_states, node_counters, tool_states, tool_counters):
         problems = (self.counter_differences(name, node_counters, tool_counters) +
@@ -495,14 +493,14 @@ class NodeVsBagTest(unittest.TestCase):
     def test_kinematic_node_and_propagate_bag_agree(self):
         scene = kinematic_scene()
         tool_states, tool = self.run_tool("kinematic", scene, "/kin/attitude_propagator")
-        self.assertHappened(tool, {"dropped_no_tf": 3, "rejected_bias": 2, "bias_used": 1,
+        self.assertHappened(tool, {"dropped_no_tf": 3, "rejected_bias": 2, "bias_applied": 1,
                                    "dropped_stale": 1, "rejected_non_finite": 1,
                                    "rejected_no_rate": 1, "rejected_future": 1, "gaps": 1,
                                    "jumps_back": 1, "resets": 1})
         node_states, node, _ = self.run_node(scene, "kin", tool_states, listener_topic="/tf")
         self.assertAgree("kinematic", node_states, node, tool_states, tool)
-        # The node does not count the bias samples it used; the one it uses is the mount-frame
-        # sample turned into the body, C b (diagnostics print 6 digits).
+        # The bias the node uses is the mount-frame sample turned into the body, C b
+        # (diagnostics print 6 digits).
         b = qmul(qmul(MOUNT, BIAS_IN_MOUNT + (0.0,)), qconj(MOUNT))[:3]
         used = [float(x) for x in node["gyro_bias"].strip("[]").split(",")]
         self.assertLess(max(abs(x - y) for x, y in zip(used, b)), 1e-7, (used, b))

@@ -3,6 +3,7 @@
 // rejections that ends in a recovery.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 
@@ -66,23 +67,28 @@ struct AidingCounters {
   std::uint64_t future = 0;
   std::uint64_t over_budget = 0;
   void count(AidingOutcome outcome);
-  /// Calls f(name, value) for each counter, in the order above: the one list the diagnostics,
-  /// the tools' summaries and the docs' table follow.
+  /// Calls f(name, value) for each counter, in aidingCounterTable()'s order: the one list the
+  /// diagnostics, the tools' summaries and the docs' table follow.
   template <class F>
-  void forEach(F&& f) const {
-    f("accepted", accepted);
-    f("aligned", aligned);
-    f("recovered", recovered);
-    f("rejected_gate", rejected_gate);
-    f("rejected_magnitude", rejected_magnitude);
-    f("not_aligned", not_aligned);
-    f("too_old", too_old);
-    f("invalid", invalid);
-    f("queue_full", queue_full);
-    f("future", future);
-    f("over_budget", over_budget);
-  }
+  void forEach(F&& f) const;
 };
+
+/// One of AidingCounters' counters: its name (accel_<name> and mag_<name> in the diagnostics),
+/// what befell the samples it counts, whether they were applied, and its field.
+struct AidingCounterInfo {
+  const char* name;
+  const char* meaning;
+  bool applied;
+  std::uint64_t AidingCounters::*field;
+};
+
+/// Every counter of AidingCounters once, in the order of docs/node.md's table.
+const std::array<AidingCounterInfo, 11>& aidingCounterTable();
+
+template <class F>
+void AidingCounters::forEach(F&& f) const {
+  for (const AidingCounterInfo& info : aidingCounterTable()) f(info.name, this->*info.field);
+}
 
 /// The linear acceleration seen lately in the gravity samples: the part of each sample the
 /// estimate does not explain, f_B - g C_BW e_up, its squared size averaged over

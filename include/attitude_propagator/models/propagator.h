@@ -16,11 +16,11 @@
 
 #include <Eigen/Geometry>
 
+#include "attitude_propagator/models/counters.h"
 #include "attitude_propagator/models/dynamic_propagator.h"
-#include "attitude_propagator/numerics/dynamic_state.h"
-#include "attitude_propagator/estimation/aiding.h"
-#include "attitude_propagator/numerics/integrator.h"
 #include "attitude_propagator/models/kinematic_propagator.h"
+#include "attitude_propagator/numerics/dynamic_state.h"
+#include "attitude_propagator/numerics/integrator.h"
 #include "attitude_propagator/time/source_timeline.h"
 #include "attitude_propagator/time/time_policy.h"
 
@@ -82,86 +82,6 @@ struct EngineState {
   Eigen::Vector3d gyro_bias_estimate_B = Eigen::Vector3d::Zero();
   Eigen::Vector3d gyro_bias_stddev_B = Eigen::Vector3d::Zero();
 };
-
-/// What happened to input and time, for diagnostics. Every counter only grows.
-struct EngineCounters {
-  std::uint64_t received = 0;  ///< every input submitted or rejected
-  std::uint64_t accepted = 0;
-  std::uint64_t rejected_non_finite = 0;
-  std::uint64_t rejected_out_of_range = 0;
-  std::uint64_t rejected_no_rate = 0;     ///< REP-145: angular_velocity_covariance[0] == -1
-  std::uint64_t rejected_type = 0;        ///< a message type the topic does not take
-  std::uint64_t rejected_covariance = 0;  ///< not symmetric, negative or huge
-  /// At or before the newest input of its source (a straggler, by any amount; a run from an
-  /// earlier time that broke before it was a jump, counted when it broke; a rate older than a
-  /// set_state). The inputs of a run are counted when it breaks or is a jump (then as used).
-  std::uint64_t dropped_stale = 0;
-  std::uint64_t dropped_no_tf = 0;
-  std::uint64_t dropped_no_time = 0;
-  std::uint64_t late = 0;        ///< dynamic: arrived after the clock passed its stamp
-  std::uint64_t gaps = 0;        ///< longer than max_dt: state held
-  std::uint64_t resets = 0;      ///< the state back to the initial one: time went back, reset()
-  std::uint64_t jumps_back = 0;  ///< a source's stamps went back, and persisted
-  /// Two timelines recognised on the clock (ClockTimeline: two /clock publishers): the later
-  /// one followed, the other's ticks ignored, no reset.
-  std::uint64_t clock_conflicts = 0;
-  std::uint64_t rejected_future = 0;  ///< stamped more than max_future ahead of the clock
-  /// Jumped ahead of its source and of the clock by more than backward_jump beyond its source's
-  /// usual lead, and not yet
-  /// confirmed by kJumpConfirmation in a row: dropped (SourceTimeline::heldAhead).
-  std::uint64_t held_ahead = 0;
-  /// Dynamic: queued inputs a reset dropped (reset(), ROS time jumping back).
-  std::uint64_t dropped_on_reset = 0;
-  std::uint64_t failed_steps = 0;      ///< the integrator could not complete an interval
-  std::uint64_t pending_overflow = 0;  ///< dynamic: queue full, the furthest ahead dropped
-  std::uint64_t deferred_ticks = 0;    ///< dynamic: grid stamps left for the next call (budget)
-  /// Gyro bias samples refused: non-finite, too large, another frame, or stamped more than
-  /// max_future ahead of the clock.
-  std::uint64_t rejected_bias = 0;
-  std::uint64_t bias_queue_full = 0;  ///< 64 bias samples waiting: the furthest ahead dropped
-  std::uint64_t bias_applied = 0;     ///< bias samples that took effect (a rate reached them)
-  // Absolute attitude fixes (AttitudeEngine::submitFix, docs/design.md §6.9).
-  std::uint64_t fixes_accepted = 0;  ///< applied (fused, or as a reset)
-  std::uint64_t fixes_reset = 0;     ///< of those, applied as a reset (fix_mode reset, or a run)
-  std::uint64_t fixes_rejected_gate = 0;   ///< fuse: the innovation beyond the chi-square gate
-  std::uint64_t fixes_too_old = 0;         ///< stamped before the history (or before the anchor)
-  std::uint64_t fixes_bad_quaternion = 0;  ///< non-finite, or not of unit norm
-  std::uint64_t fixes_bad_covariance = 0;  ///< non-finite, asymmetric, negative or above pi^2
-  std::uint64_t fixes_queue_full = 0;      ///< ahead of the newest rate, the queue full: dropped
-  std::uint64_t fixes_future = 0;          ///< stamped more than max_future ahead of the clock
-  std::uint64_t fixes_over_budget = 0;     ///< late, its replay beyond the second's budget
-  // Gravity (use_accel) and the magnetic field (use_mag) as measurements (docs/design.md §6.10),
-  // named accel_* and mag_* after AidingCounters::forEach.
-  AidingCounters accel;
-  AidingCounters mag;
-};
-
-/// Calls f(name, value) for each of the engine's fix counters, without their `fixes_` prefix,
-/// in the order of docs/node.md's table: the one list the diagnostics, propagate_bag's summary
-/// and the sums of fixes not applied follow.
-template <class F>
-void forEachFixCounter(const EngineCounters& c, F&& f) {
-  f("accepted", c.fixes_accepted);
-  f("reset", c.fixes_reset);
-  f("rejected_gate", c.fixes_rejected_gate);
-  f("too_old", c.fixes_too_old);
-  f("bad_quaternion", c.fixes_bad_quaternion);
-  f("bad_covariance", c.fixes_bad_covariance);
-  f("queue_full", c.fixes_queue_full);
-  f("future", c.fixes_future);
-  f("over_budget", c.fixes_over_budget);
-}
-
-/// The fixes the engine took and did not apply: every counter of forEachFixCounter but
-/// `accepted` and `reset` (the applied ones, resets among them).
-inline std::uint64_t fixesNotApplied(const EngineCounters& c) {
-  std::uint64_t n = 0;
-  forEachFixCounter(c, [&n](const char* name, std::uint64_t value) {
-    const std::string counter(name);
-    if (counter != "accepted" && counter != "reset") n += value;
-  });
-  return n;
-}
 
 /// Something the node should log (throttled per kind).
 struct EngineNote {

@@ -37,6 +37,34 @@ const char* aidingOutcomeName(AidingOutcome outcome) {
   return "unknown";
 }
 
+const std::array<AidingCounterInfo, 11>& aidingCounterTable() {
+  using C = AidingCounters;
+  static const std::array<AidingCounterInfo, 11> table{{
+      {"accepted", "fused at its stamp (the rates since integrated again when it was late)", true,
+       &C::accepted},
+      {"aligned", "gravity: the first one, the tilt set from it (no initial_orientation)", true,
+       &C::aligned},
+      {"recovered",
+       "applied as a reset after a run of gate rejections (the estimate was what was wrong)", true,
+       &C::recovered},
+      {"rejected_gate", "its innovation beyond the chi-square gate", false, &C::rejected_gate},
+      {"rejected_magnitude",
+       "gravity: |f| off g (the body accelerates); field: |m| or the dip off the field learned",
+       false, &C::rejected_magnitude},
+      {"not_aligned", "field: the tilt not known yet", false, &C::not_aligned},
+      {"too_old", "stamped before the history kept (fix_history) or the anchor", false,
+       &C::too_old},
+      {"invalid", "non-finite, zero, or a covariance that is not one", false, &C::invalid},
+      {"queue_full", "stamped ahead of the rates, and dropped: the waiting queue was full", false,
+       &C::queue_full},
+      {"future", "stamped more than max_future ahead of ROS time", false, &C::future},
+      {"over_budget",
+       "late, and its replay would exceed what one second may replay (design.md §6.9)", false,
+       &C::over_budget},
+  }};
+  return table;
+}
+
 void AidingCounters::count(AidingOutcome outcome) {
   switch (outcome) {
     case AidingOutcome::Accepted:

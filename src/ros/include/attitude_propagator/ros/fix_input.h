@@ -41,7 +41,9 @@ class FixInput {
   std::uint64_t notAppliedInARow(const EngineCounters& c);
   /// The WARN summary when kFixWarnRun or more fixes in a row were not applied; else empty.
   std::string warning(const EngineCounters& c);
-  /// The fix counters, and with estimate_gyro_bias the estimate and its standard deviation.
+  /// The decoder's refusals, the fixes pending and lost, and with estimate_gyro_bias the
+  /// estimate and its standard deviation (the engine's fix counters are the node's, from the
+  /// core's table).
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& status,
                 const AttitudeEngine& engine) const;
 
