@@ -28,9 +28,9 @@
 #include <string>
 #include <vector>
 
-#include "attitude_propagator/numerics/dynamic_step.h"
 #include "attitude_propagator/engine.h"
 #include "attitude_propagator/models/kinematic_propagator.h"
+#include "attitude_propagator/numerics/dynamic_step.h"
 #include "attitude_propagator/numerics/kinematic_step.h"
 #include "attitude_propagator/numerics/torque_free_motion.h"
 #include "dynamic_scenes.h"

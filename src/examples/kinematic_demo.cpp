@@ -6,8 +6,8 @@
 #include <exception>
 #include <string>
 
-#include "attitude_propagator/numerics/coning_motion.h"
 #include "attitude_propagator/models/kinematic_propagator.h"
+#include "attitude_propagator/numerics/coning_motion.h"
 #include "attitude_propagator/numerics/quaternion.h"
 
 namespace ap = attitude_propagator;

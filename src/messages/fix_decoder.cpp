@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <utility>
 
-#include "attitude_propagator/messages/conversions.h"
 #include "attitude_propagator/estimation/orientation_covariance.h"
+#include "attitude_propagator/messages/conversions.h"
 
 namespace attitude_propagator {
 

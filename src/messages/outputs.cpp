@@ -2,8 +2,8 @@
 
 #include <utility>
 
-#include "attitude_propagator/messages/conversions.h"
 #include "attitude_propagator/estimation/orientation_covariance.h"
+#include "attitude_propagator/messages/conversions.h"
 
 namespace attitude_propagator {
 

@@ -11,8 +11,8 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 
-#include "attitude_propagator/numerics/coning_motion.h"
 #include "attitude_propagator/engine.h"
+#include "attitude_propagator/numerics/coning_motion.h"
 #include "attitude_propagator/numerics/quaternion.h"
 #include "engine_fixtures.h"
 

@@ -25,8 +25,8 @@
 #include <string>
 #include <vector>
 
-#include "attitude_propagator/numerics/coning_motion.h"
 #include "attitude_propagator/models/kinematic_propagator.h"
+#include "attitude_propagator/numerics/coning_motion.h"
 #include "attitude_propagator/numerics/quaternion.h"
 #include "attitude_propagator/numerics/rigid_body.h"
 #include "attitude_propagator/numerics/torque_free_motion.h"

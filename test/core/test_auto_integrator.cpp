@@ -12,9 +12,9 @@
 #include <set>
 #include <vector>
 
+#include "attitude_propagator/models/kinematic_propagator.h"
 #include "attitude_propagator/numerics/auto_integrator.h"
 #include "attitude_propagator/numerics/coning_motion.h"
-#include "attitude_propagator/models/kinematic_propagator.h"
 #include "attitude_propagator/numerics/quaternion.h"
 #include "sampling.h"
 

@@ -8,9 +8,9 @@
 #include <optional>
 #include <vector>
 
-#include "attitude_propagator/time/average_stamp.h"
-#include "attitude_propagator/numerics/coning_motion.h"
 #include "attitude_propagator/engine.h"
+#include "attitude_propagator/numerics/coning_motion.h"
+#include "attitude_propagator/time/average_stamp.h"
 #include "engine_fixtures.h"
 #include "rotation_matchers.h"
 #include "sampling.h"

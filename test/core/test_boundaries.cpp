@@ -13,13 +13,13 @@
 #include <gtest/gtest.h>
 
 #include "attitude_propagator/config/parameters.h"
-#include "attitude_propagator/models/dynamic_propagator.h"
 #include "attitude_propagator/engine.h"
-#include "attitude_propagator/models/kinematic_propagator.h"
-#include "attitude_propagator/limits.h"
 #include "attitude_propagator/estimation/orientation_covariance.h"
-#include "attitude_propagator/time/publish_grid.h"
+#include "attitude_propagator/limits.h"
+#include "attitude_propagator/models/dynamic_propagator.h"
+#include "attitude_propagator/models/kinematic_propagator.h"
 #include "attitude_propagator/numerics/rigid_body.h"
+#include "attitude_propagator/time/publish_grid.h"
 #include "engine_fixtures.h"
 #include "refused_parameters.h"
 

@@ -14,9 +14,9 @@
 #include <gtest/gtest.h>
 
 #include "attitude_propagator/config/parameters.h"
-#include "attitude_propagator/numerics/coning_motion.h"
 #include "attitude_propagator/engine.h"
 #include "attitude_propagator/limits.h"
+#include "attitude_propagator/numerics/coning_motion.h"
 #include "attitude_propagator/numerics/quaternion.h"
 #include "engine_fixtures.h"
 #include "simulated_gyro.h"

@@ -8,8 +8,8 @@
 #include <utility>
 #include <vector>
 
-#include "attitude_propagator/numerics/coning_motion.h"
 #include "attitude_propagator/models/kinematic_propagator.h"
+#include "attitude_propagator/numerics/coning_motion.h"
 #include "attitude_propagator/numerics/kinematic_step.h"
 #include "attitude_propagator/numerics/quaternion.h"
 #include "integrator_cases.h"

@@ -9,8 +9,8 @@
 #include <gtest/gtest.h>
 
 #include "attitude_propagator/engine.h"
-#include "attitude_propagator/models/kinematic_propagator.h"
 #include "attitude_propagator/limits.h"
+#include "attitude_propagator/models/kinematic_propagator.h"
 #include "attitude_propagator/time/source_timeline.h"
 #include "attitude_propagator/time/stamp_filter.h"
 #include "engine_fixtures.h"

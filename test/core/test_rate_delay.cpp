@@ -7,8 +7,8 @@
 #include <cstdio>
 #include <vector>
 
-#include "attitude_propagator/numerics/coning_motion.h"
 #include "attitude_propagator/engine.h"
+#include "attitude_propagator/numerics/coning_motion.h"
 #include "engine_fixtures.h"
 #include "gyro_streams.h"
 #include "rotation_matchers.h"

@@ -16,11 +16,11 @@
 #include <Eigen/Geometry>
 
 #include "attitude_propagator/config/parameters.h"
-#include "attitude_propagator/models/dynamic_propagator.h"
-#include "attitude_propagator/numerics/dynamic_step.h"
-#include "attitude_propagator/models/kinematic_propagator.h"
-#include "attitude_propagator/limits.h"
 #include "attitude_propagator/estimation/orientation_covariance.h"
+#include "attitude_propagator/limits.h"
+#include "attitude_propagator/models/dynamic_propagator.h"
+#include "attitude_propagator/models/kinematic_propagator.h"
+#include "attitude_propagator/numerics/dynamic_step.h"
 #include "attitude_propagator/numerics/quaternion.h"
 #include "attitude_propagator/numerics/torque_free_motion.h"
 #include "rotation_matchers.h"

@@ -9,9 +9,9 @@
 #include <limits>
 #include <vector>
 
-#include "attitude_propagator/numerics/coning_motion.h"
 #include "attitude_propagator/engine.h"
 #include "attitude_propagator/models/kinematic_propagator.h"
+#include "attitude_propagator/numerics/coning_motion.h"
 #include "attitude_propagator/numerics/quaternion.h"
 #include "attitude_propagator/time/stamp_filter.h"
 #include "rotation_matchers.h"

@@ -11,11 +11,11 @@
 #include <optional>
 #include <vector>
 
-#include "attitude_propagator/time/average_stamp.h"
-#include "attitude_propagator/models/dynamic_propagator.h"
 #include "attitude_propagator/engine.h"
+#include "attitude_propagator/models/dynamic_propagator.h"
 #include "attitude_propagator/models/kinematic_propagator.h"
 #include "attitude_propagator/numerics/quaternion.h"
+#include "attitude_propagator/time/average_stamp.h"
 #include "attitude_propagator/time/stamp_filter.h"
 #include "engine_fixtures.h"
 #include "rotation_matchers.h"

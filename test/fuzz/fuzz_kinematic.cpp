@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "attitude_propagator/numerics/integrator.h"
 #include "attitude_propagator/models/kinematic_propagator.h"
+#include "attitude_propagator/numerics/integrator.h"
 #include "fuzz_support.h"
 
 namespace ap = attitude_propagator;

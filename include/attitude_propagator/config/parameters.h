@@ -11,11 +11,11 @@
 #include <string>
 #include <vector>
 
-#include "attitude_propagator/models/dynamic_propagator.h"
 #include "attitude_propagator/engine.h"
-#include "attitude_propagator/numerics/integrator.h"
-#include "attitude_propagator/models/kinematic_propagator.h"
 #include "attitude_propagator/limits.h"
+#include "attitude_propagator/models/dynamic_propagator.h"
+#include "attitude_propagator/models/kinematic_propagator.h"
+#include "attitude_propagator/numerics/integrator.h"
 #include "attitude_propagator/numerics/world_convention.h"
 
 namespace attitude_propagator {

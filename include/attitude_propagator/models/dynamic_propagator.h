@@ -10,10 +10,10 @@
 
 #include <Eigen/Geometry>
 
+#include "attitude_propagator/limits.h"
 #include "attitude_propagator/numerics/dynamic_state.h"
 #include "attitude_propagator/numerics/dynamic_step.h"
 #include "attitude_propagator/numerics/integrator.h"
-#include "attitude_propagator/limits.h"
 #include "attitude_propagator/numerics/rigid_body.h"
 #include "attitude_propagator/time/time_policy.h"
 

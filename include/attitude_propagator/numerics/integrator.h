@@ -2,12 +2,12 @@
 // interface: they are the values of the `model` and `integrator` parameters and appear in
 // AttitudeState.
 //
-// The integrators are one table (src/core/numerics/integrator.cpp), one row per method (IntegratorInfo
-// below): its name, the models it drives with their declared orders, the rate samples it reads,
-// what it keeps exactly, and its step function. Names, error messages, the parameter
-// documentation, the choice of `auto`, the tests' method lists and order bounds, the benchmarks
-// and evaluate_bag_core's methods all read the table; the lists kept by hand outside C++ (the
-// reconfigure enum, the fuzz seeds, evaluate_bag's colours) are checked against it by
+// The integrators are one table (src/core/numerics/integrator.cpp), one row per method
+// (IntegratorInfo below): its name, the models it drives with their declared orders, the rate
+// samples it reads, what it keeps exactly, and its step function. Names, error messages, the
+// parameter documentation, the choice of `auto`, the tests' method lists and order bounds, the
+// benchmarks and evaluate_bag_core's methods all read the table; the lists kept by hand outside C++
+// (the reconfigure enum, the fuzz seeds, evaluate_bag's colours) are checked against it by
 // test/checks/integrator_lists.sh. Adding an integrator: an enumerator below, a step function,
 // a row (docs/design.md §4.2).
 #pragma once

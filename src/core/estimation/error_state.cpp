@@ -3,8 +3,8 @@
 #include <Eigen/LU>
 
 #include "attitude_propagator/estimation/measurement.h"
-#include "attitude_propagator/limits.h"
 #include "attitude_propagator/estimation/orientation_covariance.h"
+#include "attitude_propagator/limits.h"
 #include "attitude_propagator/numerics/quaternion.h"
 
 namespace attitude_propagator {

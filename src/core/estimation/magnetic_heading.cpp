@@ -4,8 +4,8 @@
 #include <cmath>
 
 #include "attitude_propagator/estimation/gravity_direction.h"
-#include "attitude_propagator/limits.h"
 #include "attitude_propagator/estimation/orientation_covariance.h"
+#include "attitude_propagator/limits.h"
 #include "attitude_propagator/numerics/quaternion.h"
 
 namespace attitude_propagator {

@@ -56,9 +56,9 @@
 
 #include "attitude_propagator/config/parameters.h"
 #include "attitude_propagator/engine.h"
+#include "attitude_propagator/estimation/orientation_covariance.h"
 #include "attitude_propagator/messages/frame_ids.h"
 #include "attitude_propagator/messages/frame_source.h"
-#include "attitude_propagator/estimation/orientation_covariance.h"
 
 namespace attitude_propagator {
 
