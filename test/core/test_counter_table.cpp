@@ -13,21 +13,15 @@
 #include <gtest/gtest.h>
 
 #include "attitude_propagator/models/counters.h"
+#include "package_files.h"
 
 namespace ap = attitude_propagator;
 namespace fs = std::filesystem;
 
 namespace {
 
-// The package root, as the build gives it (AP_PACKAGE_ROOT, as for test_parameters.cpp).
-fs::path packageRoot() { return fs::path(AP_PACKAGE_ROOT); }
-
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using package_files::packageRoot;
+using package_files::readFile;
 
 /// The part of `text` from the heading `heading` to the next heading of its level.
 std::string section(const std::string& text, const std::string& heading) {

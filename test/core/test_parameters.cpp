@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "attitude_propagator/config/parameters.h"
+#include "package_files.h"
 #include "refused_parameters.h"
 
 namespace ap = attitude_propagator;
@@ -19,16 +20,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// The package root, as the build gives it (AP_PACKAGE_ROOT: __FILE__ may be relative to the
-// folder the compiler ran in, as the compiler cache makes it).
-fs::path packageRoot() { return fs::path(AP_PACKAGE_ROOT); }
-
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using package_files::packageRoot;
+using package_files::readFile;
 
 std::string trim(const std::string& s) {
   const auto begin = s.find_first_not_of(" \t");
