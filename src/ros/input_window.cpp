@@ -3,8 +3,33 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
+#include <map>
+#include <vector>
+
+#include "attitude_propagator/models/counters.h"
 
 namespace attitude_propagator {
+
+const char* inputLossAdvice(const std::string& counter) {
+  // What to look at, for the causes a user can act on; the rest are told by their meaning.
+  static const std::map<std::string, const char*> advice = {
+      {"dropped_stale",
+       "stamps at or before the previous one (two publishers on one topic, or a source that "
+       "loops)"},
+      {"rejected_future",
+       "stamps more than max_future ahead of ROS time (clocks not synchronised?)"},
+      {"held_ahead", "stamps further ahead of ROS time than their stream's"},
+      {"rejected_non_finite", "NaN or infinite rates or stamps"},
+      {"rejected_out_of_range", "rates out of the accepted range"},
+      {"rejected_no_rate", "angular_velocity_covariance[0] == -1 (REP-145: no rate)"},
+      {"rejected_type", "a message type the topic does not take"},
+      {"rejected_covariance", "rate covariances that are not ones"},
+      {"dropped_no_tf", "no transform from the rates' frame to the body yet"},
+      {"dropped_no_time", "unstamped messages before the first /clock"},
+  };
+  const auto it = advice.find(counter);
+  return it == advice.end() ? nullptr : it->second;
+}
 
 void InputWindow::closeInputWindow(const ros::WallTime& now, const EngineCounters& c,
                                    double max_dt) {
@@ -34,25 +59,16 @@ void InputWindow::closeInputWindow(const ros::WallTime& now, const EngineCounter
                   "or stamps far apart",
                   max_dt, period);
   }
-  const Loss losses[] = {
-      {c.gaps - s.gaps, gap_cause},
-      {c.dropped_stale - s.dropped_stale,
-       "stamps at or before the previous one (two publishers on one topic, or a source that "
-       "loops)"},
-      {c.rejected_future - s.rejected_future,
-       "stamps more than max_future ahead of ROS time (clocks not synchronised?)"},
-      {c.held_ahead - s.held_ahead, "stamps further ahead of ROS time than their stream's"},
-      {c.rejected_non_finite - s.rejected_non_finite, "NaN or infinite rates or stamps"},
-      {c.rejected_out_of_range - s.rejected_out_of_range, "rates out of the accepted range"},
-      {c.rejected_no_rate - s.rejected_no_rate,
-       "angular_velocity_covariance[0] == -1 (REP-145: no rate)"},
-      {c.rejected_type - s.rejected_type, "a message type the topic does not take"},
-      {c.rejected_covariance - s.rejected_covariance, "rate covariances that are not ones"},
-      {c.dropped_no_tf - s.dropped_no_tf, "no transform from the rates' frame to the body yet"},
-      {c.dropped_no_time - s.dropped_no_time, "unstamped messages before the first /clock"},
-  };
+  // Every counter of an input left unused (the core's table), after the gaps; the node's
+  // advice for its cause where it has one, else the table's meaning.
+  std::vector<Loss> losses{{c.gaps - s.gaps, gap_cause}};
+  forEachEngineCounter(c, [&](const CounterInfo& info, std::uint64_t n) {
+    if (!countsUnusedInput(info)) return;
+    const char* advice = inputLossAdvice(info.name);
+    losses.push_back({n - counterValue(s, info), advice != nullptr ? advice : info.meaning});
+  });
   std::uint64_t lost = 0;
-  const Loss* worst = &losses[0];
+  const Loss* worst = &losses.front();
   for (const Loss& loss : losses) {
     lost += loss.count;
     if (loss.count > worst->count) worst = &loss;

@@ -96,6 +96,27 @@ TEST(InputWindow, TheCommonestCauseIsNamedTheFirstOnATie) {
             "angular_velocity_covariance[0] == -1 (REP-145: no rate)");
 }
 
+// Every counter of the core's table that counts a rate or torque input left unused is a cause of
+// loss, named by the node's advice or, without one, by the table's meaning: a counter added to
+// the table cannot be left out of the window.
+TEST(InputWindow, EveryUnusedInputCounterOfTheTableIsACause) {
+  int counted = 0;
+  for (const ap::CounterInfo& info : ap::engineCounterTable()) {
+    if (!ap::countsUnusedInput(info)) continue;
+    SCOPED_TRACE(info.name);
+    ap::EngineCounters c;
+    c.received = 10;
+    ap::counterField(c, info) = 10;
+    const char* advice = ap::inputLossAdvice(info.name);
+    const std::string cause = advice != nullptr ? advice : info.meaning;
+    EXPECT_EQ(windowProblem(c),
+              "half or more of the rate samples of the last second were lost (10 of 10): " + cause);
+    ++counted;
+  }
+  EXPECT_GE(counted, 12);  // the twelve drops of docs/bag_tools.md's list at least
+  EXPECT_EQ(ap::inputLossAdvice("gaps"), nullptr);  // the gaps' cause needs max_dt (below)
+}
+
 TEST(InputWindow, AMaxDtBelowTheInputPeriodIsNamed) {
   // 100 samples in 1 s: a period of 0.01 s.
   EXPECT_NE(windowProblem(gapsOf(100, 100), 1.0, 0.01).find("gaps longer than max_dt 0.01 s"),

@@ -12,6 +12,10 @@
 
 namespace attitude_propagator {
 
+/// The node's advice on a cause of lost rate samples, by the counter's name in the core's table
+/// (engineCounterTable); nullptr for a counter without one (its meaning is shown instead).
+const char* inputLossAdvice(const std::string& counter);
+
 // Diagnostics judge what became of the rate samples over windows of this long (wall s).
 constexpr double kInputWindow = 1.0;
 
