@@ -8,6 +8,18 @@
 
 namespace attitude_propagator {
 
+const char* inputTopicName(Source source) {
+  switch (source) {
+    case Source::Imu:
+      return "imu/data_raw";
+    case Source::Twist:
+      return "body_twist";
+    case Source::Torque:
+      return "torque";
+  }
+  return "input";
+}
+
 const char* refusedCounter(Refused why) {
   switch (why) {
     case Refused::NoRate:

@@ -2,6 +2,7 @@
 
 #include <string>
 
+#include "attitude_propagator/messages/input_decoders.h"
 #include "attitude_propagator/models/kinematic_propagator.h"
 #include "attitude_propagator/time/stamp_filter.h"
 
@@ -87,7 +88,7 @@ std::string noteText(const EngineNote& note, const EngineCounters& c, const Para
 
 LogLine noteText(const EngineNote& note, const EngineCounters& c, const Parameters& p,
                  bool dynamic_model, const std::string& clock_sources) {
-  const char* what = note.source ? sourceName(*note.source) : "ROS time";
+  const char* what = note.source ? inputTopicName(*note.source) : "ROS time";
   const double t = static_cast<double>(note.stamp) * 1e-9;
   return {ros::console::levels::Warn, "note " + std::to_string(note.kind),
           noteText(note, c, p, dynamic_model, what, t, clock_sources)};

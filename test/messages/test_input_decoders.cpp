@@ -122,6 +122,14 @@ geometry_msgs::Vector3Stamped bias(const std::string& frame, const ros::Time& st
 // ---------------------------------------------------------------------------------------------
 
 // rotation(target, source) takes a vector in source's axes into target's: C_BS ω_S, not Cᵀ.
+// The topics the node subscribes (docs/node.md's table of inputs), as the log names them: the
+// message layer names them, never the core.
+TEST(InputTopicName, TheNodesTopicsRelativeToItsNamespace) {
+  EXPECT_STREQ(ap::inputTopicName(ap::Source::Imu), "imu/data_raw");
+  EXPECT_STREQ(ap::inputTopicName(ap::Source::Twist), "body_twist");
+  EXPECT_STREQ(ap::inputTopicName(ap::Source::Torque), "torque");
+}
+
 TEST(FrameSource, RotationTakesSourceVectorsIntoTargetAxes) {
   tf2::BufferCore buffer;
   addMount(buffer);

@@ -96,7 +96,7 @@ constexpr ap::EngineNote::Kind kAllNotes[] = {
 }  // namespace
 
 TEST(NoteText, EachKindCountsItsOwnCounter) {
-  const std::string imu = ap::sourceName(ap::Source::Imu);
+  const std::string imu = "imu/data_raw";  // the topic the node subscribes (docs/node.md)
   EXPECT_EQ(noteLine(ap::EngineNote::Gap),
             imu +
                 ": gap longer than max_dt = 0.25 s or 5.5 periods of the stream before "

@@ -28,9 +28,9 @@ namespace attitude_propagator {
 
 struct EngineConfig;
 
-/// Where an input came from; chooses what it means and how it is logged.
+/// Where an input came from; chooses what it means. The core names no topic: the message layer
+/// does (inputTopicName, input_decoders.h).
 enum class Source { Imu, Twist, Torque };
-const char* sourceName(Source source);
 
 /// A decoded input: a body rate w_B (rad/s) from Imu or Twist, or a torque (N m) in `frame`.
 struct Input {

@@ -6,18 +6,6 @@
 
 namespace attitude_propagator {
 
-const char* sourceName(Source source) {
-  switch (source) {
-    case Source::Imu:
-      return "imu/data_raw";
-    case Source::Twist:
-      return "body_twist";
-    case Source::Torque:
-      return "torque";
-  }
-  return "input";
-}
-
 const TimePolicy& timePolicyOf(const EngineConfig& config) {
   return config.dynamic ? config.dynamic->time_policy : config.kinematic.time_policy;
 }

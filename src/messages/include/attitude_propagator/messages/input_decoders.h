@@ -62,6 +62,10 @@
 
 namespace attitude_propagator {
 
+/// The topic an input of `source` comes in on, relative to the node's namespace, as the node
+/// subscribes it: imu/data_raw, body_twist, torque. For the log and the diagnostics.
+const char* inputTopicName(Source source);
+
 /// Why a decoder refused a message. Each goes to one engine counter (refusedCounter), but for
 /// NoOrientation, which only fixes meet (FixDecoder counts fixes' refusals: fix_decoder.h).
 enum class Refused {
