@@ -76,6 +76,9 @@ struct FixHistoryEntry {
   std::shared_ptr<const Measurement> measurement;
   Eigen::Quaterniond D = Eigen::Quaterniond::Identity();
   bool measurement_reset = false;
+  /// A measurement's own stamp (`stamp` is that of the state it was applied after): a
+  /// correction stamped before it, arriving later, goes before it.
+  Stamp measured = 0;
   ModelSnapshot model;
   Eigen::Quaterniond q_WB = Eigen::Quaterniond::Identity();
   ErrorState error;
@@ -335,6 +338,9 @@ class AttitudeEngine : private PropagatorHost {
     Eigen::Quaterniond D;
   };
   std::optional<Located> locate(Stamp stamp);
+  /// The state the step to entry j gives from entry k (the one before it, but for measurements
+  /// stamped later): the interval's own motion, without corrections made in it after the stamp.
+  Eigen::Quaterniond stepFrom(std::size_t k, std::size_t j);
   /// Repeats the entries from `first` on from the model's state: the steps, and the
   /// measurements as they were applied.
   void replayFrom(std::size_t first);
@@ -363,8 +369,10 @@ class AttitudeEngine : private PropagatorHost {
   /// A new entry at position `pos` of the history (oldest first), the entries from it on moved
   /// up by one; the oldest dropped when the memory bound is reached.
   FixHistoryEntry& insertHistoryEntry(std::size_t& pos);
-  /// The slot after the newest entry of the history, grown or, at the memory bound, the oldest.
+  /// A new entry after the newest of the history (its id a new one): the next slot, grown or,
+  /// at the memory bound, the oldest.
   FixHistoryEntry& nextHistorySlot();
+  FixHistoryEntry& appendHistorySlot();
   /// Fills `slot` with the model's state now.
   void fillEntry(FixHistoryEntry& slot);
   void countFix(FixOutcome outcome);

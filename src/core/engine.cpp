@@ -786,7 +786,6 @@ void AttitudeEngine::recordHistory(const ModelStep& step, bool base) {
   fillEntry(*slot);
   slot->stamp = *stamp;
   slot->base = base;
-  slot->id = ++last_history_id_;
   // Keep the newest entry at or before newest - fix_history (a fix stamped exactly there needs
   // it), drop the ones before it.
   const Stamp span = static_cast<Stamp>(std::llround(config_.fixes.history * 1e9));
@@ -797,6 +796,12 @@ void AttitudeEngine::recordHistory(const ModelStep& step, bool base) {
 }
 
 FixHistoryEntry& AttitudeEngine::nextHistorySlot() {
+  FixHistoryEntry& slot = appendHistorySlot();
+  slot.id = ++last_history_id_;  // a new entry, whatever the slot held before
+  return slot;
+}
+
+FixHistoryEntry& AttitudeEngine::appendHistorySlot() {
   if (history_size_ < history_.size()) return historyEntry(history_size_++);
   if (history_.size() < kMaxFixHistorySamples) {
     // Grow the ring: oldest first again, then one more slot at the end.
@@ -892,13 +897,15 @@ void AttitudeEngine::keepApplied(AppliedFix&& applied) {
   }
 }
 
-// The fix is applied at the last saved state at or before its stamp, k (docs/design.md §6.9).
-// A model that can move on from k to the fix's stamp (dynamic: the knot advanced to t_f) is
-// corrected there. Otherwise the estimate at the fix's stamp is interpolated along the geodesic
-// to the next state, q_f = q_k (x) D, D = Exp(a Log(q_k^-1 q_k+1)), a = (t_f - t_k) /
-// (t_k+1 - t_k); an error at t_f is the error at t_k seen through D (dtheta_k = C(D) dtheta_f),
-// so the error state is carried to t_f (moveErrorState), the update made there, and the result
-// carried back to t_k.
+// The fix is applied at the last saved state at or before its stamp, k (docs/design.md §6.9),
+// but before the measurements applied in the same interval and stamped after it (they are
+// applied again in the replay). A model that can move on from k to the fix's stamp (dynamic: the
+// knot advanced to t_f) is corrected there. Otherwise the estimate at the fix's stamp is
+// interpolated along the geodesic to the next state, q_f = q_k (x) D, D = Exp(a Log(q_k^-1
+// q_k+1)), a = (t_f - t_k) / (t_k+1 - t_k), q_k+1 the step taken again from k (what it gives
+// without the corrections in the interval after t_f); an error at t_f is the error at t_k seen
+// through D (dtheta_k = C(D) dtheta_f), so the error state is carried to t_f (moveErrorState),
+// the update made there, and the result carried back to t_k.
 std::optional<AttitudeEngine::Located> AttitudeEngine::locate(Stamp stamp) {
   const std::size_t n = history_size_;
   if (n == 0) return std::nullopt;
@@ -907,23 +914,39 @@ std::optional<AttitudeEngine::Located> AttitudeEngine::locate(Stamp stamp) {
   if (newest - stamp > span) return std::nullopt;
   std::size_t k = n;
   while (k > 0 && historyEntry(k - 1).stamp > stamp) --k;
+  while (k > 0 && historyEntry(k - 1).measurement && historyEntry(k - 1).measured > stamp) --k;
   if (k == 0) return std::nullopt;  // before the oldest state kept (or the anchor)
   --k;
   const FixHistoryEntry& base = historyEntry(k);
   propagator_->save(live_);  // the newest state, kept should the measurement not be applied
   propagator_->restore(base.model);
   Located at{k, base.q_WB, Eigen::Quaterniond::Identity()};
-  if (base.stamp < stamp && k + 1 < n) {
+  std::size_t next = k + 1;
+  while (next < n && historyEntry(next).stamp <= base.stamp) ++next;
+  if (base.stamp < stamp && next < n) {
     if (propagator_->advanceForFix(coreTime(stamp))) {
       at.q_k = propagator_->state().q_WB;  // the model's own state at the stamp
     } else {
-      const FixHistoryEntry& next = historyEntry(k + 1);
-      const double a =
-          static_cast<double>(stamp - base.stamp) / static_cast<double>(next.stamp - base.stamp);
-      at.D = expMap(a * logMap(at.q_k.conjugate() * next.q_WB));
+      const double a = static_cast<double>(stamp - base.stamp) /
+                       static_cast<double>(historyEntry(next).stamp - base.stamp);
+      at.D = expMap(a * logMap(at.q_k.conjugate() * stepFrom(k, next)));
     }
   }
   return at;
+}
+
+Eigen::Quaterniond AttitudeEngine::stepFrom(std::size_t k, std::size_t j) {
+  const FixHistoryEntry& next = historyEntry(j);
+  if (next.base || next.measurement) return next.q_WB;  // not reached by a step: as kept
+  const ErrorState kept = error_;
+  error_ = historyEntry(k).error;  // the bias estimate the step is taken with
+  replaying_ = true;
+  replayStep(next.step);
+  replaying_ = false;
+  const Eigen::Quaterniond q = propagator_->state().q_WB;
+  error_ = kept;
+  propagator_->restore(historyEntry(k).model);
+  return q;
 }
 
 FixOutcome AttitudeEngine::applyFix(const PendingFix& fix, std::vector<FixHistoryEntry>& before) {
@@ -945,10 +968,10 @@ FixOutcome AttitudeEngine::applyFix(const PendingFix& fix, std::vector<FixHistor
   rejected_in_a_row_ = 0;
 
   // The corrected state replaces the saved one (moved to the fix's stamp when the model moved
-  // there), and the steps since are repeated from it. The entries as they were are kept with the
-  // fix, for a fix or measurement stamped before it that arrives later (takeAppliedAfter).
+  // there), and the steps since are repeated from it. The entry as it was is kept with the fix,
+  // for a fix or measurement stamped before it that arrives later (takeAppliedAfter); the ones
+  // after it are rewritten by every replay.
   before.assign(1, historyEntry(at->k));
-  if (at->k + 1 < history_size_) before.push_back(historyEntry(at->k + 1));
   propagator_->correctOrientation(q * at->D.conjugate());
   error_ = moveErrorState(e, at->D.conjugate());
   saveReplayed(historyEntry(at->k));

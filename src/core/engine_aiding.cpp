@@ -180,6 +180,7 @@ AidingOutcome AttitudeEngine::applyAtNewest(const Measurement& m, Stamp stamp,
   entry.measurement = std::move(kept);
   entry.D = Eigen::Quaterniond::Identity();
   entry.measurement_reset = reset;
+  entry.measured = stamp;
   entry.base = false;
   fillEntry(entry);
   entry.stamp = state_stamp;
@@ -219,6 +220,7 @@ AidingOutcome AttitudeEngine::applyMeasurement(const PendingMeasurement& pm) {
   entry.measurement = pm.measurement;
   entry.D = at->D;
   entry.measurement_reset = reset;
+  entry.measured = pm.stamp;
   entry.base = false;
   fillEntry(entry);
   entry.stamp = base_stamp;

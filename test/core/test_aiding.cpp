@@ -745,6 +745,150 @@ TEST(Late, ALateGravitySampleGoesBeforeTheFixesStampedAfterIt) {
   EXPECT_LE((on_time.P_B - late.P_B).cwiseAbs().maxCoeff(), 1e-12);
 }
 
+// At most kMaxPendingMeasurements (64, limits.h) samples stamped ahead of the newest rate wait;
+// past it the one stamped furthest ahead is dropped and counted queue_full: the 63rd and 64th
+// wait, a 65th further ahead than all is dropped itself, one less far ahead takes the furthest
+// one's place. When the rates reach them, every one still waiting is applied.
+TEST(Pending, AtMostKMaxPendingMeasurementsWaitTheFurthestAheadDropped) {
+  ap::EngineConfig c = aidedConfig();
+  Recorder sink;
+  ap::AttitudeEngine engine(c, sink);
+  const Eigen::Vector3d f(0.0, 0.0, ap::kStandardGravity);
+  const Eigen::Matrix3d none = Eigen::Matrix3d::Zero();
+  engine.submit(imu(at(0.0), Eigen::Vector3d::Zero()));
+  ASSERT_EQ(engine.submitAcceleration(at(0.0), f, none), ap::AidingOutcome::Aligned);
+  EXPECT_EQ(ap::kMaxPendingMeasurements, 64u);  // the documented bound
+  const int n = static_cast<int>(ap::kMaxPendingMeasurements);
+  for (int k = 1; k <= n; ++k) {
+    EXPECT_EQ(engine.submitAcceleration(at(0.01 * k + 0.001), f, none),
+              ap::AidingOutcome::Waiting)
+        << k;
+    EXPECT_EQ(engine.counters().accel.queue_full, 0u) << k;
+  }
+  EXPECT_EQ(engine.submitAcceleration(at(0.01 * (n + 1) + 0.001), f, none),
+            ap::AidingOutcome::QueueFull);
+  EXPECT_EQ(engine.counters().accel.queue_full, 1u);
+  EXPECT_EQ(engine.submitAcceleration(at(0.0055), f, none), ap::AidingOutcome::Waiting);
+  EXPECT_EQ(engine.counters().accel.queue_full, 2u);  // the one at 0.641 s went
+  for (int k = 1; k <= n + 2; ++k) engine.submit(imu(at(0.01 * k), Eigen::Vector3d::Zero()));
+  EXPECT_EQ(engine.counters().accel.accepted, static_cast<std::uint64_t>(n));
+}
+
+// ---- late samples and fixes in one interval ---------------------------------------------------
+
+// Samples 0..n of the tumble at 100 Hz with fixes between samples k and k + 1 (k = 10, 30, ...)
+// at fractions `fix_a` of the interval, and gravity samples at the rates' stamps, handed in
+// `accel_delay` samples late; with `field_a` >= 0 a field sample in the same interval too, at
+// that fraction, handed in `field_delay` samples late. Each fix is handed in with the sample
+// `fix_delay[i]` after its interval's start (1: as soon as the rates reach it).
+struct InOneInterval {
+  std::vector<double> fix_a;
+  std::vector<int> fix_delay;
+  int accel_delay = 0;
+  double field_a = -1.0;
+  int field_delay = 1;
+};
+
+ap::EngineState runInOneInterval(const InOneInterval& run) {
+  ap::EngineConfig c = aidedConfig();
+  c.aiding.linear_window = 0.0;  // the noise fixed (see above)
+  c.aiding.use_mag = true;       // the history from the start
+  c.aiding.mag_stddev = 0.3e-6;
+  c.aiding.align = false;
+  c.kinematic.initial_q_WB = tumble().attitude(0.0);
+  c.initial_orientation_stddev = 0.01;
+  c.fixes.stddev = 0.01;
+  simulated_imu::Sensor sensor;
+  sensor.gyro_noise = 0.002;
+  sensor.accel_noise = 0.05;
+  sensor.mag_noise = 0.3e-6;
+  const auto samples = simulated_imu::simulate(tumble(), sensor, 1.0);
+  const double h = 1.0 / sensor.rate;
+  Recorder sink;
+  ap::AttitudeEngine engine(c, sink);
+  const int n = static_cast<int>(samples.size());
+  // Each fix is the truth at its stamp turned by a generic small rotation, with an anisotropic,
+  // correlated covariance.
+  Eigen::Matrix3d R;
+  R << 1.0e-4, 0.3e-4, -0.2e-4, 0.3e-4, 2.5e-4, 0.4e-4, -0.2e-4, 0.4e-4, 0.6e-4;
+  const std::vector<Eigen::Vector3d> offsets{
+      {0.004, -0.002, 0.006}, {-0.003, 0.005, 0.002}, {0.002, 0.003, -0.005}};
+  auto handIn = [&](int k) {
+    if (k < n) engine.submit(imu(at(samples[k].t), samples[k].w_B));
+    if (k >= run.accel_delay && k - run.accel_delay < n) {
+      const auto& s = samples[k - run.accel_delay];
+      engine.submitAcceleration(at(s.t), s.f_B, Eigen::Matrix3d::Zero());
+    }
+    // The intervals with fixes start at samples 10, 30, 50, ...
+    auto startsAnInterval = [&](int start) { return start % 20 == 10 && start + 1 < n; };
+    for (std::size_t i = 0; i < run.fix_a.size(); ++i) {
+      const int start = k - run.fix_delay[i];
+      if (!startsAnInterval(start)) continue;
+      const double t = samples[start].t + run.fix_a[i] * h;
+      // Applied as it arrives (the rates are past its stamp): the order of arrival is the case.
+      EXPECT_EQ(engine.submitFix(at(t), tumble().attitude(t) * ap::expMap(offsets[i]), R),
+                ap::FixOutcome::Accepted);
+    }
+    const int start = k - run.field_delay;
+    if (run.field_a >= 0.0 && startsAnInterval(start)) {
+      // The field at the interval's first sample, stamped a fraction of the interval later.
+      EXPECT_EQ(engine.submitMagneticField(at(samples[start].t + run.field_a * h),
+                                           samples[start].m_B, Eigen::Matrix3d::Zero()),
+                ap::AidingOutcome::Accepted);
+    }
+  };
+  for (int k = 0; k < n + 8; ++k) handIn(k);
+  EXPECT_GT(engine.counters().fixes_accepted, 3u);
+  return engine.state();
+}
+
+// A fix between samples k and k + 1 corrects the entry at k in place. A late gravity sample
+// stamped at k, handed in after it, must find that entry as it was without the fix (set back),
+// or the fix, applied again after the sample, counts twice: the newest state is the on-time one.
+TEST(Late, AGravitySampleBeforeAFixInItsIntervalFindsTheStateWithoutTheFix) {
+  InOneInterval on_time{{0.4}, {1}, 0};
+  InOneInterval late = on_time;
+  late.accel_delay = 4;
+  const ap::EngineState a = runInOneInterval(on_time);
+  const ap::EngineState b = runInOneInterval(late);
+  EXPECT_LE(ap::rotationAngle(a.q_WB, b.q_WB), 1e-9);
+  EXPECT_LE((a.P_B - b.P_B).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+// Each gravity sample here comes with its rate and is applied at the newest state, after it in
+// the history. Two fixes between the same two samples, the later handed in first: when the
+// earlier one arrives, the entry the later one changed (the gravity sample's) is set back. The
+// newest state is the on-time one (before each entry got an id of its own, the gravity sample's
+// kept its slot's old one, the set-back missed it, and the later fix counted twice: 1.5 mrad).
+TEST(Late, TwoFixesHandedInReversedAmongGravitySamplesAreTheOnTimeOnes) {
+  const ap::EngineState a = runInOneInterval({{0.1, 0.3}, {1, 1}, 0});
+  const ap::EngineState b = runInOneInterval({{0.1, 0.3}, {4, 1}, 0});
+  EXPECT_LE(ap::rotationAngle(a.q_WB, b.q_WB), 1e-9);
+  EXPECT_LE((a.P_B - b.P_B).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+// A correction goes before the measurements applied in its interval and stamped after it, and
+// interpolates towards the next state as the step gives it without them (docs/design.md §6.9).
+// A fix handed in after a field sample stamped later in the same interval: the on-time state
+// (before, the fix went after the field sample and towards the state with it: 71 urad).
+TEST(Late, ALateFixGoesBeforeAFieldSampleStampedAfterItInItsInterval) {
+  const ap::EngineState a = runInOneInterval({{0.3}, {1}, 0, 0.6, 1});
+  const ap::EngineState b = runInOneInterval({{0.3}, {3}, 0, 0.6, 1});
+  EXPECT_LE(ap::rotationAngle(a.q_WB, b.q_WB), 1e-9);
+  EXPECT_LE((a.P_B - b.P_B).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+// Two fixes and a field sample in one interval (0.1, 0.3, 0.6 of it): handed in in stamp order,
+// or the later fix first, the field sample after it and the earlier fix last, the newest state
+// is the same. The field sample was applied with the later fix in the state; when the earlier
+// fix arrives, the field's entry must not be where it acts (before: 3.9 mrad off).
+TEST(Late, AFieldSampleAfterAFixInItsIntervalIsSetBackWithIt) {
+  const ap::EngineState a = runInOneInterval({{0.1, 0.3}, {1, 1}, 0, 0.6, 1});
+  const ap::EngineState b = runInOneInterval({{0.1, 0.3}, {4, 1}, 0, 0.6, 2});
+  EXPECT_LE(ap::rotationAngle(a.q_WB, b.q_WB), 1e-9);
+  EXPECT_LE((a.P_B - b.P_B).cwiseAbs().maxCoeff(), 1e-12);
+}
+
 // ---- against a truth ------------------------------------------------------------------------
 
 // The tumble with a MEMS gyro (0.3 deg/s of bias): after 10 s the tilt stays within a degree,

@@ -204,6 +204,13 @@ TEST(Parameters, DocumentedRangesAreInclusive) {
   auto accepted = [](const ap::Parameters& p) { return ap::validateParameters(p).dynamic.value(); };
   EXPECT_EQ(accepted(dynamic([](auto& p) { p.torque_timeout = 3600.0; })).torque_timeout, 3600.0);
   expectRefused(dynamic([](auto& p) { p.torque_timeout = 3600.5; }), "torque_timeout");
+  // time_jump_threshold: [1e-3, 3600] s, kMinTimeJumpThreshold the documented smallest.
+  EXPECT_EQ(ap::kMinTimeJumpThreshold, 1e-3);
+  EXPECT_EQ(ap::validateParameters(dynamic([](auto& p) {
+              p.time_jump_threshold = ap::kMinTimeJumpThreshold;
+            })).parameters.time_jump_threshold,
+            ap::kMinTimeJumpThreshold);
+  expectRefused(dynamic([](auto& p) { p.time_jump_threshold = 0.999e-3; }), "time_jump_threshold");
   EXPECT_EQ(accepted(dynamic([](auto& p) { p.tolerance = 1e-12; })).tolerance, 1e-12);
   EXPECT_EQ(accepted(dynamic([](auto& p) { p.tolerance = 1e-2; })).tolerance, 1e-2);
   expectRefused(dynamic([](auto& p) { p.tolerance = 0.9e-12; }), "tolerance");
@@ -405,13 +412,14 @@ TEST(Parameters, FormatsAsYaml) {
 
 // The queue sizes are whole counts of messages in [1, 1e6] (docs/parameters.md).
 TEST(Parameters, QueueSizesAreCountsWithinTheirDocumentedRange) {
-  for (const int v : {1, 1000000}) {
+  EXPECT_EQ(ap::kMaxQueueSize, 1000000);  // the documented largest
+  for (const int v : {1, ap::kMaxQueueSize - 1, ap::kMaxQueueSize}) {
     ap::Parameters p;
     p.input_queue_size = v;
     p.output_queue_size = v;
     EXPECT_EQ(ap::validateParameters(p).parameters.input_queue_size, v);
   }
-  for (const int v : {0, -1, 1000001}) {
+  for (const int v : {0, -1, ap::kMaxQueueSize + 1}) {
     ap::Parameters in;
     in.input_queue_size = v;
     expectRefused(in, "input_queue_size");
@@ -424,12 +432,13 @@ TEST(Parameters, QueueSizesAreCountsWithinTheirDocumentedRange) {
 // max_gap_fill: lost samples in a row filled, [0, 4] (docs/parameters.md), reaching the kinematic
 // model as given; -1 and 5 are refused naming the range.
 TEST(Parameters, MaxGapFillIsACountWithinItsDocumentedRange) {
-  for (const int v : {0, 4}) {
+  EXPECT_EQ(ap::kMaxGapFill, 4);  // the documented largest
+  for (const int v : {0, ap::kMaxGapFill - 1, ap::kMaxGapFill}) {
     ap::Parameters p;
     p.max_gap_fill = v;
     EXPECT_EQ(ap::engineConfig(ap::validateParameters(p)).kinematic.max_gap_fill, v);
   }
-  for (const int v : {-1, 5}) {
+  for (const int v : {-1, ap::kMaxGapFill + 1}) {
     ap::Parameters p;
     p.max_gap_fill = v;
     expectRefused(p, "max_gap_fill");

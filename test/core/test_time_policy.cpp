@@ -887,13 +887,20 @@ TEST(TimePolicy, TwoClockPublishersCostOneResetAndStampsGoBackOnce) {
     sink.kinematic = !dynamic;
     ap::AttitudeEngine engine(rateConfig(dynamic), sink);
     int back_notes = 0;
+    std::vector<ap::Stamp> two_timelines;  // the ClockTwoTimelines notes' stamps
     for (int k = 0; k < 300; ++k) {
       engine.clockTick(at(100.0 + 0.01 * k));
       engine.clockTick(at(95.0 + 0.01 * k));
       engine.submit(rate(at(100.0 + 0.01 * k), kSpin));
     }
-    for (const ap::EngineNote& n : sink.notes)
+    for (const ap::EngineNote& n : sink.notes) {
       back_notes += n.kind == ap::EngineNote::ClockJumpedBack;
+      if (n.kind == ap::EngineNote::ClockTwoTimelines) two_timelines.push_back(n.stamp);
+    }
+    // One note, with the clock and a stamp of the other timeline (the earlier one, 5 s behind).
+    ASSERT_EQ(two_timelines.size(), 1u) << dynamic;
+    EXPECT_LT(two_timelines[0], at(99.0)) << dynamic;
+    EXPECT_GE(two_timelines[0], at(95.0)) << dynamic;
     const ap::EngineCounters& c = engine.counters();
     EXPECT_LE(c.resets, 1u) << dynamic;
     EXPECT_LE(back_notes, 1) << dynamic;

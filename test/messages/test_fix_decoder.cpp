@@ -514,3 +514,17 @@ TEST(SequenceGaps, HeaderSeqIsTheSerialisedMessagesFirstField) {
   EXPECT_EQ(ap::headerSeq(bytes.data(), bytes.size()), std::optional<std::uint32_t>(0x01020304u));
   EXPECT_FALSE(ap::headerSeq(bytes.data(), 3));
 }
+
+// Each refusal of a fix is counted under the name docs/design.md §7.5's table gives it; the
+// refusals of rates, torques and bias samples are not a fix's.
+TEST(FixDecoder, EachRefusalOfAFixHasTheCounterTheDocsName) {
+  EXPECT_STREQ(ap::fixRefusedCounter(ap::Refused::NoTransform), "fixes_refused_no_tf");
+  EXPECT_STREQ(ap::fixRefusedCounter(ap::Refused::WrongType), "fixes_refused_type");
+  EXPECT_STREQ(ap::fixRefusedCounter(ap::Refused::NoTime), "fixes_refused_no_time");
+  EXPECT_STREQ(ap::fixRefusedCounter(ap::Refused::NoOrientation), "fixes_refused_no_orientation");
+  EXPECT_STREQ(ap::fixRefusedCounter(ap::Refused::FixBodyFrame), "fixes_refused_body_frame");
+  for (const ap::Refused other :
+       {ap::Refused::NoRate, ap::Refused::BadCovariance, ap::Refused::BiasFrame}) {
+    EXPECT_STREQ(ap::fixRefusedCounter(other), "?");
+  }
+}
