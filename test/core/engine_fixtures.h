@@ -117,4 +117,13 @@ inline void runClock(ap::AttitudeEngine& engine, double from, double to, double 
   for (int k = 1; k <= n; ++k) engine.clockTick(at(from + k * step));
 }
 
+/// A fix covariance that breaks every symmetry (rad^2): variances unlike on each axis,
+/// correlated, about (0.02 rad)^2 in all, so that C R C^T and C^T R C, or R and its transpose
+/// of a wrongly turned frame, differ far beyond round-off.
+inline Eigen::Matrix3d correlatedFixCovariance() {
+  Eigen::Matrix3d L;
+  L << 0.018, 0.0, 0.0, 0.006, 0.014, 0.0, -0.004, 0.008, 0.02;
+  return L * L.transpose();
+}
+
 }  // namespace engine_fixtures

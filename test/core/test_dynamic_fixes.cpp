@@ -66,7 +66,7 @@ struct Fix {
 ap::EngineState runDynamic(const ap::EngineConfig& config, const std::vector<Fix>& fixes,
                            Recorder& sink, std::vector<ap::FixOutcome>* outcomes = nullptr) {
   ap::AttitudeEngine engine(config, sink);
-  const Eigen::Matrix3d R = 1e-4 * Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d R = engine_fixtures::correlatedFixCovariance();
   const bool torqued = config.dynamic->torque_input;
   for (int k = 0; k <= 200; ++k) {
     const double t = kTick * k;

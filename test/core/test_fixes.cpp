@@ -59,7 +59,7 @@ ap::EngineState runWithFix(const ap::EngineConfig& config, double fix_t, double 
                            Recorder& sink) {
   const ap::ConingMotion cone;
   ap::AttitudeEngine engine(config, sink);
-  const Eigen::Matrix3d R = 1e-4 * Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d R = engine_fixtures::correlatedFixCovariance();
   const Eigen::Quaterniond offset = ap::expMap(Eigen::Vector3d(0.02, -0.01, 0.015));
   bool sent = false;
   for (int k = 0; k <= 200; ++k) {
@@ -124,7 +124,7 @@ ap::EngineState runTwoFixes(const ap::EngineConfig& config, double submit_early,
   const ap::ConingMotion cone;
   Recorder sink;
   ap::AttitudeEngine engine(config, sink);
-  const Eigen::Matrix3d R = 1e-4 * Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d R = engine_fixtures::correlatedFixCovariance();
   const Eigen::Quaterniond early = cone.attitude(0.4) * ap::expMap({0.02, -0.01, 0.015});
   const Eigen::Quaterniond late = cone.attitude(0.5025) * ap::expMap({-0.015, 0.02, 0.01});
   for (int k = 0; k <= 200; ++k) {
@@ -183,7 +183,7 @@ TEST(LateFix, AFixAheadOfTheRatesWaits) {
   {
     const ap::ConingMotion cone;
     ap::AttitudeEngine engine(config, early_sink);
-    const Eigen::Matrix3d R = 1e-4 * Eigen::Matrix3d::Identity();
+    const Eigen::Matrix3d R = engine_fixtures::correlatedFixCovariance();
     const Eigen::Quaterniond offset = ap::expMap(Eigen::Vector3d(0.02, -0.01, 0.015));
     for (int k = 0; k <= 200; ++k) {
       const double t = 0.005 * k;
