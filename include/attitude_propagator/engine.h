@@ -226,8 +226,8 @@ class AttitudeEngine : private PropagatorHost {
 
  private:
   // PropagatorHost: what the model calls back.
-  double coreTime(Stamp stamp) override;
-  std::optional<Stamp> stampAt(double t) const override;
+  double coreTime(Stamp stamp) const { return time_.coreTime(stamp); }
+  std::optional<Stamp> stampAt(double t) const { return time_.stampAt(t); }
   /// Counts and notes a propagator outcome; true when the state holds at the stamp.
   bool handleOutcome(StampOutcome outcome, std::optional<Source> source, Stamp stamp) override;
   void emitState(Stamp stamp) override;
@@ -243,6 +243,9 @@ class AttitudeEngine : private PropagatorHost {
   void stepTaken(const ModelStep& step) override;
 
   void rebaseIfFar(Stamp stamp);
+  /// The grid stamps due up to the clock (dynamic model), then the fixes and measurements the
+  /// model's time reached.
+  void publishDue(bool skip_intermediate);
   /// Judges a look at the clock (ClockTimeline): a jump back resets, two timelines are counted
   /// and noted; clock_ follows. Returns the verdict.
   ClockTimeline::Verdict judgeClock(Stamp now);
@@ -383,13 +386,13 @@ class AttitudeEngine : private PropagatorHost {
 
   EngineConfig config_;
   EngineSink& sink_;
+  TimeBase time_;  // core time: the origin (time_base.h); before the model, which reads it
   std::unique_ptr<Propagator> propagator_;
   Eigen::Matrix3d default_R_B_;
   ErrorState error_;  // P_B, and the bias estimate with its covariances
   Eigen::Vector3d gyro_bias_B_ = Eigen::Vector3d::Zero();
   std::vector<std::pair<Stamp, Eigen::Vector3d>> pending_gyro_bias_;  // sorted by stamp, bounded
 
-  std::optional<Stamp> origin_;              // core time 0, whole seconds; set by the first stamp
   std::optional<Stamp> last_published_;      // one state per stamp, increasing
   std::optional<Stamp> clock_;               // the ROS time followed (clock_line_)
   ClockTimeline clock_line_;                 // ROS time's own timeline(s)

@@ -17,11 +17,6 @@ namespace attitude_propagator {
 
 namespace {
 
-constexpr Stamp kNsPerSecond = 1000000000;
-// Core time is a double of seconds since the origin: its resolution stays below 1e-10 s within
-// 1e6 s of it. A gap that lands further away moves the origin to it (see rebaseIfFar).
-constexpr double kFarFromOrigin = 1e6;
-
 void checkMaxFuture(double max_future) {
   if (!(max_future > 0.0 && max_future <= kMaxFuture)) {
     throw std::invalid_argument("max_future: accepted: more than 0 and at most " +
@@ -131,7 +126,7 @@ const char* fixOutcomeName(FixOutcome outcome) {
 }
 
 AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink)
-    : config_(config), sink_(sink), propagator_(makePropagator(config_, *this)) {
+    : config_(config), sink_(sink), propagator_(makePropagator(config_, *this, time_)) {
   if (!(config_.publish_rate > 0.0) || !std::isfinite(config_.publish_rate)) {
     throw std::invalid_argument("publish_rate: must be positive and finite");
   }
@@ -189,25 +184,14 @@ AttitudeEngine::~AttitudeEngine() = default;
 // Time
 // ---------------------------------------------------------------------------------------------
 
-double AttitudeEngine::coreTime(Stamp stamp) {
-  // Whole seconds keep the publish grid exact in core time.
-  if (!origin_) origin_ = stamp - stamp % kNsPerSecond;
-  return static_cast<double>(stamp - *origin_) * 1e-9;
-}
-
-std::optional<Stamp> AttitudeEngine::stampAt(double t) const {
-  if (!origin_) return std::nullopt;
-  return *origin_ + static_cast<Stamp>(std::llround(t * 1e9));
-}
-
 void AttitudeEngine::rebaseIfFar(Stamp stamp) {
   // After a gap or an anchor the state holds at `stamp` with nothing to integrate from: pinning
   // it there again, with the origin moved to the stamp, loses nothing and keeps core time
   // precise after a jump far ahead (a driver stamping in the year 2100).
-  if (std::abs(coreTime(stamp)) < kFarFromOrigin) return;
+  if (!time_.isFar(stamp)) return;
   const EngineState held = state();
   clearHistory();  // its stamps are in core time from the old origin
-  origin_ = stamp - stamp % kNsPerSecond;
+  time_.rebase(stamp);
   const double t = coreTime(stamp);
   try {
     propagator_->setState(t, held.q_WB, held.w_B);
@@ -253,20 +237,24 @@ void AttitudeEngine::clockTick(Stamp now) {
   if (verdict == ClockTimeline::Verdict::OtherTimeline) return;  // not the clock followed
   const bool jumped =
       verdict == ClockTimeline::Verdict::Ahead || verdict == ClockTimeline::Verdict::TwoTimelines;
-  propagator_->publishDue(jumped);
-  if (keep_history_) applyDueFixes();  // the dynamic model's time moved on
+  publishDue(jumped);
 }
 
 void AttitudeEngine::poll(Stamp now) {
   if (now <= 0) return;
   if (judgeClock(now) == ClockTimeline::Verdict::OtherTimeline) return;
-  propagator_->publishDue(false);
-  if (keep_history_) applyDueFixes();
+  publishDue(false);
 }
 
-void AttitudeEngine::drain() {
-  propagator_->publishDue(false);
-  if (keep_history_) applyDueFixes();
+void AttitudeEngine::drain() { publishDue(false); }
+
+void AttitudeEngine::publishDue(bool skip_intermediate) {
+  // The dynamic model publishes on the grid from the clock alone: with no input yet, its first
+  // grid stamp (the newest at or before the clock) starts core time.
+  if (clock_ && propagator_->model() == Model::Dynamic)
+    time_.pin(gridStamp(gridIndexAtOrBefore(*clock_)));
+  propagator_->publishDue(skip_intermediate);
+  if (keep_history_) applyDueFixes();  // the dynamic model's time moved on
 }
 
 bool AttitudeEngine::tooFarAhead(Stamp stamp) const {
@@ -326,6 +314,7 @@ void AttitudeEngine::use(const ReceivedInput& received) {
   Input input = received.input;
   // A bias stamped at or before the message's own stamp applies to it.
   if (input.source != Source::Torque) input.value -= biasAt(received.received_stamp);
+  time_.pin(input.stamp);  // the first input the model takes starts core time
   submitToModel(input);
   if (input.source == Source::Imu) last_imu_stamp_ = received.received_stamp;
   if (keep_history_) applyDueFixes();
@@ -608,7 +597,7 @@ void AttitudeEngine::resetState(bool forget_time) {
   accel_run_.clear();
   mag_run_.clear();
   if (forget_time) {
-    origin_.reset();
+    time_.forget();
     last_published_.reset();
     for (SourceTimeline& line : timelines_) line.forget();
     // Runs from an earlier time of the timelines forgotten: never a jump now.
@@ -658,6 +647,7 @@ std::string AttitudeEngine::setState(Stamp stamp, const Eigen::Quaterniond& q_WB
            std::to_string(config_.max_future) + " s";
   }
   try {
+    time_.pin(stamp);  // a state pinned before any other: time starts here
     propagator_->setState(coreTime(stamp), q_WB, w_B);
   } catch (const std::exception& e) {
     return e.what();

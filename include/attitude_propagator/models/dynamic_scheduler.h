@@ -21,7 +21,7 @@ class DynamicScheduler final : public Propagator {
  public:
   /// Throws std::invalid_argument (from DynamicPropagator) for an invalid configuration, or
   /// when `config` has no dynamic configuration.
-  DynamicScheduler(const EngineConfig& config, PropagatorHost& host);
+  DynamicScheduler(const EngineConfig& config, PropagatorHost& host, const TimeBase& time);
 
   void submit(const Input& input) override;
   void publishDue(bool skip_intermediate) override;
@@ -79,6 +79,7 @@ class DynamicScheduler final : public Propagator {
   };
 
   PropagatorHost& host_;
+  const TimeBase& time_;
   DynamicPropagator dynamic_;
   std::string model_name_;
   double publish_rate_;               // states at multiples of 1/publish_rate

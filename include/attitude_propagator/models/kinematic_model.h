@@ -15,7 +15,7 @@ namespace attitude_propagator {
 class KinematicModel final : public Propagator {
  public:
   /// Throws std::invalid_argument (from KinematicPropagator) for an invalid configuration.
-  KinematicModel(const EngineConfig& config, PropagatorHost& host);
+  KinematicModel(const EngineConfig& config, PropagatorHost& host, const TimeBase& time);
 
   void submit(const Input& input) override;
   void publishDue(bool /*skip_intermediate*/) override {}
@@ -50,6 +50,7 @@ class KinematicModel final : public Propagator {
   void apply(const Input& input);
 
   PropagatorHost& host_;
+  const TimeBase& time_;
   KinematicPropagator kinematic_;
   std::string model_name_ = "kinematic";
 };

@@ -22,6 +22,7 @@
 #include "attitude_propagator/numerics/dynamic_state.h"
 #include "attitude_propagator/numerics/integrator.h"
 #include "attitude_propagator/time/source_timeline.h"
+#include "attitude_propagator/time/time_base.h"
 #include "attitude_propagator/time/time_policy.h"
 
 namespace attitude_propagator {
@@ -113,13 +114,10 @@ struct EngineNote {
 
 /// What a model needs from the engine that drives it. Implemented by AttitudeEngine; called
 /// synchronously from the model's methods (and may call back into the model: a gap far from
-/// the origin re-pins the state, a non-finite state resets it).
+/// the origin re-pins the state, a non-finite state resets it). Core time is the engine's
+/// TimeBase, which the model reads and never sets.
 class PropagatorHost {
  public:
-  /// Seconds since the origin (whole seconds; the first stamp sets it).
-  virtual double coreTime(Stamp stamp) = 0;
-  /// The stamp of core time t; empty while no origin is set.
-  virtual std::optional<Stamp> stampAt(double t) const = 0;
   /// Counts and notes a propagator outcome (source empty: the clock); true when the state
   /// holds at the stamp.
   virtual bool handleOutcome(StampOutcome outcome, std::optional<Source> source, Stamp stamp) = 0;
@@ -222,6 +220,7 @@ const TimePolicy& timePolicyOf(const EngineConfig& config);
 
 /// The model `config` asks for. Throws std::invalid_argument (from the propagators) for an
 /// invalid configuration.
-std::unique_ptr<Propagator> makePropagator(const EngineConfig& config, PropagatorHost& host);
+std::unique_ptr<Propagator> makePropagator(const EngineConfig& config, PropagatorHost& host,
+                                           const TimeBase& time);
 
 }  // namespace attitude_propagator

@@ -20,8 +20,10 @@ const DynamicConfig& dynamicConfig(const EngineConfig& config) {
 
 }  // namespace
 
-DynamicScheduler::DynamicScheduler(const EngineConfig& config, PropagatorHost& host)
+DynamicScheduler::DynamicScheduler(const EngineConfig& config, PropagatorHost& host,
+                                   const TimeBase& time)
     : host_(host),
+      time_(time),
       dynamic_(dynamicConfig(config)),
       model_name_(dynamic_.modelName()),
       publish_rate_(config.publish_rate),
@@ -36,7 +38,7 @@ DynamicScheduler::DynamicScheduler(const EngineConfig& config, PropagatorHost& h
 // ---------------------------------------------------------------------------------------------
 
 void DynamicScheduler::submit(const Input& input) {
-  const double t = host_.coreTime(input.stamp);
+  const double t = time_.coreTime(input.stamp);
   // Not anchored: the input anchors, unless the clock is known and behind its stamp; then the
   // clock's next grid stamp anchors, and the input waits for its stamp like any other (an
   // input stamped in the year 2100 must not carry the propagator away from the clock).
@@ -63,7 +65,7 @@ void DynamicScheduler::submit(const Input& input) {
 }
 
 void DynamicScheduler::applyDynamic(const Input& input) {
-  const double t = host_.coreTime(input.stamp);
+  const double t = time_.coreTime(input.stamp);
   // The core places an input that arrives after the clock passed its stamp (transport
   // latency) at the last grid point, and drops one not newer than the stream's previous one.
   const bool late = dynamic_.anchored() && t < dynamic_.time();
@@ -82,7 +84,7 @@ void DynamicScheduler::applyDynamic(const Input& input) {
 }
 
 StampOutcome DynamicScheduler::applyToModel(const Input& input) {
-  const double t = host_.coreTime(input.stamp);
+  const double t = time_.coreTime(input.stamp);
   StampOutcome outcome;
   try {
     outcome = input.source == Source::Torque ? dynamic_.setTorque(t, input.value, input.frame)
@@ -149,7 +151,7 @@ void DynamicScheduler::publishGridStamp(Stamp stamp) {
   applyPendingUpTo(stamp);
   const std::optional<Stamp> last_published = host_.lastPublished();
   if (last_published && stamp <= *last_published) return;
-  const double t = host_.coreTime(stamp);
+  const double t = time_.coreTime(stamp);
   if (dynamic_.anchored() && t < dynamic_.time()) return;  // set_state pinned a later time
   if (!dynamic_.anchored() || t > dynamic_.time()) {
     const StampOutcome outcome = dynamic_.advanceTo(t);
@@ -211,10 +213,10 @@ void DynamicScheduler::reconfigure(const EngineConfig& next) {
     const double t = dynamic_.time();
     d.setState(t, dynamic_.state());
     const double timeout = next.dynamic->torque_timeout;
-    if (held_torque_ && !(timeout > 0.0 && t - host_.coreTime(held_torque_->stamp) >= timeout)) {
+    if (held_torque_ && !(timeout > 0.0 && t - time_.coreTime(held_torque_->stamp) >= timeout)) {
       // At its own stamp, behind the new anchor: it acts from the anchor, and a torque in
       // transit stamped after it is still newer, not stale.
-      d.setTorque(host_.coreTime(held_torque_->stamp), held_torque_->value, held_torque_->frame);
+      d.setTorque(time_.coreTime(held_torque_->stamp), held_torque_->value, held_torque_->frame);
     }
   }
   dynamic_ = std::move(d);
@@ -263,7 +265,7 @@ bool DynamicScheduler::advanceForFix(double t) {
 
 void DynamicScheduler::replay(const ModelStep& step) {
   if (step.advance) {
-    dynamic_.advanceTo(host_.coreTime(step.input.stamp));
+    dynamic_.advanceTo(time_.coreTime(step.input.stamp));
     return;
   }
   applyToModel(step.input);

@@ -9,8 +9,9 @@
 
 namespace attitude_propagator {
 
-KinematicModel::KinematicModel(const EngineConfig& config, PropagatorHost& host)
-    : host_(host), kinematic_(config.kinematic) {}
+KinematicModel::KinematicModel(const EngineConfig& config, PropagatorHost& host,
+                               const TimeBase& time)
+    : host_(host), time_(time), kinematic_(config.kinematic) {}
 
 void KinematicModel::submit(const Input& input) {
   apply(input);
@@ -27,7 +28,7 @@ void KinematicModel::restore(const ModelSnapshot& from) {
 }
 
 void KinematicModel::apply(const Input& input) {
-  const double t = host_.coreTime(input.stamp);
+  const double t = time_.coreTime(input.stamp);
   // time() is only defined once anchored (the window is empty before).
   const double t_before = kinematic_.anchored() ? kinematic_.time() : 0.0;
   const Eigen::Quaterniond q_before = kinematic_.orientation();
@@ -50,7 +51,7 @@ void KinematicModel::apply(const Input& input) {
   // With the stamp filter on, or averages stamped at their start or midpoint, the state holds
   // where the propagator put it, not at the input's stamp.
   const std::optional<Stamp> moved =
-      kinematic_.movesStamps() ? host_.stampAt(kinematic_.time()) : std::nullopt;
+      kinematic_.movesStamps() ? time_.stampAt(kinematic_.time()) : std::nullopt;
   const Stamp stamp = moved ? *moved : input.stamp;
   host_.emitState(stamp);
   host_.inputApplied(input, stamp);

@@ -10,9 +10,10 @@ const TimePolicy& timePolicyOf(const EngineConfig& config) {
   return config.dynamic ? config.dynamic->time_policy : config.kinematic.time_policy;
 }
 
-std::unique_ptr<Propagator> makePropagator(const EngineConfig& config, PropagatorHost& host) {
-  if (config.model == Model::Dynamic) return std::make_unique<DynamicScheduler>(config, host);
-  return std::make_unique<KinematicModel>(config, host);
+std::unique_ptr<Propagator> makePropagator(const EngineConfig& config, PropagatorHost& host,
+                                           const TimeBase& time) {
+  if (config.model == Model::Dynamic) return std::make_unique<DynamicScheduler>(config, host, time);
+  return std::make_unique<KinematicModel>(config, host, time);
 }
 
 }  // namespace attitude_propagator
