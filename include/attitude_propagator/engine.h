@@ -417,8 +417,7 @@ class AttitudeEngine : private PropagatorHost {
   std::optional<Stamp> forgotten_fix_;     // the newest applied fix's stamp no longer kept
   int rejected_in_a_row_ = 0;
   bool replaying_ = false;
-  const Input* submitting_ = nullptr;  // the input being handed to the model, as received
-  ModelSnapshot live_;                 // the newest state while a fix is worked out
+  ModelSnapshot live_;  // the newest state while a fix is worked out
 
   // Gravity and the magnetic field (docs/design.md §6.10).
   std::vector<PendingMeasurement> pending_measurements_;  // by stamp, kMaxPendingMeasurements

@@ -321,23 +321,20 @@ void AttitudeEngine::use(const ReceivedInput& received) {
 }
 
 void AttitudeEngine::submitToModel(const Input& input) {
-  submitting_ = &input;  // the history keeps the input as received (stepTaken)
+  bool acted = false;
   if (takesBiasEstimate(input)) {
     Input corrected = input;
     corrected.value -= error_.bias_B;
-    propagator_->submit(corrected);
+    acted = propagator_->submit(corrected);
   } else {
-    propagator_->submit(input);
+    acted = propagator_->submit(input);
   }
-  submitting_ = nullptr;
+  // The history keeps the input as received: a replay subtracts the estimate as it is then.
+  if (acted) stepTaken(ModelStep{input, false});
 }
 
 void AttitudeEngine::stepTaken(const ModelStep& step) {
   if (!keep_history_ || replaying_) return;
-  if (submitting_ != nullptr && !step.advance) {
-    recordHistory(ModelStep{*submitting_, false});  // before the bias estimate
-    return;
-  }
   recordHistory(step);
 }
 

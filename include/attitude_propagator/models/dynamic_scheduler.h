@@ -23,7 +23,7 @@ class DynamicScheduler final : public Propagator {
   /// when `config` has no dynamic configuration.
   DynamicScheduler(const EngineConfig& config, PropagatorHost& host, const TimeBase& time);
 
-  void submit(const Input& input) override;
+  bool submit(const Input& input) override;
   void publishDue(bool skip_intermediate) override;
   void setState(double t, const Eigen::Quaterniond& q_WB, const Eigen::Vector3d& w_B) override;
   void reset() override;

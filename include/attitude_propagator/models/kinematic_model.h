@@ -17,7 +17,7 @@ class KinematicModel final : public Propagator {
   /// Throws std::invalid_argument (from KinematicPropagator) for an invalid configuration.
   KinematicModel(const EngineConfig& config, PropagatorHost& host, const TimeBase& time);
 
-  void submit(const Input& input) override;
+  bool submit(const Input& input) override;
   void publishDue(bool /*skip_intermediate*/) override {}
   void setState(double t, const Eigen::Quaterniond& q_WB, const Eigen::Vector3d& w_B) override {
     kinematic_.setState(t, q_WB, w_B);

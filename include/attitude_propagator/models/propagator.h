@@ -140,8 +140,8 @@ class PropagatorHost {
   virtual void propagateCovariance(double h, const Eigen::Vector3d& w_step,
                                    const Eigen::Matrix3d& rate_covariance_B) = 0;
   virtual void anchorCovariance() = 0;
-  /// The model took a step (kept for late fixes; the model calls it after each input it
-  /// handled, whatever became of it, and after each advance to a grid stamp).
+  /// The model took a step (kept for late fixes): an input that waited for the clock, when it
+  /// acted, whatever became of it, and each advance to a grid stamp.
   virtual void stepTaken(const ModelStep& step) = 0;
 
  protected:
@@ -157,8 +157,10 @@ class Propagator {
   /// An input in order for its source, not ahead of the clock by more than max_future, bias
   /// subtracted, rate stamps moved by rate_delay. Kinematic: integrated now, the state at its
   /// stamp published. Dynamic: applied when the clock reaches its stamp (at once when the
-  /// propagator has already passed it).
-  virtual void submit(const Input& input) = 0;
+  /// propagator has already passed it). True when it acted now, whatever became of it: a step
+  /// the engine keeps for late fixes (one that waits is reported by the model when it acts,
+  /// stepTaken).
+  virtual bool submit(const Input& input) = 0;
   /// Publishes what is due up to the clock (host clock()): the dynamic model's grid stamps,
   /// within the budgets; skip_intermediate: only the newest (the clock jumped by a gap).
   /// Kinematic: nothing (its states follow the inputs).

@@ -37,7 +37,7 @@ DynamicScheduler::DynamicScheduler(const EngineConfig& config, PropagatorHost& h
 // Inputs
 // ---------------------------------------------------------------------------------------------
 
-void DynamicScheduler::submit(const Input& input) {
+bool DynamicScheduler::submit(const Input& input) {
   const double t = time_.coreTime(input.stamp);
   // Not anchored: the input anchors, unless the clock is known and behind its stamp; then the
   // clock's next grid stamp anchors, and the input waits for its stamp like any other (an
@@ -46,7 +46,7 @@ void DynamicScheduler::submit(const Input& input) {
   const bool wait_for_clock = !dynamic_.anchored() && clock && input.stamp > *clock;
   if (!wait_for_clock && (!dynamic_.anchored() || t <= dynamic_.time())) {
     applyDynamic(input);  // anchors, or late (the core places it), or a jump back
-    return;
+    return true;
   }
   // Ahead of the propagator: held until the clock reaches its stamp, so the state published
   // at a grid stamp sees exactly the inputs stamped up to it.
@@ -55,13 +55,14 @@ void DynamicScheduler::submit(const Input& input) {
     // the propagator ahead of the clock, and nothing could be published until it caught up).
     ++host_.mutableCounters().pending_overflow;
     host_.note({EngineNote::PendingFull, input.source, input.stamp});
-    if (input.stamp >= pending_.back().stamp) return;
+    if (input.stamp >= pending_.back().stamp) return false;
     pending_.pop_back();
   }
   const auto at =
       std::upper_bound(pending_.begin(), pending_.end(), input.stamp,
                        [](Stamp stamp, const Input& other) { return stamp < other.stamp; });
   pending_.insert(at, input);
+  return false;
 }
 
 void DynamicScheduler::applyDynamic(const Input& input) {
@@ -80,7 +81,6 @@ void DynamicScheduler::applyDynamic(const Input& input) {
       host_.inputApplied(input, input.stamp);
     }
   }
-  host_.stepTaken(ModelStep{input, false});
 }
 
 StampOutcome DynamicScheduler::applyToModel(const Input& input) {
@@ -106,7 +106,10 @@ void DynamicScheduler::applyPendingUpTo(Stamp stamp) {
   std::vector<Input> due(std::make_move_iterator(pending_.begin()),
                          std::make_move_iterator(pending_.begin() + n));
   pending_.erase(pending_.begin(), pending_.begin() + n);
-  for (const Input& input : due) applyDynamic(input);
+  for (const Input& input : due) {
+    applyDynamic(input);
+    host_.stepTaken(ModelStep{input, false});
+  }
 }
 
 bool DynamicScheduler::restartInputOrder(Source source) {

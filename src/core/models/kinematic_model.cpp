@@ -13,9 +13,9 @@ KinematicModel::KinematicModel(const EngineConfig& config, PropagatorHost& host,
                                const TimeBase& time)
     : host_(host), time_(time), kinematic_(config.kinematic) {}
 
-void KinematicModel::submit(const Input& input) {
+bool KinematicModel::submit(const Input& input) {
   apply(input);
-  host_.stepTaken(ModelStep{input, false});  // every input changes the model, or may have
+  return true;  // every input changes the model, or may have
 }
 
 std::optional<double> KinematicModel::savedTime() const {
