@@ -416,7 +416,6 @@ class AttitudeEngine : private PropagatorHost {
   ReplayBudget replay_budget_;             // states replayed per second of stamp time
   std::optional<Stamp> forgotten_fix_;     // the newest applied fix's stamp no longer kept
   int rejected_in_a_row_ = 0;
-  bool replaying_ = false;
   ModelSnapshot live_;  // the newest state while a fix is worked out
 
   // Gravity and the magnetic field (docs/design.md §6.10).

@@ -334,7 +334,7 @@ void AttitudeEngine::submitToModel(const Input& input) {
 }
 
 void AttitudeEngine::stepTaken(const ModelStep& step) {
-  if (!keep_history_ || replaying_) return;
+  if (!keep_history_) return;
   recordHistory(step);
 }
 
@@ -443,11 +443,6 @@ const Eigen::Vector3d& AttitudeEngine::biasAt(Stamp stamp) {
 
 bool AttitudeEngine::handleOutcome(StampOutcome outcome, std::optional<Source> source,
                                    Stamp stamp) {
-  if (replaying_) {
-    // A replay repeats what was counted and noted already: only whether the state holds.
-    return outcome == StampOutcome::Anchored || outcome == StampOutcome::Advanced ||
-           outcome == StampOutcome::HeldGap || outcome == StampOutcome::FailedStep;
-  }
   const bool input = source.has_value();
   switch (outcome) {
     case StampOutcome::Anchored:
@@ -505,7 +500,6 @@ EngineState AttitudeEngine::stateAt(Stamp stamp) const {
 }
 
 void AttitudeEngine::emitState(Stamp stamp) {
-  if (replaying_) return;  // the replayed state is published with the next output (§6.9)
   if (last_published_ && stamp <= *last_published_) return;  // one per stamp
   EngineState s = stateAt(stamp);
   if (!s.q_WB.coeffs().allFinite() || !s.w_B.allFinite()) {
@@ -521,7 +515,6 @@ void AttitudeEngine::emitState(Stamp stamp) {
 }
 
 void AttitudeEngine::inputAppliedAt(const Input& input, Stamp stamp, const DynamicState& at) {
-  if (replaying_) return;
   EngineState s = stateAt(stamp);
   s.q_WB = at.q_WB;
   s.w_B = at.w_B;
@@ -529,7 +522,6 @@ void AttitudeEngine::inputAppliedAt(const Input& input, Stamp stamp, const Dynam
 }
 
 void AttitudeEngine::inputApplied(const Input& input, Stamp stamp) {
-  if (replaying_) return;
   sink_.inputApplied(input, stateAt(stamp));
 }
 
@@ -927,9 +919,7 @@ Eigen::Quaterniond AttitudeEngine::stepFrom(std::size_t k, std::size_t j) {
   if (next.base || next.measurement) return next.q_WB;  // not reached by a step: as kept
   const ErrorState kept = error_;
   error_ = historyEntry(k).error;  // the bias estimate the step is taken with
-  replaying_ = true;
   replayStep(next.step);
-  replaying_ = false;
   const Eigen::Quaterniond q = propagator_->state().q_WB;
   error_ = kept;
   propagator_->restore(historyEntry(k).model);
@@ -980,7 +970,6 @@ void AttitudeEngine::replayFrom(std::size_t first) {
   if (first < history_size_) {
     replay_budget_.charge(historyEntry(history_size_ - 1).stamp, history_size_ - first);
   }
-  replaying_ = true;
   for (std::size_t i = first; i < history_size_; ++i) {
     FixHistoryEntry& entry = historyEntry(i);
     if (entry.measurement) {
@@ -990,7 +979,6 @@ void AttitudeEngine::replayFrom(std::size_t first) {
     }
     saveReplayed(entry);
   }
-  replaying_ = false;
 }
 
 void AttitudeEngine::fillEntry(FixHistoryEntry& slot) {

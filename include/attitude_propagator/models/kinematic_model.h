@@ -43,10 +43,22 @@ class KinematicModel final : public Propagator {
   void correctOrientation(const Eigen::Quaterniond& q_WB) override {
     kinematic_.correctOrientation(q_WB);
   }
-  void replay(const ModelStep& step) override { apply(step.input); }
+  void replay(const ModelStep& step) override;
 
  private:
-  /// One input through the propagator: the covariance, the state published.
+  /// What one input did to the propagator: the outcome, the step's length and rotation rate,
+  /// and whether the stamp filter stopped fitting.
+  struct Step {
+    StampOutcome outcome = StampOutcome::Waiting;
+    double h = 0.0;
+    Eigen::Vector3d w_step = Eigen::Vector3d::Zero();
+    bool misfit = false;
+  };
+  /// One input through the propagator, nothing else.
+  Step step(const Input& input);
+  /// The orientation covariance over the step, or back to the initial one at an anchor.
+  void followCovariance(const Step& step, const Input& input);
+  /// One input as it arrives: the step, counted and noted, the covariance, the state published.
   void apply(const Input& input);
 
   PropagatorHost& host_;

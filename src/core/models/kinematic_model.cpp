@@ -27,27 +27,46 @@ void KinematicModel::restore(const ModelSnapshot& from) {
   if (const auto* saved = std::get_if<KinematicPropagator>(&from)) kinematic_ = *saved;
 }
 
-void KinematicModel::apply(const Input& input) {
+KinematicModel::Step KinematicModel::step(const Input& input) {
   const double t = time_.coreTime(input.stamp);
   // time() is only defined once anchored (the window is empty before).
   const double t_before = kinematic_.anchored() ? kinematic_.time() : 0.0;
   const Eigen::Quaterniond q_before = kinematic_.orientation();
   const SensorClockFilter* filter = kinematic_.stampFilter();
   const std::uint64_t fallbacks = filter != nullptr ? filter->fallbacks() : 0;
-  const StampOutcome outcome = kinematic_.addSample(t, input.value);
-  if (filter != nullptr && filter->fallbacks() > fallbacks) {
+  Step s;
+  s.outcome = kinematic_.addSample(t, input.value);
+  s.misfit = filter != nullptr && filter->fallbacks() > fallbacks;
+  if (s.outcome == StampOutcome::Advanced) {
+    // The step's own rotation drives the covariance, whatever the integrator did inside it.
+    s.h = t - t_before;
+    s.w_step = logMap(q_before.conjugate() * kinematic_.orientation()) / s.h;
+  }
+  return s;
+}
+
+void KinematicModel::followCovariance(const Step& step, const Input& input) {
+  if (step.outcome == StampOutcome::Advanced) {
+    host_.propagateCovariance(step.h, step.w_step, input.rate_covariance_B);
+  } else if (step.outcome == StampOutcome::Anchored) {
+    host_.anchorCovariance();  // the initial state again, as uncertain as configured
+  }
+}
+
+void KinematicModel::replay(const ModelStep& step) {
+  // What was counted, noted and published stays as it was: only the state and its covariance.
+  followCovariance(this->step(step.input), step.input);
+}
+
+void KinematicModel::apply(const Input& input) {
+  const Step s = step(input);
+  if (s.misfit) {
+    const SensorClockFilter* filter = kinematic_.stampFilter();
     host_.note({EngineNote::StampFilterMisfit, input.source, input.stamp, filter->jitter(),
                 filter->period()});
   }
-  if (!host_.handleOutcome(outcome, input.source, input.stamp)) return;
-  if (outcome == StampOutcome::Advanced) {
-    // The step's own rotation drives the covariance, whatever the integrator did inside it.
-    const double h = t - t_before;
-    const Eigen::Vector3d w_step = logMap(q_before.conjugate() * kinematic_.orientation()) / h;
-    host_.propagateCovariance(h, w_step, input.rate_covariance_B);
-  } else if (outcome == StampOutcome::Anchored) {
-    host_.anchorCovariance();  // the initial state again, as uncertain as configured
-  }
+  if (!host_.handleOutcome(s.outcome, input.source, input.stamp)) return;
+  followCovariance(s, input);
   // With the stamp filter on, or averages stamped at their start or midpoint, the state holds
   // where the propagator put it, not at the input's stamp.
   const std::optional<Stamp> moved =
