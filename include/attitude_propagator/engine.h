@@ -203,6 +203,8 @@ class AttitudeEngine : private PropagatorHost {
   std::optional<Stamp> otherClock() const { return clock_line_.other(); }
   /// The ROS time followed; empty before the first look at the clock.
   std::optional<Stamp> clockNow() const { return clock_; }
+  /// Core time: its origin, as the engine pinned it (docs/design.md §6.1).
+  const TimeBase& timeBase() const { return time_; }
   /// The configuration in force (budgets, bounds), for callers that drive the clock.
   const EngineConfig& config() const { return config_; }
   /// Mean seconds by which the inputs of `source` arrive behind the clock (negative: ahead);

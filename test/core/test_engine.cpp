@@ -248,8 +248,12 @@ TEST(EngineKinematic, AStampYearsAheadIsAGapAndPrecisionIsKeptAfterIt) {
   engine.submit(rate(at(0.01), w));
   // 2100-01-01: 74 years ahead (beyond a 32-bit count of seconds in a difference).
   const ap::Stamp far = 4102444800LL * kSecond;
+  EXPECT_EQ(engine.timeBase().coreTime(at(0.01)), 0.01);  // the first input's second
   engine.submit(rate(far, w));
   EXPECT_EQ(engine.counters().gaps, 1u);
+  // The state held there, the origin moved to its second (design.md §6.1).
+  EXPECT_EQ(engine.timeBase().coreTime(far), 0.0);
+  EXPECT_EQ(engine.timeBase().stampAt(0.0), std::optional<ap::Stamp>(far));
   const Eigen::Quaterniond held = sink.states.back().q_WB;
   for (int k = 1; k <= 100; ++k) engine.submit(rate(far + k * kSecond / 100, w));
   ASSERT_EQ(sink.states.back().stamp, far + kSecond);
