@@ -18,7 +18,6 @@ class KinematicModel final : public Propagator {
   KinematicModel(const EngineConfig& config, PropagatorHost& host, const TimeBase& time);
 
   bool submit(const Input& input) override;
-  void publishDue(bool /*skip_intermediate*/) override {}
   void setState(double t, const Eigen::Quaterniond& q_WB, const Eigen::Vector3d& w_B) override {
     kinematic_.setState(t, q_WB, w_B);
   }
@@ -27,19 +26,15 @@ class KinematicModel final : public Propagator {
   void reconfigure(const EngineConfig& next) override;
 
   EngineState state() const override;
-  std::size_t pending() const override { return 0; }
   Model model() const override { return Model::Kinematic; }
   bool takesRepeatedRateStamps() const override { return kinematic_.stampFilter() != nullptr; }
   const std::string& modelName() const override { return model_name_; }
   Integrator integrator() const override { return kinematic_.integrator(); }
-  double energyDrift() const override { return 0.0; }
-  double momentumDrift() const override { return 0.0; }
   const KinematicPropagator* kinematic() const override { return &kinematic_; }
 
   std::optional<double> savedTime() const override;
   void save(ModelSnapshot& into) const override { into = kinematic_; }
   void restore(const ModelSnapshot& from) override;
-  bool advanceForFix(double /*t*/) override { return false; }  // a step needs the next sample
   void correctOrientation(const Eigen::Quaterniond& q_WB) override {
     kinematic_.correctOrientation(q_WB);
   }

@@ -149,7 +149,9 @@ class PropagatorHost {
 };
 
 /// A model: what an input does to the state and when states are published. Every call but
-/// setState and reconfigure never throws.
+/// setState and reconfigure never throws. What only a model with a clock of its own means (a
+/// queue, a grid, invariants, moving on between steps) has a default that is the kinematic
+/// model's: nothing waits, nothing is due, nothing drifts.
 class Propagator {
  public:
   virtual ~Propagator() = default;
@@ -164,7 +166,7 @@ class Propagator {
   /// Publishes what is due up to the clock (host clock()): the dynamic model's grid stamps,
   /// within the budgets; skip_intermediate: only the newest (the clock jumped by a gap).
   /// Kinematic: nothing (its states follow the inputs).
-  virtual void publishDue(bool skip_intermediate) = 0;
+  virtual void publishDue(bool /*skip_intermediate*/) {}
 
   /// Pins the state at core time t (a new anchor). Throws std::invalid_argument, leaving the
   /// state unchanged, for a state the propagator refuses.
@@ -183,14 +185,14 @@ class Propagator {
   /// The state at the propagator's newest stamp (stamp and P_B left to the engine).
   virtual EngineState state() const = 0;
   /// Inputs waiting for the clock (dynamic model).
-  virtual std::size_t pending() const = 0;
+  virtual std::size_t pending() const { return 0; }
   virtual Model model() const = 0;
   /// "kinematic" or the dynamic propagator's model name.
   virtual const std::string& modelName() const = 0;
   virtual Integrator integrator() const = 0;
   /// Relative drifts of energy and |M| since the anchor (dynamic model; 0 otherwise).
-  virtual double energyDrift() const = 0;
-  virtual double momentumDrift() const = 0;
+  virtual double energyDrift() const { return 0.0; }
+  virtual double momentumDrift() const { return 0.0; }
   /// True when the model gives each of several rate samples stamped alike its own stamp (the
   /// sensor-clock filter's FIFO reads): the engine then lets a repeated stamp through.
   virtual bool takesRepeatedRateStamps() const { return false; }
@@ -209,7 +211,7 @@ class Propagator {
   /// stamped there acts at its own stamp. False when the model moves only by its steps
   /// (kinematic: a step needs the next sample; the fix is then carried back to the model's
   /// time along the geodesic).
-  virtual bool advanceForFix(double t) = 0;
+  virtual bool advanceForFix(double /*t*/) { return false; }
   /// Replaces the orientation at the model's time; everything else (the rate, the sample
   /// window, the knots and grid, the held torque) stays.
   virtual void correctOrientation(const Eigen::Quaterniond& q_WB) = 0;
