@@ -100,6 +100,8 @@ class AttitudeEngine : private PropagatorHost {
  public:
   /// Throws std::invalid_argument (from the propagators) for an invalid configuration.
   AttitudeEngine(const EngineConfig& config, EngineSink& sink);
+  /// The same, driving the model `make` makes (a test's own, around a real one).
+  AttitudeEngine(const EngineConfig& config, EngineSink& sink, const PropagatorFactory& make);
   ~AttitudeEngine();
   AttitudeEngine(const AttitudeEngine&) = delete;
   AttitudeEngine& operator=(const AttitudeEngine&) = delete;

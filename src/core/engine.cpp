@@ -126,7 +126,11 @@ const char* fixOutcomeName(FixOutcome outcome) {
 }
 
 AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink)
-    : config_(config), sink_(sink), propagator_(makePropagator(config_, *this, time_)) {
+    : AttitudeEngine(config, sink, makePropagator) {}
+
+AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink,
+                               const PropagatorFactory& make)
+    : config_(config), sink_(sink), propagator_(make(config_, *this, time_)) {
   if (!(config_.publish_rate > 0.0) || !std::isfinite(config_.publish_rate)) {
     throw std::invalid_argument("publish_rate: must be positive and finite");
   }

@@ -4,7 +4,6 @@
 // each step.
 #pragma once
 
-#include <cstddef>
 #include <string>
 
 #include "attitude_propagator/models/kinematic_propagator.h"

@@ -9,6 +9,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -221,6 +222,11 @@ class Propagator {
 
 /// The time policy of the model `config` asks for.
 const TimePolicy& timePolicyOf(const EngineConfig& config);
+
+/// Makes the model an engine drives (the engine, its time base): makePropagator, or a model of
+/// a test's own.
+using PropagatorFactory = std::function<std::unique_ptr<Propagator>(
+    const EngineConfig&, PropagatorHost&, const TimeBase&)>;
 
 /// The model `config` asks for. Throws std::invalid_argument (from the propagators) for an
 /// invalid configuration.
