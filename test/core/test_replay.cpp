@@ -72,13 +72,13 @@ TEST(Replay, ALateFixRepeatsTheStepsAfterItsEntryAsReceivedAndReportsNothing) {
     SCOPED_TRACE(estimate_bias ? "bias estimated" : "attitude alone");
     SpyModel* spy = nullptr;
     Recorder sink;
-    ap::AttitudeEngine engine(
-        replayConfig(estimate_bias), sink,
-        [&spy](const ap::EngineConfig& c, ap::PropagatorHost& host, const ap::TimeBase& time) {
-          auto model = std::make_unique<SpyModel>(c, host, time);
-          spy = model.get();
-          return std::unique_ptr<ap::Propagator>(std::move(model));
-        });
+    const ap::PropagatorFactory make = [&spy](const ap::EngineConfig& c, ap::PropagatorHost& host,
+                                              const ap::TimeBase& time) {
+      auto model = std::make_unique<SpyModel>(c, host, time);
+      spy = model.get();
+      return std::unique_ptr<ap::Propagator>(std::move(model));
+    };
+    ap::AttitudeEngine engine(replayConfig(estimate_bias), sink, make);
     ASSERT_NE(spy, nullptr);
     auto w = [](int k) { return Eigen::Vector3d(0.3, -0.2 + 0.01 * k, 0.5); };
     for (int k = 0; k <= 20; ++k) {
