@@ -681,17 +681,30 @@ TEST(Late, GravityAndFieldSamplesHandedInLateGiveTheStateTheyGiveOnTime) {
 
 // With absolute fixes at the same time: a late gravity sample is applied before the fixes
 // stamped after it, which are applied again after it, as on time.
-ap::EngineState runWithFixes(int accel_delay) {
+// The tumble started from its true attitude, with the history from the start and the
+// linear acceleration's average off (the noise fixed, see above); a gyro and an accelerometer
+// with noise.
+ap::EngineConfig withFixesConfig() {
   ap::EngineConfig c = aidedConfig();
-  c.aiding.linear_window = 0.0;  // the noise fixed (see above)
-  c.aiding.use_mag = true;       // the history from the start
+  c.aiding.linear_window = 0.0;
+  c.aiding.use_mag = true;  // the history from the start
   c.aiding.align = false;
   c.kinematic.initial_q_WB = tumble().attitude(0.0);
   c.initial_orientation_stddev = 0.01;
   c.fixes.stddev = 0.01;
+  return c;
+}
+
+simulated_imu::Sensor noisySensor() {
   simulated_imu::Sensor sensor;
   sensor.gyro_noise = 0.002;
   sensor.accel_noise = 0.05;
+  return sensor;
+}
+
+ap::EngineState runWithFixes(int accel_delay) {
+  const ap::EngineConfig c = withFixesConfig();
+  const simulated_imu::Sensor sensor = noisySensor();
   const auto samples = simulated_imu::simulate(tumble(), sensor, 2.0);
   Recorder sink;
   ap::AttitudeEngine engine(c, sink);
@@ -760,8 +773,7 @@ TEST(Pending, AtMostKMaxPendingMeasurementsWaitTheFurthestAheadDropped) {
   EXPECT_EQ(ap::kMaxPendingMeasurements, 64u);  // the documented bound
   const int n = static_cast<int>(ap::kMaxPendingMeasurements);
   for (int k = 1; k <= n; ++k) {
-    EXPECT_EQ(engine.submitAcceleration(at(0.01 * k + 0.001), f, none),
-              ap::AidingOutcome::Waiting)
+    EXPECT_EQ(engine.submitAcceleration(at(0.01 * k + 0.001), f, none), ap::AidingOutcome::Waiting)
         << k;
     EXPECT_EQ(engine.counters().accel.queue_full, 0u) << k;
   }
@@ -790,17 +802,9 @@ struct InOneInterval {
 };
 
 ap::EngineState runInOneInterval(const InOneInterval& run) {
-  ap::EngineConfig c = aidedConfig();
-  c.aiding.linear_window = 0.0;  // the noise fixed (see above)
-  c.aiding.use_mag = true;       // the history from the start
+  ap::EngineConfig c = withFixesConfig();
   c.aiding.mag_stddev = 0.3e-6;
-  c.aiding.align = false;
-  c.kinematic.initial_q_WB = tumble().attitude(0.0);
-  c.initial_orientation_stddev = 0.01;
-  c.fixes.stddev = 0.01;
-  simulated_imu::Sensor sensor;
-  sensor.gyro_noise = 0.002;
-  sensor.accel_noise = 0.05;
+  simulated_imu::Sensor sensor = noisySensor();
   sensor.mag_noise = 0.3e-6;
   const auto samples = simulated_imu::simulate(tumble(), sensor, 1.0);
   const double h = 1.0 / sensor.rate;
