@@ -255,8 +255,9 @@ void AttitudeEngine::drain() { publishDue(false); }
 void AttitudeEngine::publishDue(bool skip_intermediate) {
   // The dynamic model publishes on the grid from the clock alone: with no input yet, its first
   // grid stamp (the newest at or before the clock) starts core time.
-  if (clock_ && propagator_->model() == Model::Dynamic)
+  if (clock_ && !time_.pinned() && propagator_->model() == Model::Dynamic) {
     time_.pin(gridStamp(gridIndexAtOrBefore(*clock_)));
+  }
   propagator_->publishDue(skip_intermediate);
   if (keep_history_) applyDueFixes();  // the dynamic model's time moved on
 }
