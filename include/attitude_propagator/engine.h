@@ -96,7 +96,7 @@ struct FixHistoryEntry {
 /// transport that queues.
 constexpr double kInputLagWarning = 0.5;
 
-class AttitudeEngine : private PropagatorHost {
+class AttitudeEngine {
  public:
   /// Throws std::invalid_argument (from the propagators) for an invalid configuration.
   AttitudeEngine(const EngineConfig& config, EngineSink& sink);
@@ -229,22 +229,31 @@ class AttitudeEngine : private PropagatorHost {
   std::int64_t gridIndexAtOrBefore(Stamp now) const;
 
  private:
-  // PropagatorHost: what the model calls back.
   double coreTime(Stamp stamp) const { return time_.coreTime(stamp); }
   std::optional<Stamp> stampAt(double t) const { return time_.stampAt(t); }
-  /// Counts and notes a propagator outcome; true when the state holds at the stamp.
-  bool handleOutcome(StampOutcome outcome, std::optional<Source> source, Stamp stamp) override;
-  void emitState(Stamp stamp) override;
-  void inputApplied(const Input& input, Stamp stamp) override;
-  void inputAppliedAt(const Input& input, Stamp stamp, const DynamicState& at) override;
-  void note(const EngineNote& note) override { sink_.note(note); }
-  EngineCounters& mutableCounters() override { return counters_; }
-  std::optional<Stamp> clock() const override { return clock_; }
-  std::optional<Stamp> lastPublished() const override { return last_published_; }
+
+  // What a model's call did (ModelResult), acted on when the call is over.
+  /// The result in its order: counts and note, outcome, covariance, the state published, the
+  /// input handed on, the step kept (`received`: the input as the engine submitted it, before
+  /// the bias estimate; null for what the model did on its own).
+  void act(const ModelResult& result, const Input* received);
+  /// Counts and notes an outcome (source empty: the clock); a gap far from the origin re-pins
+  /// the state there (rebaseIfFar).
+  void countOutcome(StampOutcome outcome, std::optional<Source> source, Stamp stamp);
+  /// Publishes the state at `stamp` (once per stamp, increasing).
+  void emitState(Stamp stamp);
+  /// Hands an applied input on with the state at `stamp`, or `at` (an input placed before the
+  /// model's time: the state at its own stamp, not the model's newest).
+  void handOn(const Input& input, Stamp stamp, const std::optional<DynamicState>& at);
+  /// The orientation covariance as the result says: over its step, or back to the initial one.
+  void followCovariance(const ModelResult& result);
+  /// Propagated over a step of length h with the step's rate w_step and the input's rate
+  /// covariance (zero: the configured one).
   void propagateCovariance(double h, const Eigen::Vector3d& w_step,
-                           const Eigen::Matrix3d& rate_covariance_B) override;
-  void anchorCovariance() override;
-  void stepTaken(const ModelStep& step) override;
+                           const Eigen::Matrix3d& rate_covariance_B);
+  void anchorCovariance();
+  /// Keeps the result's step for late fixes (keep_history_).
+  void keepStep(const ModelResult& result, const Input* received);
 
   void rebaseIfFar(Stamp stamp);
   /// The grid stamps due up to the clock (dynamic model), then the fixes and measurements the

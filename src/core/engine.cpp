@@ -130,7 +130,7 @@ AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink)
 
 AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink,
                                const PropagatorFactory& make)
-    : config_(config), sink_(sink), propagator_(make(config_, *this, time_)) {
+    : config_(config), sink_(sink), propagator_(make(config_, time_)) {
   if (!(config_.publish_rate > 0.0) || !std::isfinite(config_.publish_rate)) {
     throw std::invalid_argument("publish_rate: must be positive and finite");
   }
@@ -253,12 +253,19 @@ void AttitudeEngine::poll(Stamp now) {
 void AttitudeEngine::drain() { publishDue(false); }
 
 void AttitudeEngine::publishDue(bool skip_intermediate) {
-  // The dynamic model publishes on the grid from the clock alone: with no input yet, its first
-  // grid stamp (the newest at or before the clock) starts core time.
-  if (clock_ && !time_.pinned() && propagator_->model() == Model::Dynamic) {
-    time_.pin(gridStamp(gridIndexAtOrBefore(*clock_)));
+  if (clock_) {
+    // A model that publishes from the clock alone (dynamic: on its grid) starts core time there
+    // when no input has.
+    if (!time_.pinned()) {
+      if (const std::optional<Stamp> first = propagator_->firstStampFromClock(*clock_)) {
+        time_.pin(*first);
+      }
+    }
+    propagator_->beginDue(*clock_, last_published_, skip_intermediate);
+    while (const std::optional<ModelResult> due = propagator_->nextDue(last_published_)) {
+      act(*due, nullptr);
+    }
   }
-  propagator_->publishDue(skip_intermediate);
   if (keep_history_) applyDueFixes();  // the dynamic model's time moved on
 }
 
@@ -296,7 +303,7 @@ void AttitudeEngine::submit(const Input& raw) {
   Input input = raw;
   if (input.source != Source::Torque) input.stamp -= rate_delay_ns_;  // the rate's own instant
   if (!input.value.allFinite() || !input.rate_covariance_B.allFinite()) {
-    handleOutcome(StampOutcome::RejectedNonFinite, input.source, input.stamp);
+    countOutcome(StampOutcome::RejectedNonFinite, input.source, input.stamp);
     return;
   }
   if (tooFarAhead(input.stamp)) {
@@ -326,31 +333,49 @@ void AttitudeEngine::use(const ReceivedInput& received) {
 }
 
 void AttitudeEngine::submitToModel(const Input& input) {
-  bool acted = false;
-  if (takesBiasEstimate(input)) {
-    Input corrected = input;
-    corrected.value -= error_.bias_B;
-    acted = propagator_->submit(corrected);
-  } else {
-    acted = propagator_->submit(input);
+  if (!takesBiasEstimate(input)) {
+    act(propagator_->submit(input, clock_), &input);
+    return;
   }
+  Input corrected = input;
+  corrected.value -= error_.bias_B;
   // The history keeps the input as received: a replay subtracts the estimate as it is then.
-  if (acted) stepTaken(ModelStep{input, false});
+  act(propagator_->submit(corrected, clock_), &input);
 }
 
-void AttitudeEngine::stepTaken(const ModelStep& step) {
+void AttitudeEngine::act(const ModelResult& result, const Input* received) {
+  counters_.late += result.late;
+  counters_.pending_overflow += result.pending_overflow;
+  counters_.deferred_ticks += result.deferred_ticks;
+  if (result.note) sink_.note(*result.note);
+  if (result.outcome) countOutcome(*result.outcome, result.source, result.stamp);
+  followCovariance(result);
+  if (result.publish) emitState(result.stamp);
+  if (result.hand_on) handOn(*result.input, result.stamp, result.at);
+  if (result.keep_step) keepStep(result, received);
+}
+
+void AttitudeEngine::keepStep(const ModelResult& result, const Input* received) {
   if (!keep_history_) return;
-  recordHistory(step);
+  if (received != nullptr || result.input != nullptr) {
+    recordHistory(ModelStep{received != nullptr ? *received : *result.input, false});
+    return;
+  }
+  Input grid;  // the advance to a grid stamp
+  grid.stamp = result.stamp;
+  recordHistory(ModelStep{grid, true});
 }
 
 void AttitudeEngine::replayStep(const ModelStep& step) {
-  if (step.advance || !takesBiasEstimate(step.input)) {
-    propagator_->replay(step);
-    return;
+  const ModelStep* given = &step;
+  ModelStep corrected;
+  if (!step.advance && takesBiasEstimate(step.input)) {
+    corrected = step;
+    corrected.input.value -= error_.bias_B;  // the estimate as it is now, after the fix
+    given = &corrected;
   }
-  ModelStep corrected = step;
-  corrected.input.value -= error_.bias_B;  // the estimate as it is now, after the fix
-  propagator_->replay(corrected);
+  // Of the result only the covariance: what was counted, noted, kept and published stays.
+  followCovariance(propagator_->replay(*given));
 }
 
 bool AttitudeEngine::inOrder(const ReceivedInput& received,
@@ -400,7 +425,9 @@ void AttitudeEngine::dropHeldRun(Source source) {
 void AttitudeEngine::restartTimeline(Source source, Stamp stamp) {
   ++counters_.jumps_back;
   sink_.note({EngineNote::StampsJumpedBack, source, stamp});
-  if (propagator_->restartInputOrder(source)) {
+  const Propagator::InputOrderRestart restart = propagator_->restartInputOrder(source);
+  counters_.dropped_stale += restart.dropped;  // its queued inputs from the old timeline
+  if (restart.time_restarts) {
     // The model's time is the inputs' (kinematic): it starts again with them, from the initial
     // state, and the outputs' stamps start again too.
     ++counters_.resets;
@@ -446,42 +473,40 @@ const Eigen::Vector3d& AttitudeEngine::biasAt(Stamp stamp) {
   return gyro_bias_B_;
 }
 
-bool AttitudeEngine::handleOutcome(StampOutcome outcome, std::optional<Source> source,
-                                   Stamp stamp) {
+void AttitudeEngine::countOutcome(StampOutcome outcome, std::optional<Source> source, Stamp stamp) {
   const bool input = source.has_value();
   switch (outcome) {
     case StampOutcome::Anchored:
     case StampOutcome::Advanced:
       if (input) ++counters_.accepted;
-      return true;
+      return;
     case StampOutcome::HeldGap:
       if (input) ++counters_.accepted;
       ++counters_.gaps;
       sink_.note({EngineNote::Gap, source, stamp});
       rebaseIfFar(stamp);
-      return true;
+      return;
     case StampOutcome::Waiting:
       if (input) ++counters_.accepted;
-      return false;  // nothing integrated yet: nothing to publish
+      return;  // nothing integrated yet: nothing to publish
     case StampOutcome::DroppedStale:
       if (input) ++counters_.dropped_stale;
       if (input) sink_.note({EngineNote::Stale, source, stamp});
-      return false;
+      return;
     case StampOutcome::RejectedNonFinite:
       ++counters_.rejected_non_finite;
       sink_.note({EngineNote::NonFinite, source, stamp});
-      return false;
+      return;
     case StampOutcome::RejectedOutOfRange:
       ++counters_.rejected_out_of_range;
       sink_.note({EngineNote::OutOfRange, source, stamp});
-      return false;
+      return;
     case StampOutcome::FailedStep:
       if (input) ++counters_.accepted;  // it acts from the new anchor
       ++counters_.failed_steps;
       sink_.note({EngineNote::FailedStep, source, stamp});
-      return true;  // held and re-anchored at the stamp, like a gap
+      return;  // held and re-anchored at the stamp, like a gap
   }
-  return false;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -519,15 +544,27 @@ void AttitudeEngine::emitState(Stamp stamp) {
   sink_.publishState(s);
 }
 
-void AttitudeEngine::inputAppliedAt(const Input& input, Stamp stamp, const DynamicState& at) {
+void AttitudeEngine::handOn(const Input& input, Stamp stamp,
+                            const std::optional<DynamicState>& at) {
   EngineState s = stateAt(stamp);
-  s.q_WB = at.q_WB;
-  s.w_B = at.w_B;
+  if (at) {  // the state at its own stamp, behind the model's
+    s.q_WB = at->q_WB;
+    s.w_B = at->w_B;
+  }
   sink_.inputApplied(input, s);
 }
 
-void AttitudeEngine::inputApplied(const Input& input, Stamp stamp) {
-  sink_.inputApplied(input, stateAt(stamp));
+void AttitudeEngine::followCovariance(const ModelResult& result) {
+  switch (result.covariance) {
+    case ModelResult::Covariance::Unchanged:
+      return;
+    case ModelResult::Covariance::Anchor:
+      anchorCovariance();
+      return;
+    case ModelResult::Covariance::Step:
+      propagateCovariance(result.h, result.w_step, result.input->rate_covariance_B);
+      return;
+  }
 }
 
 void AttitudeEngine::propagateCovariance(double h, const Eigen::Vector3d& w_step,
@@ -573,7 +610,7 @@ void AttitudeEngine::capBiasCovariance(ErrorState& e) {
 }
 
 void AttitudeEngine::resetState(bool forget_time) {
-  propagator_->reset();  // queued inputs dropped, counted
+  counters_.dropped_on_reset += propagator_->reset();  // queued inputs dropped, counted
   error_.P_B = initialCovariance();
   error_.P_Bb.setZero();  // the bias estimate stays: it belongs to the gyro, not to the timeline
   clearHistory();

@@ -21,25 +21,26 @@ namespace {
 
 class SpyModel final : public ap::Propagator {
  public:
-  SpyModel(const ap::EngineConfig& config, ap::PropagatorHost& host, const ap::TimeBase& time)
-      : inner_(config, host, time) {}
+  SpyModel(const ap::EngineConfig& config, const ap::TimeBase& time) : inner_(config, time) {}
 
   std::vector<ap::Input> submitted;
   std::vector<ap::ModelStep> replayed;
 
-  bool submit(const ap::Input& input) override {
+  ap::ModelResult submit(const ap::Input& input, std::optional<ap::Stamp> clock) override {
     submitted.push_back(input);
-    return inner_.submit(input);
+    return inner_.submit(input, clock);
   }
-  void replay(const ap::ModelStep& step) override {
+  ap::ModelResult replay(const ap::ModelStep& step) override {
     replayed.push_back(step);
-    inner_.replay(step);
+    return inner_.replay(step);
   }
   void setState(double t, const Eigen::Quaterniond& q_WB, const Eigen::Vector3d& w_B) override {
     inner_.setState(t, q_WB, w_B);
   }
-  void reset() override { inner_.reset(); }
-  bool restartInputOrder(ap::Source source) override { return inner_.restartInputOrder(source); }
+  std::size_t reset() override { return inner_.reset(); }
+  InputOrderRestart restartInputOrder(ap::Source source) override {
+    return inner_.restartInputOrder(source);
+  }
   void reconfigure(const ap::EngineConfig& next) override { inner_.reconfigure(next); }
   ap::EngineState state() const override { return inner_.state(); }
   ap::Model model() const override { return inner_.model(); }
@@ -72,9 +73,8 @@ TEST(Replay, ALateFixRepeatsTheStepsAfterItsEntryAsReceivedAndReportsNothing) {
     SCOPED_TRACE(estimate_bias ? "bias estimated" : "attitude alone");
     SpyModel* spy = nullptr;
     Recorder sink;
-    const ap::PropagatorFactory make = [&spy](const ap::EngineConfig& c, ap::PropagatorHost& host,
-                                              const ap::TimeBase& time) {
-      auto model = std::make_unique<SpyModel>(c, host, time);
+    const ap::PropagatorFactory make = [&spy](const ap::EngineConfig& c, const ap::TimeBase& time) {
+      auto model = std::make_unique<SpyModel>(c, time);
       spy = model.get();
       return std::unique_ptr<ap::Propagator>(std::move(model));
     };

@@ -7,6 +7,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <optional>
 #include <string>
 #include <vector>
@@ -21,13 +22,15 @@ class DynamicScheduler final : public Propagator {
  public:
   /// Throws std::invalid_argument (from DynamicPropagator) for an invalid configuration, or
   /// when `config` has no dynamic configuration.
-  DynamicScheduler(const EngineConfig& config, PropagatorHost& host, const TimeBase& time);
+  DynamicScheduler(const EngineConfig& config, const TimeBase& time);
 
-  bool submit(const Input& input) override;
-  void publishDue(bool skip_intermediate) override;
+  ModelResult submit(const Input& input, std::optional<Stamp> clock) override;
+  std::optional<Stamp> firstStampFromClock(Stamp clock) const override;
+  void beginDue(Stamp clock, std::optional<Stamp> last_published, bool skip_intermediate) override;
+  std::optional<ModelResult> nextDue(std::optional<Stamp> last_published) override;
   void setState(double t, const Eigen::Quaterniond& q_WB, const Eigen::Vector3d& w_B) override;
-  void reset() override;
-  bool restartInputOrder(Source source) override;
+  std::size_t reset() override;
+  InputOrderRestart restartInputOrder(Source source) override;
   void reconfigure(const EngineConfig& next) override;
 
   EngineState state() const override;
@@ -46,14 +49,28 @@ class DynamicScheduler final : public Propagator {
     dynamic_.correctOrientation(q_WB);
     recent_.clear();  // the states before it are no longer the estimate's
   }
-  void replay(const ModelStep& step) override;
+  ModelResult replay(const ModelStep& step) override;
 
  private:
-  void applyDynamic(const Input& input);
+  /// An input acting now: at once, or when the grid reached its stamp.
+  ModelResult applyDynamic(const Input& input);
   /// The input to the propagator (setTorque or setRate), the held torque kept.
   StampOutcome applyToModel(const Input& input);
-  void applyPendingUpTo(Stamp stamp);
-  void publishGridStamp(Stamp stamp);
+  /// Moves the waiting inputs stamped up to `stamp` to the ones due in this pass.
+  void takeDueUpTo(Stamp stamp);
+  /// The grid stamp reached: the advance to it and its state published; empty when nothing is
+  /// published there (already published, or set_state pinned a later time).
+  std::optional<ModelResult> publishGridStamp(Stamp stamp, std::optional<Stamp> last_published);
+
+  /// A pass over the grid stamps due (beginDue, nextDue): the stamps k to k_now, and what the
+  /// pass has spent of its budgets.
+  struct Pass {
+    bool open = false;
+    std::int64_t k = 0, k_now = -1;
+    bool at_grid_stamp = false;  // the inputs due at gridStamp(k) are being applied
+    std::size_t handled = 0;     // grid stamps begun
+    std::uint64_t work = 0;      // integrator work
+  };
 
   /// The states at the newest grid stamps, so that a late input (placed at the last grid point)
   /// is handed on with the state at its own stamp: interpolated between the two grid states
@@ -78,15 +95,17 @@ class DynamicScheduler final : public Propagator {
     std::size_t size_ = 0;
   };
 
-  PropagatorHost& host_;
   const TimeBase& time_;
   DynamicPropagator dynamic_;
   std::string model_name_;
-  double publish_rate_;               // states at multiples of 1/publish_rate
-  std::size_t max_pending_;           // inputs waiting at most
-  std::size_t grid_budget_;           // grid stamps per call at most
-  std::uint64_t work_budget_;         // integrator work per call at most
-  std::vector<Input> pending_;        // sorted by stamp
+  double publish_rate_;         // states at multiples of 1/publish_rate
+  std::size_t max_pending_;     // inputs waiting at most
+  std::size_t grid_budget_;     // grid stamps per call at most
+  std::uint64_t work_budget_;   // integrator work per call at most
+  std::vector<Input> pending_;  // sorted by stamp
+  std::deque<Input> due_;       // taken from pending_ for the pass's grid stamp, in order
+  Input acting_;                // the due input last applied (a result points to it)
+  Pass pass_;
   std::optional<Input> held_torque_;  // the last torque applied, for reconfigure()
   RecentStates recent_;
 };

@@ -14,14 +14,17 @@ namespace attitude_propagator {
 class KinematicModel final : public Propagator {
  public:
   /// Throws std::invalid_argument (from KinematicPropagator) for an invalid configuration.
-  KinematicModel(const EngineConfig& config, PropagatorHost& host, const TimeBase& time);
+  KinematicModel(const EngineConfig& config, const TimeBase& time);
 
-  bool submit(const Input& input) override;
+  ModelResult submit(const Input& input, std::optional<Stamp> clock) override;
   void setState(double t, const Eigen::Quaterniond& q_WB, const Eigen::Vector3d& w_B) override {
     kinematic_.setState(t, q_WB, w_B);
   }
-  void reset() override { kinematic_.reset(); }
-  bool restartInputOrder(Source source) override;
+  std::size_t reset() override {
+    kinematic_.reset();
+    return 0;  // nothing waits
+  }
+  InputOrderRestart restartInputOrder(Source source) override;
   void reconfigure(const EngineConfig& next) override;
 
   EngineState state() const override;
@@ -37,7 +40,7 @@ class KinematicModel final : public Propagator {
   void correctOrientation(const Eigen::Quaterniond& q_WB) override {
     kinematic_.correctOrientation(q_WB);
   }
-  void replay(const ModelStep& step) override;
+  ModelResult replay(const ModelStep& step) override;
 
  private:
   /// What one input did to the propagator: the outcome, the step's length and rotation rate,
@@ -51,11 +54,8 @@ class KinematicModel final : public Propagator {
   /// One input through the propagator, nothing else.
   Step step(const Input& input);
   /// The orientation covariance over the step, or back to the initial one at an anchor.
-  void followCovariance(const Step& step, const Input& input);
-  /// One input as it arrives: the step, counted and noted, the covariance, the state published.
-  void apply(const Input& input);
+  static void followCovariance(const Step& step, ModelResult& result);
 
-  PropagatorHost& host_;
   const TimeBase& time_;
   KinematicPropagator kinematic_;
   std::string model_name_ = "kinematic";

@@ -1,10 +1,10 @@
 // The model behind the engine: one interface, Propagator, implemented by the kinematic model
 // (KinematicModel, kinematic_model.h) and the dynamic one (DynamicScheduler,
-// dynamic_scheduler.h), and the types an input and a state travel in. The engine judges an
-// input against its source and the clock, subtracts the bias and moves rate stamps by
-// rate_delay; what the input then does to the state, when a state is published and at which
-// stamp, is the model's, which reports back through PropagatorHost (the engine: core time,
-// the counters, the sink). See docs/design.md §2 and §5.
+// dynamic_scheduler.h), and the types an input, a state and a call's result travel in. The
+// engine judges an input against its source and the clock, subtracts the bias and moves rate
+// stamps by rate_delay; what the input then does to the state, when a state is published and at
+// which stamp, is the model's, which returns it from each call (ModelResult) for the engine to
+// count, publish and keep. See docs/design.md §2 and §5.
 #pragma once
 
 #include <cstddef>
@@ -113,71 +113,91 @@ struct EngineNote {
   double jitter = 0.0, period = 0.0;
 };
 
-/// What a model needs from the engine that drives it. Implemented by AttitudeEngine; called
-/// synchronously from the model's methods (and may call back into the model: a gap far from
-/// the origin re-pins the state, a non-finite state resets it). Core time is the engine's
-/// TimeBase, which the model reads and never sets.
-class PropagatorHost {
- public:
-  /// Counts and notes a propagator outcome (source empty: the clock); true when the state
-  /// holds at the stamp.
-  virtual bool handleOutcome(StampOutcome outcome, std::optional<Source> source, Stamp stamp) = 0;
-  /// Publishes the state at `stamp` (once per stamp, increasing).
-  virtual void emitState(Stamp stamp) = 0;
-  /// Hands an applied input on with the state at `stamp`.
-  virtual void inputApplied(const Input& input, Stamp stamp) = 0;
-  /// Hands an applied input on with the state it took effect at, `at` (an input placed before
-  /// the model's time: the state at its own stamp, not the model's newest).
-  virtual void inputAppliedAt(const Input& input, Stamp stamp, const DynamicState& at) = 0;
-  virtual void note(const EngineNote& note) = 0;
-  virtual EngineCounters& mutableCounters() = 0;
-  /// The latest ROS time seen; empty before the first.
-  virtual std::optional<Stamp> clock() const = 0;
-  /// The stamp of the last state published; empty before one (or after time was forgotten).
-  virtual std::optional<Stamp> lastPublished() const = 0;
-  /// The orientation covariance: propagated over a step of length h with the step's rate
-  /// w_step and the input's rate covariance (zero: the configured one), or back to the
-  /// initial one (an anchor).
-  virtual void propagateCovariance(double h, const Eigen::Vector3d& w_step,
-                                   const Eigen::Matrix3d& rate_covariance_B) = 0;
-  virtual void anchorCovariance() = 0;
-  /// The model took a step (kept for late fixes): an input that waited for the clock, when it
-  /// acted, whatever became of it, and each advance to a grid stamp.
-  virtual void stepTaken(const ModelStep& step) = 0;
-
- protected:
-  ~PropagatorHost() = default;
+/// What one call of a model did (Propagator::submit, nextDue, replay), returned for the engine
+/// to act on once the call is over, in this order: the model's counts and note; the outcome
+/// counted and noted (a gap far from the origin re-pins the state there); where the state holds
+/// at `stamp`, the covariance followed, the state published and the input handed on; the step
+/// kept for late fixes. The model never calls the engine: what it needs of it (core time, the
+/// clock, the last published stamp) it is given.
+struct ModelResult {
+  /// The outcome at `stamp` of the input (`source`) or of the advance to a grid stamp (source
+  /// empty); empty when nothing moved the state (an input that waits, a grid stamp an input
+  /// already brought the state to).
+  std::optional<StampOutcome> outcome;
+  std::optional<Source> source;
+  Stamp stamp = 0;
+  /// The state at `stamp` is published (kinematic: every input's; dynamic: a grid stamp's).
+  bool publish = false;
+  /// The input is handed on with the state at `stamp` (or `at`): it acted and the state holds.
+  bool hand_on = false;
+  /// The orientation covariance: unchanged, propagated over the step (h, w_step, the input's
+  /// rate covariance; zero: the configured one), or back to the initial one (an anchor).
+  enum class Covariance { Unchanged, Step, Anchor };
+  Covariance covariance = Covariance::Unchanged;
+  double h = 0.0;
+  Eigen::Vector3d w_step = Eigen::Vector3d::Zero();
+  /// The input that acted. Points into the call's argument or the model, valid until the
+  /// model's next call.
+  const Input* input = nullptr;
+  /// The state the input took effect at, when not the model's newest (an input placed before
+  /// the model's time: the state at its own stamp).
+  std::optional<DynamicState> at;
+  /// The step is kept for late fixes: the input that acted (the engine keeps an input it
+  /// submitted as it received it, before the bias estimate), or with no input the advance to
+  /// the grid stamp `stamp`.
+  bool keep_step = false;
+  /// Counts of the model's own, added to EngineCounters' fields of the same names.
+  std::uint64_t late = 0, pending_overflow = 0, deferred_ticks = 0;
+  /// A note of the model's own (StampFilterMisfit, PendingFull, Deferred).
+  std::optional<EngineNote> note;
 };
 
-/// A model: what an input does to the state and when states are published. Every call but
-/// setState and reconfigure never throws. What only a model with a clock of its own means (a
-/// queue, a grid, invariants, moving on between steps) has a default that is the kinematic
-/// model's: nothing waits, nothing is due, nothing drifts.
+/// A model: what an input does to the state and when states are published, returned from each
+/// call. Every call but setState and reconfigure never throws. What only a model with a clock of
+/// its own means (a queue, a grid, invariants, moving on between steps) has a default that is the
+/// kinematic model's: nothing waits, nothing is due, nothing drifts.
 class Propagator {
  public:
   virtual ~Propagator() = default;
 
   /// An input in order for its source, not ahead of the clock by more than max_future, bias
-  /// subtracted, rate stamps moved by rate_delay. Kinematic: integrated now, the state at its
-  /// stamp published. Dynamic: applied when the clock reaches its stamp (at once when the
-  /// propagator has already passed it). True when it acted now, whatever became of it: a step
-  /// the engine keeps for late fixes (one that waits is reported by the model when it acts,
-  /// stepTaken).
-  virtual bool submit(const Input& input) = 0;
-  /// Publishes what is due up to the clock (host clock()): the dynamic model's grid stamps,
-  /// within the budgets; skip_intermediate: only the newest (the clock jumped by a gap).
-  /// Kinematic: nothing (its states follow the inputs).
-  virtual void publishDue(bool /*skip_intermediate*/) {}
+  /// subtracted, rate stamps moved by rate_delay; `clock` the latest ROS time seen (empty before
+  /// the first). Kinematic: integrated now, the state at its stamp published. Dynamic: applied
+  /// when the clock reaches its stamp (at once when the propagator has already passed it); an
+  /// input that waits comes back from nextDue when it acts. The result's input is set when it
+  /// acted now, whatever became of it.
+  virtual ModelResult submit(const Input& input, std::optional<Stamp> clock) = 0;
+  /// The stamp at which the model starts core time from the clock alone, with no input yet
+  /// (dynamic: the newest grid stamp at or before the clock); empty: the first input starts it.
+  virtual std::optional<Stamp> firstStampFromClock(Stamp /*clock*/) const { return std::nullopt; }
+  /// Starts a pass over what is due up to `clock` (the dynamic model's grid stamps, within the
+  /// budgets of one pass; skip_intermediate: only the newest, the clock jumped by a gap). The
+  /// engine then calls nextDue until it returns nothing, acting on each result before the next
+  /// call. Kinematic: nothing is ever due (its states follow the inputs).
+  virtual void beginDue(Stamp /*clock*/, std::optional<Stamp> /*last_published*/,
+                        bool /*skip_intermediate*/) {}
+  /// The next unit of the pass: one waiting input that acts, or one grid stamp reached (or
+  /// deferred: the budget spent, the rest on the next pass); empty when the pass is over.
+  /// `last_published`: the stamp of the last state published, as the engine knows it now.
+  virtual std::optional<ModelResult> nextDue(std::optional<Stamp> /*last_published*/) {
+    return std::nullopt;
+  }
 
   /// Pins the state at core time t (a new anchor). Throws std::invalid_argument, leaving the
   /// state unchanged, for a state the propagator refuses.
   virtual void setState(double t, const Eigen::Quaterniond& q_WB, const Eigen::Vector3d& w_B) = 0;
-  /// Back to the initial state, waiting for an anchor; queued inputs are dropped (counted).
-  virtual void reset() = 0;
-  /// A source's stamps went back, and persisted. True when the model's time is the inputs'
-  /// (kinematic: the engine starts time again, from the initial state); otherwise the model
-  /// goes on, the source's inputs acting late.
-  virtual bool restartInputOrder(Source source) = 0;
+  /// Back to the initial state, waiting for an anchor; returns the queued inputs it dropped
+  /// (the engine counts them, dropped_on_reset).
+  virtual std::size_t reset() = 0;
+  /// What a model did when a source's stamps went back and persisted.
+  struct InputOrderRestart {
+    /// The model's time is the inputs' (kinematic): the engine starts time again, from the
+    /// initial state. Otherwise the model goes on, the source's inputs acting late.
+    bool time_restarts = false;
+    /// Queued inputs of the source's old timeline dropped (the engine counts them stale).
+    std::size_t dropped = 0;
+  };
+  virtual InputOrderRestart restartInputOrder(Source source) = 0;
   /// A new propagator from `next` (same model), started from the current state at the current
   /// time; queued inputs and a held torque stay. Throws std::invalid_argument, leaving
   /// everything unchanged, when `next` is refused.
@@ -216,21 +236,22 @@ class Propagator {
   /// Replaces the orientation at the model's time; everything else (the rate, the sample
   /// window, the knots and grid, the held torque) stays.
   virtual void correctOrientation(const Eigen::Quaterniond& q_WB) = 0;
-  /// Repeats a saved step in a replay (the host then neither counts nor publishes).
-  virtual void replay(const ModelStep& step) = 0;
+  /// Repeats a saved step in a replay, and returns what it did as the live call would. The
+  /// engine keeps only the covariance of the result: nothing is counted, noted, kept or
+  /// published again.
+  virtual ModelResult replay(const ModelStep& step) = 0;
 };
 
 /// The time policy of the model `config` asks for.
 const TimePolicy& timePolicyOf(const EngineConfig& config);
 
-/// Makes the model an engine drives (the engine, its time base): makePropagator, or a model of
+/// Makes the model an engine drives (on the engine's time base): makePropagator, or a model of
 /// a test's own.
-using PropagatorFactory = std::function<std::unique_ptr<Propagator>(
-    const EngineConfig&, PropagatorHost&, const TimeBase&)>;
+using PropagatorFactory =
+    std::function<std::unique_ptr<Propagator>(const EngineConfig&, const TimeBase&)>;
 
 /// The model `config` asks for. Throws std::invalid_argument (from the propagators) for an
 /// invalid configuration.
-std::unique_ptr<Propagator> makePropagator(const EngineConfig& config, PropagatorHost& host,
-                                           const TimeBase& time);
+std::unique_ptr<Propagator> makePropagator(const EngineConfig& config, const TimeBase& time);
 
 }  // namespace attitude_propagator

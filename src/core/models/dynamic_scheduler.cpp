@@ -20,10 +20,8 @@ const DynamicConfig& dynamicConfig(const EngineConfig& config) {
 
 }  // namespace
 
-DynamicScheduler::DynamicScheduler(const EngineConfig& config, PropagatorHost& host,
-                                   const TimeBase& time)
-    : host_(host),
-      time_(time),
+DynamicScheduler::DynamicScheduler(const EngineConfig& config, const TimeBase& time)
+    : time_(time),
       dynamic_(dynamicConfig(config)),
       model_name_(dynamic_.modelName()),
       publish_rate_(config.publish_rate),
@@ -37,50 +35,50 @@ DynamicScheduler::DynamicScheduler(const EngineConfig& config, PropagatorHost& h
 // Inputs
 // ---------------------------------------------------------------------------------------------
 
-bool DynamicScheduler::submit(const Input& input) {
+ModelResult DynamicScheduler::submit(const Input& input, std::optional<Stamp> clock) {
   const double t = time_.coreTime(input.stamp);
   // Not anchored: the input anchors, unless the clock is known and behind its stamp; then the
   // clock's next grid stamp anchors, and the input waits for its stamp like any other (an
   // input stamped in the year 2100 must not carry the propagator away from the clock).
-  const std::optional<Stamp> clock = host_.clock();
   const bool wait_for_clock = !dynamic_.anchored() && clock && input.stamp > *clock;
   if (!wait_for_clock && (!dynamic_.anchored() || t <= dynamic_.time())) {
-    applyDynamic(input);  // anchors, or late (the core places it), or a jump back
-    return true;
+    return applyDynamic(input);  // anchors, or late (the core places it), or a jump back
   }
   // Ahead of the propagator: held until the clock reaches its stamp, so the state published
   // at a grid stamp sees exactly the inputs stamped up to it.
+  ModelResult r;
   if (pending_.size() >= max_pending_) {
     // Full: the input stamped furthest ahead of the clock goes (applying one early would carry
     // the propagator ahead of the clock, and nothing could be published until it caught up).
-    ++host_.mutableCounters().pending_overflow;
-    host_.note({EngineNote::PendingFull, input.source, input.stamp});
-    if (input.stamp >= pending_.back().stamp) return false;
+    r.pending_overflow = 1;
+    r.note = EngineNote{EngineNote::PendingFull, input.source, input.stamp};
+    if (input.stamp >= pending_.back().stamp) return r;
     pending_.pop_back();
   }
   const auto at =
       std::upper_bound(pending_.begin(), pending_.end(), input.stamp,
                        [](Stamp stamp, const Input& other) { return stamp < other.stamp; });
   pending_.insert(at, input);
-  return false;
+  return r;
 }
 
-void DynamicScheduler::applyDynamic(const Input& input) {
+ModelResult DynamicScheduler::applyDynamic(const Input& input) {
   const double t = time_.coreTime(input.stamp);
   // The core places an input that arrives after the clock passed its stamp (transport
   // latency) at the last grid point, and drops one not newer than the stream's previous one.
   const bool late = dynamic_.anchored() && t < dynamic_.time();
+  ModelResult r;
   // Before it acts: the state at its own stamp, where the clock had already passed.
-  const std::optional<DynamicState> at_stamp = late ? recent_.at(t) : std::nullopt;
-  const StampOutcome outcome = applyToModel(input);
-  if (late && outcome == StampOutcome::Advanced) ++host_.mutableCounters().late;
-  if (host_.handleOutcome(outcome, input.source, input.stamp)) {
-    if (at_stamp) {
-      host_.inputAppliedAt(input, input.stamp, *at_stamp);
-    } else {
-      host_.inputApplied(input, input.stamp);
-    }
-  }
+  if (late) r.at = recent_.at(t);
+  r.outcome = applyToModel(input);
+  r.source = input.source;
+  r.stamp = input.stamp;
+  r.input = &input;
+  r.keep_step = true;
+  // The grid publishes; the input is handed on with the state at its stamp.
+  r.hand_on = stateHoldsAtStamp(*r.outcome);
+  if (late && *r.outcome == StampOutcome::Advanced) r.late = 1;
+  return r;
 }
 
 StampOutcome DynamicScheduler::applyToModel(const Input& input) {
@@ -98,74 +96,90 @@ StampOutcome DynamicScheduler::applyToModel(const Input& input) {
   return outcome;
 }
 
-void DynamicScheduler::applyPendingUpTo(Stamp stamp) {
+void DynamicScheduler::takeDueUpTo(Stamp stamp) {
   std::size_t n = 0;
   while (n < pending_.size() && pending_[n].stamp <= stamp) ++n;
   if (n == 0) return;
-  // Moved out first: applying may reset the engine, which clears the queue.
-  std::vector<Input> due(std::make_move_iterator(pending_.begin()),
-                         std::make_move_iterator(pending_.begin() + n));
+  // Moved out first: acting on one may reset the engine, which clears the queue, not these.
+  due_.insert(due_.end(), std::make_move_iterator(pending_.begin()),
+              std::make_move_iterator(pending_.begin() + n));
   pending_.erase(pending_.begin(), pending_.begin() + n);
-  for (const Input& input : due) {
-    applyDynamic(input);
-    host_.stepTaken(ModelStep{input, false});
-  }
 }
 
-bool DynamicScheduler::restartInputOrder(Source source) {
+Propagator::InputOrderRestart DynamicScheduler::restartInputOrder(Source source) {
   // The dynamic model's time is the clock's, which did not go back: the source's inputs go on
   // as late inputs. Its queued inputs from the old timeline would come after them: dropped.
   const auto old = std::remove_if(pending_.begin(), pending_.end(),
                                   [source](const Input& i) { return i.source == source; });
-  host_.mutableCounters().dropped_stale += static_cast<std::uint64_t>(pending_.end() - old);
+  const auto dropped = static_cast<std::size_t>(pending_.end() - old);
   pending_.erase(old, pending_.end());
   dynamic_.restartInputOrder();
-  return false;
+  return {false, dropped};
 }
 
 // ---------------------------------------------------------------------------------------------
 // The publish grid
 // ---------------------------------------------------------------------------------------------
 
-void DynamicScheduler::publishDue(bool skip_intermediate) {
-  const std::optional<Stamp> clock = host_.clock();
-  if (!clock) return;
-  const std::optional<Stamp> last_published = host_.lastPublished();
-  const std::int64_t k_now = gridIndexAtOrBefore(*clock, publish_rate_);
-  std::int64_t k = k_now;
-  if (last_published && !skip_intermediate) {
-    k = std::min(gridIndexAtOrBefore(*last_published, publish_rate_) + 1, k_now);
-  }
-  std::size_t handled = 0;
-  std::uint64_t work = 0;
-  for (; k <= k_now; ++k) {
-    if (handled++ == grid_budget_ || work >= work_budget_) {
-      // Bounded work per call: the rest is published on the next tick or poll.
-      ++host_.mutableCounters().deferred_ticks;
-      host_.note({EngineNote::Deferred, std::nullopt, gridStamp(k, publish_rate_)});
-      return;
-    }
-    publishGridStamp(gridStamp(k, publish_rate_));
-    work += dynamic_.lastCallWork();
-  }
+std::optional<Stamp> DynamicScheduler::firstStampFromClock(Stamp clock) const {
+  return gridStamp(gridIndexAtOrBefore(clock, publish_rate_), publish_rate_);
 }
 
-void DynamicScheduler::publishGridStamp(Stamp stamp) {
-  applyPendingUpTo(stamp);
-  const std::optional<Stamp> last_published = host_.lastPublished();
-  if (last_published && stamp <= *last_published) return;
+void DynamicScheduler::beginDue(Stamp clock, std::optional<Stamp> last_published,
+                                bool skip_intermediate) {
+  pass_ = Pass{};
+  pass_.k_now = gridIndexAtOrBefore(clock, publish_rate_);
+  pass_.k = pass_.k_now;
+  if (last_published && !skip_intermediate) {
+    pass_.k = std::min(gridIndexAtOrBefore(*last_published, publish_rate_) + 1, pass_.k_now);
+  }
+  pass_.open = true;
+}
+
+std::optional<ModelResult> DynamicScheduler::nextDue(std::optional<Stamp> last_published) {
+  while (pass_.open && pass_.k <= pass_.k_now) {
+    if (!pass_.at_grid_stamp) {
+      if (pass_.handled++ == grid_budget_ || pass_.work >= work_budget_) {
+        // Bounded work per pass: the rest is published on the next tick or poll.
+        pass_.open = false;
+        ModelResult r;
+        r.deferred_ticks = 1;
+        r.note = EngineNote{EngineNote::Deferred, std::nullopt, gridStamp(pass_.k, publish_rate_)};
+        return r;
+      }
+      pass_.at_grid_stamp = true;
+      takeDueUpTo(gridStamp(pass_.k, publish_rate_));
+    }
+    if (!due_.empty()) {  // the inputs stamped up to the grid stamp first, one a call
+      acting_ = std::move(due_.front());
+      due_.pop_front();
+      return applyDynamic(acting_);
+    }
+    pass_.at_grid_stamp = false;
+    std::optional<ModelResult> r =
+        publishGridStamp(gridStamp(pass_.k++, publish_rate_), last_published);
+    pass_.work += dynamic_.lastCallWork();
+    if (r) return r;
+  }
+  pass_.open = false;
+  return std::nullopt;
+}
+
+std::optional<ModelResult> DynamicScheduler::publishGridStamp(Stamp stamp,
+                                                              std::optional<Stamp> last_published) {
+  if (last_published && stamp <= *last_published) return std::nullopt;
   const double t = time_.coreTime(stamp);
-  if (dynamic_.anchored() && t < dynamic_.time()) return;  // set_state pinned a later time
+  if (dynamic_.anchored() && t < dynamic_.time()) return std::nullopt;  // set_state pinned later
+  ModelResult r;
+  r.stamp = stamp;
   if (!dynamic_.anchored() || t > dynamic_.time()) {
-    const StampOutcome outcome = dynamic_.advanceTo(t);
-    const bool holds = host_.handleOutcome(outcome, std::nullopt, stamp);
-    Input grid;
-    grid.stamp = stamp;
-    host_.stepTaken(ModelStep{grid, true});
-    if (!holds) return;
+    r.outcome = dynamic_.advanceTo(t);
+    r.keep_step = true;
+    if (!stateHoldsAtStamp(*r.outcome)) return r;
   }
   recent_.push(dynamic_.time(), dynamic_.state());
-  host_.emitState(stamp);  // also when an input stamped exactly here brought the state to it
+  r.publish = true;  // also when an input stamped exactly here brought the state to it
+  return r;
 }
 
 void DynamicScheduler::RecentStates::push(double t, const DynamicState& state) {
@@ -202,12 +216,13 @@ void DynamicScheduler::setState(double t, const Eigen::Quaterniond& q_WB,
   recent_.clear();
 }
 
-void DynamicScheduler::reset() {
-  host_.mutableCounters().dropped_on_reset += pending_.size();  // every input is accounted for
+std::size_t DynamicScheduler::reset() {
+  const std::size_t dropped = pending_.size();  // every input is accounted for
   dynamic_.reset();
   pending_.clear();
   held_torque_.reset();
   recent_.clear();
+  return dropped;
 }
 
 void DynamicScheduler::reconfigure(const EngineConfig& next) {
@@ -266,12 +281,13 @@ bool DynamicScheduler::advanceForFix(double t) {
   return true;
 }
 
-void DynamicScheduler::replay(const ModelStep& step) {
+ModelResult DynamicScheduler::replay(const ModelStep& step) {
   if (step.advance) {
     dynamic_.advanceTo(time_.coreTime(step.input.stamp));
-    return;
+  } else {
+    applyToModel(step.input);
   }
-  applyToModel(step.input);
+  return ModelResult{};  // nothing the engine keeps: the dynamic model has no covariance
 }
 
 EngineState DynamicScheduler::state() const {

@@ -9,13 +9,32 @@
 
 namespace attitude_propagator {
 
-KinematicModel::KinematicModel(const EngineConfig& config, PropagatorHost& host,
-                               const TimeBase& time)
-    : host_(host), time_(time), kinematic_(config.kinematic) {}
+KinematicModel::KinematicModel(const EngineConfig& config, const TimeBase& time)
+    : time_(time), kinematic_(config.kinematic) {}
 
-bool KinematicModel::submit(const Input& input) {
-  apply(input);
-  return true;  // every input changes the model, or may have
+ModelResult KinematicModel::submit(const Input& input, std::optional<Stamp> /*clock*/) {
+  const Step s = step(input);
+  ModelResult r;
+  r.outcome = s.outcome;
+  r.source = input.source;
+  r.stamp = input.stamp;
+  r.input = &input;  // every input changes the model, or may have
+  r.keep_step = true;
+  if (s.misfit) {
+    const SensorClockFilter* filter = kinematic_.stampFilter();
+    r.note = EngineNote{EngineNote::StampFilterMisfit, input.source, input.stamp, filter->jitter(),
+                        filter->period()};
+  }
+  if (!stateHoldsAtStamp(s.outcome)) return r;
+  followCovariance(s, r);
+  // With the stamp filter on, or averages stamped at their start or midpoint, the state holds
+  // where the propagator put it, not at the input's stamp.
+  const std::optional<Stamp> moved =
+      kinematic_.movesStamps() ? time_.stampAt(kinematic_.time()) : std::nullopt;
+  if (moved) r.stamp = *moved;
+  r.publish = true;
+  r.hand_on = true;
+  return r;
 }
 
 std::optional<double> KinematicModel::savedTime() const {
@@ -45,41 +64,26 @@ KinematicModel::Step KinematicModel::step(const Input& input) {
   return s;
 }
 
-void KinematicModel::followCovariance(const Step& step, const Input& input) {
+void KinematicModel::followCovariance(const Step& step, ModelResult& result) {
   if (step.outcome == StampOutcome::Advanced) {
-    host_.propagateCovariance(step.h, step.w_step, input.rate_covariance_B);
+    result.covariance = ModelResult::Covariance::Step;
+    result.h = step.h;
+    result.w_step = step.w_step;
   } else if (step.outcome == StampOutcome::Anchored) {
-    host_.anchorCovariance();  // the initial state again, as uncertain as configured
+    // The initial state again, as uncertain as configured.
+    result.covariance = ModelResult::Covariance::Anchor;
   }
 }
 
-void KinematicModel::replay(const ModelStep& step) {
-  // What was counted, noted and published stays as it was: only the state and its covariance.
-  followCovariance(this->step(step.input), step.input);
+ModelResult KinematicModel::replay(const ModelStep& step) {
+  // The live step again: the engine keeps only its covariance.
+  return submit(step.input, std::nullopt);
 }
 
-void KinematicModel::apply(const Input& input) {
-  const Step s = step(input);
-  if (s.misfit) {
-    const SensorClockFilter* filter = kinematic_.stampFilter();
-    host_.note({EngineNote::StampFilterMisfit, input.source, input.stamp, filter->jitter(),
-                filter->period()});
-  }
-  if (!host_.handleOutcome(s.outcome, input.source, input.stamp)) return;
-  followCovariance(s, input);
-  // With the stamp filter on, or averages stamped at their start or midpoint, the state holds
-  // where the propagator put it, not at the input's stamp.
-  const std::optional<Stamp> moved =
-      kinematic_.movesStamps() ? time_.stampAt(kinematic_.time()) : std::nullopt;
-  const Stamp stamp = moved ? *moved : input.stamp;
-  host_.emitState(stamp);
-  host_.inputApplied(input, stamp);
-}
-
-bool KinematicModel::restartInputOrder(Source /*source*/) {
+Propagator::InputOrderRestart KinematicModel::restartInputOrder(Source /*source*/) {
   // The rates stamp the kinematic model's states: its time starts again with them (a looped
   // bag), from the initial state, and the outputs' stamps start again too.
-  return true;
+  return {true, 0};
 }
 
 void KinematicModel::reconfigure(const EngineConfig& next) {

@@ -10,10 +10,9 @@ const TimePolicy& timePolicyOf(const EngineConfig& config) {
   return config.dynamic ? config.dynamic->time_policy : config.kinematic.time_policy;
 }
 
-std::unique_ptr<Propagator> makePropagator(const EngineConfig& config, PropagatorHost& host,
-                                           const TimeBase& time) {
-  if (config.model == Model::Dynamic) return std::make_unique<DynamicScheduler>(config, host, time);
-  return std::make_unique<KinematicModel>(config, host, time);
+std::unique_ptr<Propagator> makePropagator(const EngineConfig& config, const TimeBase& time) {
+  if (config.model == Model::Dynamic) return std::make_unique<DynamicScheduler>(config, time);
+  return std::make_unique<KinematicModel>(config, time);
 }
 
 }  // namespace attitude_propagator
