@@ -291,11 +291,11 @@ class AttitudeEngine {
     Eigen::Quaterniond q_WB;
     Eigen::Matrix3d R_B;
   };
-  /// An applied fix, and the entries it changed in place as they were before it: the one it
-  /// acted at and, when it acted between two, the next one (the geodesic's other end).
+  /// An applied fix, and the entry it changed in place (the one it acted at) as it was before
+  /// it; the entries after it are rewritten by every replay.
   struct AppliedFix {
     PendingFix fix;
-    std::vector<FixHistoryEntry> before;
+    FixHistoryEntry before;
   };
   /// Applied fixes taken out to be applied again after an earlier fix or measurement, the
   /// entries they had changed set back, and those entries as they were, should nothing be
@@ -322,8 +322,8 @@ class AttitudeEngine {
   /// that are stamped after it, in stamp order: the order they would have had on time.
   FixOutcome applyInStampOrder(const PendingFix& fix);
   /// Applies a fix stamped at or before the newest entry; when applied, `before` receives the
-  /// entries it changed in place, as they were.
-  FixOutcome applyFix(const PendingFix& fix, std::vector<FixHistoryEntry>& before);
+  /// entry it changed in place (the one it acted at), as it was.
+  FixOutcome applyFix(const PendingFix& fix, FixHistoryEntry& before);
   /// The first applied fix stamped after `stamp` (fixes of equal stamps keep their order).
   std::vector<AppliedFix>::iterator firstAppliedAfter(Stamp stamp);
   /// The applied fixes stamped after `stamp`, taken out of those kept, in stamp order, and the

@@ -847,7 +847,7 @@ FixOutcome AttitudeEngine::applyInStampOrder(const PendingFix& fix) {
   if (forgotten_fix_ && fix.stamp < *forgotten_fix_) return FixOutcome::TooOld;
   if (!replayAffordable(fix.stamp)) return FixOutcome::OverBudget;
   TakenFixes again = takeAppliedAfter(fix.stamp);
-  std::vector<FixHistoryEntry> before;
+  FixHistoryEntry before;
   const FixOutcome outcome = applyFix(fix, before);
   if (outcome != FixOutcome::Accepted && outcome != FixOutcome::Reset) {
     putBack(std::move(again));  // untouched
@@ -872,11 +872,10 @@ AttitudeEngine::TakenFixes AttitudeEngine::takeAppliedAfter(Stamp stamp) {
   taken.fixes.assign(std::make_move_iterator(later), std::make_move_iterator(applied_fixes_.end()));
   applied_fixes_.erase(later, applied_fixes_.end());
   for (auto g = taken.fixes.rbegin(); g != taken.fixes.rend(); ++g) {
-    for (const FixHistoryEntry& was : g->before) {
-      if (const std::optional<std::size_t> i = findHistoryEntry(was.id)) {
-        taken.replaced.push_back(historyEntry(*i));
-        historyEntry(*i) = was;
-      }
+    const FixHistoryEntry& was = g->before;
+    if (const std::optional<std::size_t> i = findHistoryEntry(was.id)) {
+      taken.replaced.push_back(historyEntry(*i));
+      historyEntry(*i) = was;
     }
   }
   return taken;
@@ -902,7 +901,7 @@ void AttitudeEngine::applyAgain(const std::vector<AppliedFix>& fixes) {
   // arrivals'.
   const int rejected_in_a_row = rejected_in_a_row_;
   for (const AppliedFix& g : fixes) {
-    std::vector<FixHistoryEntry> before;
+    FixHistoryEntry before;
     const FixOutcome o = applyFix(g.fix, before);
     if (o == FixOutcome::Accepted || o == FixOutcome::Reset)
       keepApplied({g.fix, std::move(before)});
@@ -968,7 +967,7 @@ Eigen::Quaterniond AttitudeEngine::stepFrom(std::size_t k, std::size_t j) {
   return q;
 }
 
-FixOutcome AttitudeEngine::applyFix(const PendingFix& fix, std::vector<FixHistoryEntry>& before) {
+FixOutcome AttitudeEngine::applyFix(const PendingFix& fix, FixHistoryEntry& before) {
   const std::optional<Located> at = locate(fix.stamp);
   if (!at) return FixOutcome::TooOld;
   const AttitudeFix measurement(fix.q_WB, fix.R_B, config_.fixes.gate);
@@ -990,7 +989,7 @@ FixOutcome AttitudeEngine::applyFix(const PendingFix& fix, std::vector<FixHistor
   // there), and the steps since are repeated from it. The entry as it was is kept with the fix,
   // for a fix or measurement stamped before it that arrives later (takeAppliedAfter); the ones
   // after it are rewritten by every replay.
-  before.assign(1, historyEntry(at->k));
+  before = historyEntry(at->k);
   propagator_->correctOrientation(q * at->D.conjugate());
   error_ = moveErrorState(e, at->D.conjugate());
   saveReplayed(historyEntry(at->k));
