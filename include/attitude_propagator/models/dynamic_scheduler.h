@@ -68,6 +68,7 @@ class DynamicScheduler final : public Propagator {
     bool open = false;
     std::int64_t k = 0, k_now = -1;
     bool at_grid_stamp = false;  // the inputs due at gridStamp(k) are being applied
+    Stamp stamp = 0;             // gridStamp(k), once at_grid_stamp
     std::size_t handled = 0;     // grid stamps begun
     std::uint64_t work = 0;      // integrator work
   };

@@ -148,7 +148,8 @@ std::optional<ModelResult> DynamicScheduler::nextDue(std::optional<Stamp> last_p
         return r;
       }
       pass_.at_grid_stamp = true;
-      takeDueUpTo(gridStamp(pass_.k, publish_rate_));
+      pass_.stamp = gridStamp(pass_.k, publish_rate_);
+      takeDueUpTo(pass_.stamp);
     }
     if (!due_.empty()) {  // the inputs stamped up to the grid stamp first, one a call
       acting_ = std::move(due_.front());
@@ -156,8 +157,8 @@ std::optional<ModelResult> DynamicScheduler::nextDue(std::optional<Stamp> last_p
       return applyDynamic(acting_);
     }
     pass_.at_grid_stamp = false;
-    std::optional<ModelResult> r =
-        publishGridStamp(gridStamp(pass_.k++, publish_rate_), last_published);
+    ++pass_.k;
+    std::optional<ModelResult> r = publishGridStamp(pass_.stamp, last_published);
     pass_.work += dynamic_.lastCallWork();
     if (r) return r;
   }
