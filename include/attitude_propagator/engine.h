@@ -28,14 +28,12 @@
 #include "attitude_propagator/models/dynamic_propagator.h"
 #include "attitude_propagator/models/engine_config.h"
 #include "attitude_propagator/models/kinematic_propagator.h"
+#include "attitude_propagator/models/outcome_table.h"
 #include "attitude_propagator/models/propagator.h"
 #include "attitude_propagator/numerics/integrator.h"
 #include "attitude_propagator/time/source_timeline.h"
 
 namespace attitude_propagator {
-
-/// Inputs the node turned away before they reached the engine, counted here with the rest.
-enum class Rejection { NoRate, WrongType, NoTransform, NoTime, BadCovariance };
 
 /// Receives what the engine produces. Called synchronously from the engine's methods.
 class EngineSink {
@@ -47,22 +45,6 @@ class EngineSink {
   virtual void inputApplied(const Input& input, const EngineState& state) = 0;
   virtual void note(const EngineNote& note) = 0;
 };
-
-/// What became of a fix (the counters say the same: EngineCounters::fixes_*).
-enum class FixOutcome {
-  Accepted,       ///< fused at its stamp, the rates since replayed
-  Reset,          ///< the attitude replaced at its stamp, the rates since replayed
-  Waiting,        ///< stamped ahead of the newest rate: applied when the rates reach it
-  RejectedGate,   ///< fuse: the innovation is beyond the gate
-  TooOld,         ///< stamped before the history, the last anchor or an applied fix no longer kept
-  BadQuaternion,  ///< non-finite, or |q| not 1 within kFixUnitTolerance
-  BadCovariance,  ///< non-finite, asymmetric, a negative variance, a variance above pi^2,
-                  ///< a correlation beyond one
-  QueueFull,      ///< waiting, and dropped: kMaxPendingFixes were stamped nearer
-  Future,         ///< stamped more than max_future ahead of the clock, as every input
-  OverBudget,     ///< late: its replay would exceed what its second may replay (replay_budget.h)
-};
-const char* fixOutcomeName(FixOutcome outcome);
 
 /// One entry of the fix history: a step of the model (a rate input as the model received it,
 /// after rate_delay and the configured bias, the bias estimate subtracted when it is applied;

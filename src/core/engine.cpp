@@ -99,32 +99,6 @@ bool validFixCovariance(const Eigen::Matrix3d& R) {
 
 }  // namespace
 
-const char* fixOutcomeName(FixOutcome outcome) {
-  switch (outcome) {
-    case FixOutcome::Accepted:
-      return "accepted";
-    case FixOutcome::Reset:
-      return "reset";
-    case FixOutcome::Waiting:
-      return "waiting";
-    case FixOutcome::RejectedGate:
-      return "rejected_gate";
-    case FixOutcome::TooOld:
-      return "too_old";
-    case FixOutcome::BadQuaternion:
-      return "bad_quaternion";
-    case FixOutcome::BadCovariance:
-      return "bad_covariance";
-    case FixOutcome::QueueFull:
-      return "queue_full";
-    case FixOutcome::Future:
-      return "future";
-    case FixOutcome::OverBudget:
-      return "over_budget";
-  }
-  return "unknown";
-}
-
 AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink)
     : AttitudeEngine(config, sink, makePropagator) {}
 
@@ -279,23 +253,7 @@ bool AttitudeEngine::tooFarAhead(Stamp stamp) const {
 
 void AttitudeEngine::reject(Rejection why) {
   ++counters_.received;
-  switch (why) {
-    case Rejection::NoRate:
-      ++counters_.rejected_no_rate;
-      break;
-    case Rejection::WrongType:
-      ++counters_.rejected_type;
-      break;
-    case Rejection::NoTransform:
-      ++counters_.dropped_no_tf;
-      break;
-    case Rejection::NoTime:
-      ++counters_.dropped_no_time;
-      break;
-    case Rejection::BadCovariance:
-      ++counters_.rejected_covariance;
-      break;
-  }
+  ++(counters_.*rejectionCounter(why));
 }
 
 void AttitudeEngine::submit(const Input& raw) {
@@ -474,39 +432,12 @@ const Eigen::Vector3d& AttitudeEngine::biasAt(Stamp stamp) {
 }
 
 void AttitudeEngine::countOutcome(StampOutcome outcome, std::optional<Source> source, Stamp stamp) {
-  const bool input = source.has_value();
-  switch (outcome) {
-    case StampOutcome::Anchored:
-    case StampOutcome::Advanced:
-      if (input) ++counters_.accepted;
-      return;
-    case StampOutcome::HeldGap:
-      if (input) ++counters_.accepted;
-      ++counters_.gaps;
-      sink_.note({EngineNote::Gap, source, stamp});
-      rebaseIfFar(stamp);
-      return;
-    case StampOutcome::Waiting:
-      if (input) ++counters_.accepted;
-      return;  // nothing integrated yet: nothing to publish
-    case StampOutcome::DroppedStale:
-      if (input) ++counters_.dropped_stale;
-      if (input) sink_.note({EngineNote::Stale, source, stamp});
-      return;
-    case StampOutcome::RejectedNonFinite:
-      ++counters_.rejected_non_finite;
-      sink_.note({EngineNote::NonFinite, source, stamp});
-      return;
-    case StampOutcome::RejectedOutOfRange:
-      ++counters_.rejected_out_of_range;
-      sink_.note({EngineNote::OutOfRange, source, stamp});
-      return;
-    case StampOutcome::FailedStep:
-      if (input) ++counters_.accepted;  // it acts from the new anchor
-      ++counters_.failed_steps;
-      sink_.note({EngineNote::FailedStep, source, stamp});
-      return;  // held and re-anchored at the stamp, like a gap
-  }
+  const StampOutcomeRow& row = stampOutcomeRow(outcome);
+  const bool input = source.has_value() && row.input != nullptr;
+  if (input) ++(counters_.*row.input);
+  if (row.event) ++(counters_.*row.event);
+  if (row.note && (input || row.event)) sink_.note({*row.note, source, stamp});
+  if (outcome == StampOutcome::HeldGap) rebaseIfFar(stamp);  // the state held there
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -697,38 +628,8 @@ std::string AttitudeEngine::setState(Stamp stamp, const Eigen::Quaterniond& q_WB
 // ---------------------------------------------------------------------------------------------
 
 void AttitudeEngine::countFix(FixOutcome outcome) {
-  switch (outcome) {
-    case FixOutcome::Accepted:
-      ++counters_.fixes_accepted;
-      break;
-    case FixOutcome::Reset:
-      ++counters_.fixes_accepted;
-      ++counters_.fixes_reset;
-      break;
-    case FixOutcome::Waiting:
-      break;  // counted when the rates reach it
-    case FixOutcome::RejectedGate:
-      ++counters_.fixes_rejected_gate;
-      break;
-    case FixOutcome::TooOld:
-      ++counters_.fixes_too_old;
-      break;
-    case FixOutcome::BadQuaternion:
-      ++counters_.fixes_bad_quaternion;
-      break;
-    case FixOutcome::BadCovariance:
-      ++counters_.fixes_bad_covariance;
-      break;
-    case FixOutcome::QueueFull:
-      ++counters_.fixes_queue_full;
-      break;
-    case FixOutcome::Future:
-      ++counters_.fixes_future;
-      break;
-    case FixOutcome::OverBudget:
-      ++counters_.fixes_over_budget;
-      break;
-  }
+  // Waiting counts nothing: the fix is counted when the rates reach it.
+  for (auto counter : fixOutcomeRow(outcome).counters) ++(counters_.*counter);
 }
 
 FixOutcome AttitudeEngine::submitFix(Stamp stamp, const Eigen::Quaterniond& q_WB,

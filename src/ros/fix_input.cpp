@@ -174,44 +174,16 @@ void FixInput::logRefusal(const Refusal& r) {
 }
 
 void FixInput::logOutcome(FixOutcome outcome, Stamp stamp, const AttitudeEngine& engine) {
-  const char* why = nullptr;
-  switch (outcome) {
-    case FixOutcome::Accepted:
-    case FixOutcome::Reset:
-    case FixOutcome::Waiting:
-      ROS_DEBUG("%sorientation_fix at %.9f s: %s", log_.prefix().c_str(), toRosTime(stamp).toSec(),
-                fixOutcomeName(outcome));
-      return;
-    case FixOutcome::RejectedGate:
-      why = "its innovation is beyond fix_gate (5 in a row apply as a reset)";
-      break;
-    case FixOutcome::TooOld:
-      why = "stamped before the rates kept (fix_history) or before the last anchor";
-      break;
-    case FixOutcome::BadQuaternion:
-      why = "a non-finite quaternion, or not of unit norm";
-      break;
-    case FixOutcome::BadCovariance:
-      why =
-          "a covariance that is not one (non-finite, asymmetric, a negative variance, a "
-          "variance above pi^2)";
-      break;
-    case FixOutcome::QueueFull:
-      why = "stamped ahead of the rates, and too many wait already";
-      break;
-    case FixOutcome::Future:
-      why = "stamped more than max_future ahead of ROS time";
-      break;
-    case FixOutcome::OverBudget:
-      why =
-          "late, and replaying the rates since would exceed the replays one second may cost "
-          "(too many late fixes: the rates must not fall behind)";
-      break;
+  const FixOutcomeRow& row = fixOutcomeRow(outcome);
+  if (row.why == nullptr) {  // applied, or waiting for the rates
+    ROS_DEBUG("%sorientation_fix at %.9f s: %s", log_.prefix().c_str(), toRosTime(stamp).toSec(),
+              row.name);
+    return;
   }
-  last_reason_ = fixOutcomeName(outcome);
-  warn("fix outcome", formatted("orientation_fix at %.9f s: %s: %s (%lu accepted so far)",
-                                toRosTime(stamp).toSec(), fixOutcomeName(outcome), why,
-                                engine.counters().fixes_accepted));
+  last_reason_ = row.name;
+  warn("fix outcome",
+       formatted("orientation_fix at %.9f s: %s: %s (%lu accepted so far)",
+                 toRosTime(stamp).toSec(), row.name, row.why, engine.counters().fixes_accepted));
 }
 
 }  // namespace attitude_propagator
