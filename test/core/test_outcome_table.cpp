@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "attitude_propagator/engine.h"
-#include "attitude_propagator/models/kinematic_model.h"
 #include "attitude_propagator/models/outcome_table.h"
 #include "engine_fixtures.h"
+#include "wrapped_model.h"
 
 namespace ap = attitude_propagator;
 using engine_fixtures::at;
@@ -164,10 +164,9 @@ TEST(OutcomeTable, AGridGapOfTheClockCountsItsEventAndNoInput) {
 
 // A model that, on each look at the clock, returns one result with the outcome it was given
 // and no input (the clock's); everything else is the kinematic model's.
-class ClockOutcomeModel final : public ap::Propagator {
+class ClockOutcomeModel final : public wrapped_model::WrappedKinematicModel {
  public:
-  ClockOutcomeModel(const ap::EngineConfig& config, const ap::TimeBase& time)
-      : inner_(config, time) {}
+  using WrappedKinematicModel::WrappedKinematicModel;
   ap::StampOutcome next = ap::StampOutcome::DroppedStale;
 
   void beginDue(ap::Stamp clock, std::optional<ap::Stamp>, bool) override { due_ = clock; }
@@ -179,33 +178,8 @@ class ClockOutcomeModel final : public ap::Propagator {
     due_.reset();
     return r;
   }
-  ap::ModelResult submit(const ap::Input& input, std::optional<ap::Stamp> clock) override {
-    return inner_.submit(input, clock);
-  }
-  ap::ModelResult replay(const ap::ModelStep& step) override { return inner_.replay(step); }
-  void setState(double t, const Eigen::Quaterniond& q_WB, const Eigen::Vector3d& w_B) override {
-    inner_.setState(t, q_WB, w_B);
-  }
-  std::size_t reset() override { return inner_.reset(); }
-  InputOrderRestart restartInputOrder(ap::Source source) override {
-    return inner_.restartInputOrder(source);
-  }
-  void reconfigure(const ap::EngineConfig& next_config) override {
-    inner_.reconfigure(next_config);
-  }
-  ap::EngineState state() const override { return inner_.state(); }
-  ap::Model model() const override { return inner_.model(); }
-  const std::string& modelName() const override { return inner_.modelName(); }
-  ap::Integrator integrator() const override { return inner_.integrator(); }
-  std::optional<double> savedTime() const override { return inner_.savedTime(); }
-  void save(ap::ModelSnapshot& into) const override { inner_.save(into); }
-  void restore(const ap::ModelSnapshot& from) override { inner_.restore(from); }
-  void correctOrientation(const Eigen::Quaterniond& q_WB) override {
-    inner_.correctOrientation(q_WB);
-  }
 
  private:
-  ap::KinematicModel inner_;
   std::optional<ap::Stamp> due_;
 };
 
@@ -215,14 +189,9 @@ TEST(OutcomeTable, AnOutcomeOfTheClockCountsItsEventOnlyAndNotesOnlyWithIt) {
   for (const ap::StampOutcome outcome : kStampOutcomes) {
     SCOPED_TRACE(ap::outcomeName(outcome));
     ClockOutcomeModel* model = nullptr;
-    const ap::PropagatorFactory make = [&model](const ap::EngineConfig& c,
-                                                const ap::TimeBase& time) {
-      auto m = std::make_unique<ClockOutcomeModel>(c, time);
-      model = m.get();
-      return std::unique_ptr<ap::Propagator>(std::move(m));
-    };
     engine_fixtures::Recorder sink;
-    ap::AttitudeEngine engine(engine_fixtures::kinematicConfig(), sink, make);
+    ap::AttitudeEngine engine(engine_fixtures::kinematicConfig(), sink,
+                              wrapped_model::factoryOf(model));
     model->next = outcome;
     engine.clockTick(at(1.0));
     const ap::StampOutcomeRow& row = ap::stampOutcomeRow(outcome);

@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "attitude_propagator/engine.h"
-#include "attitude_propagator/models/kinematic_model.h"
 #include "engine_fixtures.h"
+#include "wrapped_model.h"
 
 namespace ap = attitude_propagator;
 using engine_fixtures::at;
@@ -19,9 +19,9 @@ using engine_fixtures::Recorder;
 
 namespace {
 
-class SpyModel final : public ap::Propagator {
+class SpyModel final : public wrapped_model::WrappedKinematicModel {
  public:
-  SpyModel(const ap::EngineConfig& config, const ap::TimeBase& time) : inner_(config, time) {}
+  using WrappedKinematicModel::WrappedKinematicModel;
 
   std::vector<ap::Input> submitted;
   std::vector<ap::ModelStep> replayed;
@@ -34,27 +34,6 @@ class SpyModel final : public ap::Propagator {
     replayed.push_back(step);
     return inner_.replay(step);
   }
-  void setState(double t, const Eigen::Quaterniond& q_WB, const Eigen::Vector3d& w_B) override {
-    inner_.setState(t, q_WB, w_B);
-  }
-  std::size_t reset() override { return inner_.reset(); }
-  InputOrderRestart restartInputOrder(ap::Source source) override {
-    return inner_.restartInputOrder(source);
-  }
-  void reconfigure(const ap::EngineConfig& next) override { inner_.reconfigure(next); }
-  ap::EngineState state() const override { return inner_.state(); }
-  ap::Model model() const override { return inner_.model(); }
-  const std::string& modelName() const override { return inner_.modelName(); }
-  ap::Integrator integrator() const override { return inner_.integrator(); }
-  std::optional<double> savedTime() const override { return inner_.savedTime(); }
-  void save(ap::ModelSnapshot& into) const override { inner_.save(into); }
-  void restore(const ap::ModelSnapshot& from) override { inner_.restore(from); }
-  void correctOrientation(const Eigen::Quaterniond& q_WB) override {
-    inner_.correctOrientation(q_WB);
-  }
-
- private:
-  ap::KinematicModel inner_;
 };
 
 ap::EngineConfig replayConfig(bool estimate_bias) {
@@ -73,12 +52,7 @@ TEST(Replay, ALateFixRepeatsTheStepsAfterItsEntryAsReceivedAndReportsNothing) {
     SCOPED_TRACE(estimate_bias ? "bias estimated" : "attitude alone");
     SpyModel* spy = nullptr;
     Recorder sink;
-    const ap::PropagatorFactory make = [&spy](const ap::EngineConfig& c, const ap::TimeBase& time) {
-      auto model = std::make_unique<SpyModel>(c, time);
-      spy = model.get();
-      return std::unique_ptr<ap::Propagator>(std::move(model));
-    };
-    ap::AttitudeEngine engine(replayConfig(estimate_bias), sink, make);
+    ap::AttitudeEngine engine(replayConfig(estimate_bias), sink, wrapped_model::factoryOf(spy));
     ASSERT_NE(spy, nullptr);
     auto w = [](int k) { return Eigen::Vector3d(0.3, -0.2 + 0.01 * k, 0.5); };
     for (int k = 0; k <= 20; ++k) {
