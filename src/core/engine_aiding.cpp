@@ -44,7 +44,7 @@ AidingOutcome AttitudeEngine::submitAcceleration(Stamp stamp, const Eigen::Vecto
   const Eigen::Matrix3d R = orDefault(covariance_B, config_.aiding.accel_stddev);
   const double linear_variance = linear_acceleration_.observe(
       stamp, f_B - kStandardGravity * bodyUp(propagator_->state().q_WB), R.trace(),
-      config_.aiding.linear_window);
+      config_.aiding.linear_window, f_B.norm());
   linear_variance_ = tilt_known_ ? linear_variance : 0.0;
   const GravityDirection measurement(f_B, R, config_.aiding.accel_gate, linear_variance_);
   if (last_imu_stamp_ && stamp == *last_imu_stamp_) {

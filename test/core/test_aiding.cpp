@@ -493,6 +493,78 @@ TEST(LinearAcceleration, ALastingAccelerationIsAveragedOverTheWindowASingleOneIs
   EXPECT_EQ(v, 0.0);
 }
 
+// The force's magnitude shows a linear acceleration whatever the estimate explains:
+// |f|^2 - g^2 = |a|^2 + 2 g a_up, so for one at right angles to gravity (a turn) |a|^2, from the
+// first sample on, with a residual of zero (the tilt has followed the force); its size counts,
+// not its sign; the sensor's noise is no acceleration.
+TEST(LinearAcceleration, TheForcesMagnitudeShowsAHorizontalAccelerationFromTheFirstSample) {
+  const Eigen::Vector3d none = Eigen::Vector3d::Zero();
+  const double window = ap::kLinearAccelerationWindow;
+  ap::LinearAcceleration turn;
+  const double f = std::sqrt(g * g + 9.0);  // 3 m/s^2 across gravity
+  EXPECT_NEAR(turn.observe(at(0.0), none, 0.0, window, f), 3.0, 1e-9);
+  double v = 0.0;
+  for (int k = 1; k <= 500; ++k) v = turn.observe(at(0.01 * k), none, 0.0, window, f);
+  EXPECT_NEAR(v, 3.0, 1e-9);
+  ap::LinearAcceleration falling;  // |f| < g: accelerating downward
+  EXPECT_NEAR(falling.observe(at(0.0), none, 0.0, window, std::sqrt(g * g - 9.0)), 3.0, 1e-9);
+  ap::LinearAcceleration noise;
+  EXPECT_NEAR(noise.observe(at(0.0), none, 0.03, window, std::sqrt(g * g + 0.03)), 0.0, 1e-12);
+  // Without the force (0), the unexplained part alone, from zero.
+  ap::LinearAcceleration residual_only;
+  EXPECT_EQ(residual_only.observe(at(0.0), Eigen::Vector3d(3.0, 0, 0), 0.0, window, 0.0), 0.0);
+  // A vertical oscillation a_up = A sin(w t) is no lasting acceleration: 2 g a_up averages out
+  // over the window, to within the exponential average's gain at w, 1 / sqrt(1 + (w W)^2)
+  // (and a_up^2 = A^2 / 2 (1 - cos 2 w t) to within its gain at 2 w), 5 % for the sampling.
+  const double A = 1.0, w = 2.0 * M_PI / 0.5;
+  ap::LinearAcceleration heave;
+  double largest = 0.0;
+  for (int k = 0; k <= 2000; ++k) {
+    const double t = 0.01 * k, up = A * std::sin(w * t);
+    v = heave.observe(at(t), none, 0.0, window, std::hypot(0.0, g + up));
+    if (t > 10.0 * window) largest = std::max(largest, v);
+  }
+  const double bound = (A * A / 2.0 * (1.0 + 1.0 / std::hypot(1.0, 2.0 * w * window)) +
+                        2.0 * g * A / std::hypot(1.0, w * window)) /
+                       3.0;
+  EXPECT_LE(largest, 1.05 * bound);
+  EXPECT_LT(bound, 2.0 * g * A / 3.0 / 5.0);  // a fifth of what one sample says, or less
+}
+
+// A level body in a constant turn from its first sample: a centripetal acceleration a at right
+// angles to gravity, so |f|^2 = g^2 + a^2 and the accelerometer's direction leans atan(a / g) for
+// as long as it lasts. The tilt starts right (initial_orientation, stddev s0) and the gyro is
+// next to noiseless, so the tilt is a static state seen through m samples of one noise R each
+// (isotropic in the plane): its estimate moves toward the lean by the closed-form share
+// (m / R) / (1 / s0^2 + m / R) (information form). R holds the acceleration the magnitude shows
+// from the first sample, a^2 / 3 per axis less the sensor's noise; the unexplained part alone
+// shows nothing at first, the first samples would then count as the sensor's noise, and the
+// tilt would lean with the force within a tenth of a second.
+TEST(LinearAcceleration, AConstantHorizontalAccelerationMovesTheTiltByTheClosedFormShare) {
+  const double a = 2.0, s0 = 0.002, sigma = 0.05;
+  ap::EngineConfig c = aidedConfig();
+  c.aiding.align = false;
+  c.initial_orientation_stddev = s0;
+  c.rate_stddev = 1e-7;
+  ASSERT_EQ(c.aiding.accel_stddev, sigma);
+  Recorder sink;
+  ap::AttitudeEngine engine(c, sink);
+  const Eigen::Vector3d f(0.0, a, g);  // the force leans toward the body's +y
+  for (int k = 0; k < 1000; ++k) {     // 10 s
+    engine.submit(imu(at(0.01 * k), Eigen::Vector3d::Zero()));
+    engine.submitAcceleration(at(0.01 * k), f, Eigen::Matrix3d::Zero());
+  }
+  const double m = static_cast<double>(engine.counters().accel.accepted);
+  ASSERT_GE(m, 999.0);
+  const double f2 = f.squaredNorm(), off = (std::sqrt(f2) - g) / g;
+  const double R = sigma * sigma / f2 + off * off + (a * a - 3.0 * sigma * sigma) / 3.0 / (g * g);
+  const double share = (m / R) / (1.0 / (s0 * s0) + m / R);
+  const double lean = std::atan2(a, g);
+  const double tilt = simulated_imu::tiltError(engine.state().q_WB, Eigen::Quaterniond::Identity());
+  EXPECT_NEAR(tilt, share * lean, 0.01 * share * lean);
+  EXPECT_LT(share, 0.3);  // the scene: the turn moves the tilt by less than a third of its lean
+}
+
 TEST(RateDelay, AGravitySampleIsMovedBackWithItsRate) {
   ap::EngineConfig c = aidedConfig();
   c.rate_delay = 0.01;

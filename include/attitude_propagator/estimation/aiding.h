@@ -90,27 +90,37 @@ void AidingCounters::forEach(F&& f) const {
   for (const AidingCounterInfo& info : aidingCounterTable()) f(info.name, this->*info.field);
 }
 
-/// The linear acceleration seen lately in the gravity samples: the part of each sample the
-/// estimate does not explain, f_B - g C_BW e_up, its squared size averaged over
-/// kLinearAccelerationWindow seconds (exponentially, by the samples' stamps, from zero). A sample
-/// is taken to carry that average, less the sensor's noise, as the variance of a linear
-/// acceleration per axis (GravityDirection): while a vehicle turns or brakes, or a hand shakes,
-/// the gravity direction is trusted less, and as much again once it stops; a single sample far
-/// off (a bump) is left to the gate.
+/// The linear acceleration seen lately in the gravity samples, from two sides, each averaged over
+/// kLinearAccelerationWindow seconds (exponentially, by the samples' stamps):
+///  - the part of each sample the estimate does not explain, f_B - g C_BW e_up, its squared size
+///    (from zero: before the tilt is known it says nothing). A lasting acceleration the tilt has
+///    already followed no longer shows here;
+///  - the specific force's magnitude, |f|^2 - g^2 = |a|^2 + 2 g a_up (from the first sample): it
+///    owes nothing to the estimate, and a horizontal acceleration (a turn, a braking: at right
+///    angles to gravity, |f| hardly off g) shows in it as |a|^2 for as long as it lasts, while a
+///    vertical one (a_up, whose mean over a window is the change of a bounded vertical velocity)
+///    mostly averages out.
+/// A sample is taken to carry the larger of the two, less the sensor's noise, as the variance of
+/// a linear acceleration per axis (GravityDirection): while a vehicle turns or brakes, or a hand
+/// shakes, the gravity direction is trusted less, and as much again once it stops; a single
+/// sample far off (a bump) is left to the gate.
 class LinearAcceleration {
  public:
   /// The variance (m^2/s^4 per axis) for the sample at `stamp` whose unexplained part is
-  /// `residual` (m/s^2), with the sensor's noise `noise_trace` (m^2/s^4, the covariance's trace),
-  /// averaged over `window` seconds.
+  /// `residual` (m/s^2) and whose force has the size `force` (m/s^2; 0: not given, the
+  /// magnitude's side not used), with the sensor's noise `noise_trace` (m^2/s^4, the
+  /// covariance's trace), averaged over `window` seconds.
   double observe(Stamp stamp, const Eigen::Vector3d& residual, double noise_trace,
-                 double window = kLinearAccelerationWindow);
+                 double window = kLinearAccelerationWindow, double force = 0.0);
   void reset() {
     mean_ = 0.0;
+    magnitude_ = 0.0;
     last_.reset();
   }
 
  private:
-  double mean_ = 0.0;
+  double mean_ = 0.0;       // <|f_B - g u|^2>
+  double magnitude_ = 0.0;  // <|f|^2 - g^2>
   std::optional<Stamp> last_;
 };
 

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "attitude_propagator/estimation/gravity_direction.h"
+
 namespace attitude_propagator {
 
 const char* aidingOutcomeName(AidingOutcome outcome) {
@@ -107,16 +109,23 @@ void AidingCounters::count(AidingOutcome outcome) {
 }
 
 double LinearAcceleration::observe(Stamp stamp, const Eigen::Vector3d& residual, double noise_trace,
-                                   double window) {
+                                   double window, double force) {
   if (!(window > 0.0)) return 0.0;
-  // Exponential window over the stamps, a = 1 - exp(-dt / window), from nothing seen: a sample
-  // far off the average (a bump) is the gate's to judge, a lasting acceleration (a turn) is
-  // the average's.
+  // Exponential window over the stamps, a = 1 - exp(-dt / window): a sample far off the average
+  // (a bump) is the gate's to judge, a lasting acceleration (a turn) is the average's.
   const double dt = last_ ? std::max(0.0, static_cast<double>(stamp - *last_) * 1e-9) : 0.0;
-  mean_ += (1.0 - std::exp(-dt / window)) * (residual.squaredNorm() - mean_);
+  const double a = 1.0 - std::exp(-dt / window);
+  mean_ += a * (residual.squaredNorm() - mean_);
+  const double g2 = kStandardGravity * kStandardGravity;
+  if (force > 0.0) {
+    // The magnitude owes nothing to the estimate: its average starts from the first sample.
+    const double sample = force * force - g2;
+    magnitude_ += (last_ ? a : 1.0) * (sample - magnitude_);
+  }
   if (!last_ || stamp > *last_) last_ = stamp;
   // The three axes' sum, less the noise the sensor has anyway, spread over the three axes.
-  return std::max(0.0, mean_ - noise_trace) / 3.0;
+  const double seen = std::max(mean_, force > 0.0 ? std::abs(magnitude_) : 0.0);
+  return std::max(0.0, seen - noise_trace) / 3.0;
 }
 
 bool RejectionRun::rejected(Stamp stamp, double seconds) {
