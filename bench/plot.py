@@ -1346,8 +1346,15 @@ def fixes_chart(rows, path):
 
 
 AHRS_STREAMS = [("handheld", "handheld tumble (tilt to 52 deg, 2 m/s^2; accel_stddev chosen here)"),
-                ("vehicle", "vehicle, held out (turns to 2.6 m/s^2, braking)"),
-                ("vehicle_mag", "vehicle + magnetometer, held out (field turned 30 deg at 150 s)")]
+                ("vehicle", "vehicle (turns to 2.6 m/s^2, braking)"),
+                ("vehicle_mag", "vehicle + magnetometer (field turned 30 deg at 150 s)"),
+                ("vehicle2", "second vehicle, held out"),
+                ("vehicle2_mag", "second vehicle + magnetometer, held out (field turned 30 deg at "
+                 "150 s)"),
+                ("boat", "boat, held out (swells, heave)")]
+# The streams with a magnetometer, whose heading gets a panel of its own.
+AHRS_HEADING = [("vehicle_mag", "vehicle + magnetometer: heading"),
+                ("vehicle2_mag", "second vehicle + magnetometer, held out: heading")]
 
 
 def rms_of(values):
@@ -1359,7 +1366,7 @@ def ahrs_label(name, stream):
     """engine_accel_stddev_2 -> the engine and its setting; madgwick_beta_0.01 -> the peer."""
     if name.startswith("engine_accel_stddev_"):
         value = name[len("engine_accel_stddev_"):]
-        aids = "use_accel" + (", use_mag" if stream == "vehicle_mag" else "")
+        aids = "use_accel" + (", use_mag" if stream.endswith("_mag") else "")
         which = "the sensor's" if value == "0.05" else "chosen on handheld"
         return f"engine ({aids}, accel_stddev {value}: {which})"
     return "Madgwick beta " + name[len("madgwick_beta_"):] + " (best of 4 gains)"
@@ -1372,8 +1379,8 @@ def ahrs_chart(rows, path, settle=10.0):
     error on the magnetometer's stream, each series' RMS after `settle` s in its label; the title
     says which filter had the lower RMS on how many panels."""
     panels = [(stream, "tilt_deg", title + ": tilt") for stream, title in AHRS_STREAMS]
-    panels.append(("vehicle_mag", "heading_deg", "vehicle + magnetometer, held out: heading"))
-    fig, axes = plt.subplots(len(panels), 1, figsize=(11, 13.5))
+    panels += [(stream, "heading_deg", title) for stream, title in AHRS_HEADING]
+    fig, axes = plt.subplots(len(panels), 1, figsize=(11, 3.4 * len(panels)))
     wins = []
     for ax, (stream, column, title) in zip(axes, panels):
         short = stream.replace("_mag", " + mag") + (" heading" if column == "heading_deg" else
@@ -1389,7 +1396,7 @@ def ahrs_chart(rows, path, settle=10.0):
                              ("tab:gray", 0.5) if name.endswith("_0.05") else ("tab:blue", 0.8))
             ax.plot(t, y, color=colour, linewidth=width,
                     label=f"{ahrs_label(name, stream)}: RMS {scores[name]:.3g} deg")
-        if stream == "vehicle_mag":
+        if stream.endswith("_mag"):
             ax.axvspan(150.0, 161.0, color="tab:red", alpha=0.12, label="field disturbance")
         if scores:
             wins.append((min(scores, key=scores.get), short))
@@ -1408,7 +1415,8 @@ def ahrs_chart(rows, path, settle=10.0):
         f"{' (accel_stddev ' + name.rsplit('_', 1)[1] + ')' if name.startswith('engine') else ''}"
         f" on {', '.join(panels_won)}" for name, panels_won in by_filter.items())
     fig.suptitle(verdict, fontsize=11)
-    fig.tight_layout()
+    # Room above the panels for the title's lines.
+    fig.tight_layout(rect=(0, 0, 1, 1 - 0.012 * (1 + len(by_filter))))
     fig.savefig(path, dpi=70)
     plt.close(fig)
 
