@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "attitude_propagator/models/counters.h"
+#include "attitude_propagator/models/outcome_table.h"
 #include "package_files.h"
 
 namespace ap = attitude_propagator;
@@ -217,4 +218,19 @@ TEST(CounterTable, ReceivedIsTheRatesAndTorques) {
   }
   EXPECT_EQ(received, std::vector<std::string>{"received"});
   EXPECT_EQ(used, std::vector<std::string>{"accepted"});
+}
+
+// docs/node.md's table of what becomes of a fix names, in its last column, the counter of every
+// fix outcome that counts one (models/outcome_table.h): the docs say what the engine counts.
+TEST(CounterTable, NodeMdsTableOfFixesNamesEveryFixOutcomesCounter) {
+  const std::string doc = readFile(packageRoot() / "docs/node.md");
+  const std::size_t begin = doc.find("| fix | outcome | counted in diagnostics as |");
+  ASSERT_NE(begin, std::string::npos) << "docs/node.md: the table of fixes";
+  const std::string table = doc.substr(begin, doc.find("\n\n", begin) - begin);
+  for (const ap::FixOutcomeRow& row : ap::fixOutcomeTable()) {
+    for (const auto field : row.counters) {
+      const std::string name = std::string("`") + ap::counterName(field) + "`";
+      EXPECT_NE(table.find(name), std::string::npos) << name << " (" << row.name << ")";
+    }
+  }
 }
