@@ -65,7 +65,8 @@ Motion sines() {
           2.0 * M_PI * 27.0};
 }
 
-std::vector<StreamSpec> streamSpecs() {
+/// The streams read from `motion` (named for the one miss left, on the cone).
+std::vector<StreamSpec> streamSpecs(const std::string& motion) {
   std::vector<StreamSpec> specs;
   auto add = [&specs](const std::string& name, double hz) -> StreamSpec& {
     specs.emplace_back();
@@ -93,7 +94,9 @@ std::vector<StreamSpec> streamSpecs() {
     s.averaged = true;
     s.drop = drop;
     s.setting = RateSamples::IntervalAverage;
-    s.known_miss = true;  // exp2 next to the fills (rule 1) is wrong for these motions
+    // The cone's 10 % lost is still missed: auto integrates most steps with exp2 there and ends
+    // 1.7x rk4's error (docs/real_streams.md, "How the `auto` rule was validated").
+    s.known_miss = motion == "cone" && drop > 0.05;
   }
   add("point_5pct_lost", 120.0).drop = 0.05;
   add("jitter_0.05ms", 333.0).jitter = 5e-5;
@@ -133,7 +136,7 @@ std::vector<StreamSpec> streamSpecs() {
 constexpr std::uint64_t kSeed0 = 101;  // seeds kSeed0 .. kSeed0 + kSeeds - 1
 
 void judgeMotion(const Motion& motion) {
-  held_out::judgeMotion(motion, streamSpecs(), kSeed0, "[ held-out ]");
+  held_out::judgeMotion(motion, streamSpecs(motion.name), kSeed0, "[ held-out ]");
 }
 
 }  // namespace
