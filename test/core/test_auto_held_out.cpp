@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "attitude_propagator/numerics/auto_integrator.h"
 #include "held_out_streams.h"
 
 using namespace held_out;
@@ -168,3 +169,28 @@ TEST(AutoHeldOut, TriaxialTumble) { judgeMotion(tumble()); }
 TEST(AutoHeldOut, MiddleAxisFlips) { judgeMotion(flip()); }
 TEST(AutoHeldOut, WideFastConing) { judgeMotion(cone()); }
 TEST(AutoHeldOut, VehicleSinesWithVibration) { judgeMotion(sines()); }
+
+// The prediction for means with lost samples (auto_integrator.h, rule 1) estimates the fills'
+// error and each candidate's from regular runs of means that were not filled: a filled mean,
+// whatever it holds, must not enter. A rate about a fixed axis whose magnitude is a cubic in
+// time makes every estimate zero: the fourth difference of a cubic's interval means vanishes
+// (the fill's cubic is exact), and m x slope vanishes for parallel vectors. Here every tenth
+// mean is filled and 1 rad/s off.
+TEST(AutoHeldOut, FilledMeansDoNotEnterThePrediction) {
+  const double h = 0.01;
+  // The mean over [a, b] of c(t) = 2 + t - t^2/2 + t^3/10: (C(b) - C(a)) / (b - a).
+  auto mean = [](double a, double b) {
+    auto primitive = [](double t) {
+      return 2.0 * t + t * t / 2.0 - t * t * t / 6.0 + t * t * t * t / 40.0;
+    };
+    return (primitive(b) - primitive(a)) / (b - a);
+  };
+  ap::KinematicAutoRule rule(RateSamples::IntervalAverage, false);
+  for (int k = 1; k <= 400; ++k) {
+    const bool filled = k % 10 == 0;
+    const double w = mean((k - 1) * h, k * h) + (filled ? 1.0 : 0.0);
+    rule.step(h, w * Eigen::Vector3d::UnitZ(), filled);
+  }
+  EXPECT_LE(rule.predictedError(Integrator::Cf4), 1e-12);
+  EXPECT_LE(rule.predictedError(Integrator::Exp2), 1e-12);
+}
