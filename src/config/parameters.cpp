@@ -87,8 +87,8 @@ Model resolveModel(const Parameters& p) {
 /// per stream by KinematicAutoRule (auto_integrator.h) where the measurements put another ahead.
 std::string autoKinematicDoc() {
   return quotedNames({autoIntegrator(Model::Kinematic, false)}) +
-         " (per stream: `exp2` next to filled losses, `rk4` or `exp2` under heavy stamp jitter; "
-         "docs/real_streams.md)";
+         " (per stream: `exp2` on means with filled losses where the stream predicts it the "
+         "smaller error, `rk4` or `exp2` under heavy stamp jitter; docs/real_streams.md)";
 }
 
 Integrator resolveIntegrator(const Parameters& p, Model model) {

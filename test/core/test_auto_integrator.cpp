@@ -1,5 +1,6 @@
 // `integrator: auto` on the kinematic model chooses per stream (auto_integrator.h): cf4 on
-// clean streams, exp2 around interval means filled in for lost samples, rk4 (point samples)
+// clean streams, exp2 on interval means with lost samples filled in where the stream predicts
+// exp2 the smaller error, rk4 (point samples)
 // when stamp jitter moves the rates a lot. Truths: the coning motion's closed form and its exact
 // interval means; `auto` is judged against the best of the kinematic methods on the same
 // samples, as the benchmark's real streams judge it (docs/real_streams.md).
@@ -138,7 +139,8 @@ TEST(AutoRule, CleanStreamsStayOnCf4) {
 
 TEST(AutoRule, FilledLossesOfMeansAreIntegratedByExp2) {
   // 5 % of the coning means lost and filled in (max_gap_fill): cf4 on the filled means is 1.6x
-  // exp2's error on the benchmark; auto uses exp2 for the steps whose window holds a filled mean.
+  // exp2's error on the benchmark; auto takes exp2 once the error the stream predicts for cf4
+  // with the fills exceeds exp2's (the fills drift with cf4's error on a cone).
   double log_ratio = 0.0;
   for (std::uint64_t seed = 1; seed <= 5; ++seed) {
     Stream s;
