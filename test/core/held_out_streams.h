@@ -156,6 +156,26 @@ inline Eigen::Vector3d meanOver(const Motion& motion, double a, double b) {
   return meanOver(motion, a, b, piecesFor(motion, a, b));
 }
 
+/// The truth check every held-out set starts with: the motion's interval means agree with the
+/// same mean on eight times the pieces, and its rate generates its attitude, q' = q ⊗ (0, ω)/2,
+/// by a central difference. `period` is the interval of the means checked.
+inline void expectRatesGenerateAttitudes(const Motion& m, double period) {
+  for (double t : {0.05, 1.3, 2.8, 6.1, 9.2}) {
+    const double a = t - period;
+    const Eigen::Vector3d mean = meanOver(m, a, t);
+    EXPECT_LE((mean - meanOver(m, a, t, 8 * piecesFor(m, a, t))).norm(), 1e-11 * mean.norm())
+        << m.name << " t = " << t;
+  }
+  for (double t : {0.0, 0.37, 2.9, 7.71, kDuration}) {
+    const double d = 1e-6;
+    const Eigen::Vector4d derivative =
+        (m.attitude(t + d).coeffs() - m.attitude(t - d).coeffs()) / (2.0 * d);
+    const Eigen::Vector4d expected = 0.5 * (m.attitude(t) * ap::pureQuaternion(m.rate(t))).coeffs();
+    EXPECT_LE((derivative - expected).norm(), 1e-7 * (1.0 + m.rate(t).norm()))
+        << m.name << " t = " << t;
+  }
+}
+
 /// Sample k is taken at k / rate_hz (after a rate change: at the change's stamp plus k /
 /// rate_after_hz); the anchor keeps its exact stamp and rate, so every method starts from the
 /// truth.

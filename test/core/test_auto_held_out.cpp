@@ -146,23 +146,8 @@ void judgeMotion(const Motion& motion) {
 // central differences; the interval means over the longest period (73 Hz) agree with those of
 // eight times as many parts.
 TEST(AutoHeldOut, MotionsRatesGenerateTheirAttitudes) {
-  for (const Motion& m : {tumble(), flip(), cone(), sines()}) {
-    for (double t : {0.05, 1.3, 2.8, 6.1, 9.2}) {
-      const double a = t - 1.0 / 73.0;
-      const Eigen::Vector3d mean = meanOver(m, a, t);
-      EXPECT_LE((mean - meanOver(m, a, t, 8 * piecesFor(m, a, t))).norm(), 1e-11 * mean.norm())
-          << m.name << " t = " << t;
-    }
-    for (double t : {0.0, 0.37, 2.9, 7.71, kDuration}) {
-      const double d = 1e-6;
-      const Eigen::Vector4d derivative =
-          (m.attitude(t + d).coeffs() - m.attitude(t - d).coeffs()) / (2.0 * d);
-      const Eigen::Vector4d expected =
-          0.5 * (m.attitude(t) * ap::pureQuaternion(m.rate(t))).coeffs();
-      EXPECT_LE((derivative - expected).norm(), 1e-7 * (1.0 + m.rate(t).norm()))
-          << m.name << " t = " << t;
-    }
-  }
+  for (const Motion& m : {tumble(), flip(), cone(), sines()})
+    expectRatesGenerateAttitudes(m, 1.0 / 73.0);
 }
 
 TEST(AutoHeldOut, TriaxialTumble) { judgeMotion(tumble()); }

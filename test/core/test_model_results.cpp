@@ -214,21 +214,29 @@ TEST(DynamicSchedulerResults, AJumpBackDropsOnlyThatSourcesWaitingInputsAndTimeG
 }
 
 TEST(DynamicSchedulerResults, ALateInputReturnsTheStateAtItsOwnStamp) {
+  // A sphere keeps its body rate, so the closed form is q(t) = q0 ⊗ exp(ω t / 2); a generic
+  // start and axis tell q0 ⊗ exp from exp ⊗ q0 and a rate about z from one about another axis.
+  const Eigen::Quaterniond q0(Eigen::AngleAxisd(0.7, Eigen::Vector3d(0.3, -0.5, 0.8).normalized()));
+  const Eigen::Vector3d w(0.15, -0.25, 0.1);
+  ap::EngineConfig config = engine_fixtures::spinningSphereConfig();
+  config.dynamic->initial.q_WB = q0;
+  config.dynamic->initial.w_B = w;
   ap::TimeBase time;
   time.pin(at(1.0));
-  ap::DynamicScheduler model(engine_fixtures::spinningSphereConfig(), time);  // 0.2 rad/s about z
+  ap::DynamicScheduler model(config, time);
   std::optional<ap::Stamp> last_published;
   wholePass(model, at(1.0), last_published);
   wholePass(model, at(1.1), last_published);  // the grid at 50 Hz up to 1.1 s
-  const ap::Input late = rate(at(1.05), Eigen::Vector3d(0.0, 0.0, 0.2));
-  const ap::ModelResult r = model.submit(late, at(1.1));
+  const ap::ModelResult r = model.submit(rate(at(1.05), w), at(1.1));
   ASSERT_TRUE(r.outcome.has_value());
   EXPECT_EQ(r.late, 1u);
   EXPECT_TRUE(r.hand_on);
   ASSERT_TRUE(r.at.has_value());
-  // The closed form at the input's own stamp: 0.05 s at 0.2 rad/s about z.
-  const Eigen::Quaterniond expected(Eigen::AngleAxisd(0.2 * 0.05, Eigen::Vector3d::UnitZ()));
+  // The closed form at the input's own stamp, 0.05 s after the start.
+  const Eigen::Quaterniond expected =
+      q0 * Eigen::Quaterniond(Eigen::AngleAxisd(w.norm() * 0.05, w.normalized()));
   EXPECT_LT(r.at->q_WB.angularDistance(expected), 1e-9);
+  EXPECT_LT((r.at->w_B - w).norm(), 1e-12);
 }
 
 }  // namespace
