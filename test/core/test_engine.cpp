@@ -425,6 +425,30 @@ TEST(EngineDynamic, ALateInputActsFromTheLastGridPointAndIsCounted) {
   EXPECT_NEAR(s->w_B.x(), 0.2, 4 * DBL_EPSILON);  // from the grid point 1.0 (measured 2.8e-17)
 }
 
+// design.md §6.5, §6.7: the engine is the one owner of each source's order. In the dynamic model
+// a late torque newer than its source's previous acts from the last grid point; one at or
+// before the previous, though later than the grid point and later than the previous rate (the
+// rate is another source), is a straggler: dropped and counted, the torque in force unchanged.
+// Inertia 2 about x: 0.4 N m about x from 1.0 gives w_x = 0.2 at 2.0; the dropped torque about y
+// would give w_y = 2.5.
+TEST(EngineDynamic, ALateInputNotNewerThanItsSourcesPreviousIsDropped) {
+  Recorder sink;
+  ap::AttitudeEngine engine(torqueConfig(), sink);
+  runClock(engine, 0.0, 1.0, 0.01);
+  engine.clockTick(at(1.01));
+  engine.submit(rate(at(0.999), Eigen::Vector3d::Zero()));
+  engine.submit(torque(at(0.998), Eigen::Vector3d(0.4, 0.0, 0.0)));
+  engine.submit(torque(at(0.998), Eigen::Vector3d(0.0, 5.0, 0.0)));  // repeated
+  engine.submit(torque(at(0.997), Eigen::Vector3d(0.0, 5.0, 0.0)));  // older
+  EXPECT_EQ(engine.counters().late, 2u);
+  EXPECT_EQ(engine.counters().dropped_stale, 2u);
+  runClock(engine, 1.01, 2.0, 0.01);
+  const ap::EngineState* s = sink.stateAt(at(2.0));
+  ASSERT_NE(s, nullptr);
+  EXPECT_NEAR(s->w_B.x(), 0.2, 4 * DBL_EPSILON);
+  EXPECT_NEAR(s->w_B.y(), 0.0, 4 * DBL_EPSILON);
+}
+
 // A late input acts from the last grid point, but is handed on (the node republishes an IMU
 // message with it) with the state at its own stamp: spinning at 1 rad/s about z, the grid at
 // 0.1 s, a rate stamped 0.05 s goes out with 0.05 rad (the closed form), not the 0.1 rad of the

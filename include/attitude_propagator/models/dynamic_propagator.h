@@ -78,9 +78,10 @@ class DynamicPropagator {
   /// Non-finite input is RejectedNonFinite, |tau| > kMaxTorque RejectedOutOfRange (state
   /// unchanged); FailedStep as for advanceTo (the torque then acts from the new anchor). A sample
   /// stamped at or before time() (it arrived after the clock passed its stamp) acts from its stamp
-  /// if no grid point was committed since, else from the last grid point, and returns Advanced; a
-  /// sample not newer than the previous torque sample is DroppedStale, however far back. With the
-  /// exact model a non-zero torque throws std::logic_error.
+  /// if no grid point was committed since, else from the last grid point, and returns Advanced.
+  /// Samples come in their source's order: the engine drops one not newer than the previous
+  /// (SourceTimeline, docs/design.md §6.5), the one owner of that rule. With the exact model a
+  /// non-zero torque throws std::logic_error.
   StampOutcome setTorque(double t, const Eigen::Vector3d& tau, TorqueFrame frame);
 
   /// A measured body rate at t: advances to t, then sets w_B (the orientation is kept). Late
@@ -102,11 +103,6 @@ class DynamicPropagator {
   /// followed from the corrected state. No-op before the anchor or for a zero or non-finite q
   /// (normalised otherwise).
   void correctOrientation(const Eigen::Quaterniond& q_WB);
-
-  /// The inputs' stamps start again from an earlier time (their source jumped back, and the
-  /// engine recognised it): the next rate and torque samples are not compared with the previous
-  /// ones, and act as late samples do. The state and the held torque stay.
-  void restartInputOrder();
 
   bool anchored() const;
   double time() const;

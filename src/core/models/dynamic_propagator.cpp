@@ -102,8 +102,6 @@ struct DynamicPropagator::Impl {
   PrincipalTorque torque;
   // The stamps of the last accepted samples, for the out-of-order check: a late sample that
   // took effect at a later knot must not make a newer late sample look stale.
-  double torque_sample_stamp = -std::numeric_limits<double>::infinity();
-  double rate_sample_stamp = -std::numeric_limits<double>::infinity();
 
   std::uint64_t steps = 0;
   std::uint64_t failed_steps = 0;
@@ -306,11 +304,10 @@ struct DynamicPropagator::Impl {
   /// Where an input stamped t takes effect: advances to t when t is ahead, and for a stamp
   /// behind time() by any amount (an input that arrived after the clock passed its stamp: a
   /// transport delay, a starved process, a sensor clock behind the node's) inserts a knot at t,
-  /// or at the last knot if t is older, and recomputes the current state.
-  /// `last_stamp` is the previous input of the same kind: older stamps are out of order.
-  StampOutcome placeInput(double t, double last_stamp) {
+  /// or at the last knot if t is older, and recomputes the current state. Whether the input is
+  /// newer than the previous one of its source is the engine's rule (SourceTimeline), not this.
+  StampOutcome placeInput(double t) {
     if (!anchored || t > time) return advanceTo(t);
-    if (t <= last_stamp) return StampOutcome::DroppedStale;
     return StampOutcome::Advanced;
   }
 
@@ -341,8 +338,6 @@ struct DynamicPropagator::Impl {
     torque_set = false;
     torque = PrincipalTorque{};
     torque_stamp = -std::numeric_limits<double>::infinity();
-    torque_sample_stamp = -std::numeric_limits<double>::infinity();
-    rate_sample_stamp = -std::numeric_limits<double>::infinity();
   }
 };
 
@@ -392,7 +387,7 @@ StampOutcome DynamicPropagator::setTorque(double t, const Eigen::Vector3d& tau, 
     throw std::logic_error("DynamicPropagator::setTorque: integrator '" +
                            integratorName(d.integrator) + "' cannot take a torque");
   }
-  const StampOutcome outcome = d.placeInput(t, d.torque_sample_stamp);
+  const StampOutcome outcome = d.placeInput(t);
   if (!stateHoldsAtStamp(outcome)) return outcome;
   TorqueInput input;
   input.tau = tau;
@@ -401,7 +396,6 @@ StampOutcome DynamicPropagator::setTorque(double t, const Eigen::Vector3d& tau, 
     d.torque = d.stepper.toPrincipal(input);
     d.torque_set = true;
     d.torque_stamp = std::max(t, d.knot_time);
-    d.torque_sample_stamp = t;
   });
   return ok ? outcome : StampOutcome::FailedStep;
 }
@@ -411,11 +405,10 @@ StampOutcome DynamicPropagator::setRate(double t, const Eigen::Vector3d& w_B) {
   d.beginCall();
   if (!std::isfinite(t) || !w_B.allFinite()) return StampOutcome::RejectedNonFinite;
   if (!(w_B.norm() <= kMaxBodyRate)) return StampOutcome::RejectedOutOfRange;
-  const StampOutcome outcome = d.placeInput(t, d.rate_sample_stamp);
+  const StampOutcome outcome = d.placeInput(t);
   if (!stateHoldsAtStamp(outcome)) return outcome;
   const bool ok = d.insertKnot(t, [&d, &w_B, t]() {
     d.knot.w_P = d.config.body.q_BP().conjugate() * w_B;
-    d.rate_sample_stamp = t;
     const DynamicState x = d.stepper.fromPrincipal(d.knot);
     d.energy0 = d.config.body.kineticEnergy(x.w_B);
     d.momentum0 = d.config.body.angularMomentum_B(x.w_B).norm();
@@ -454,11 +447,6 @@ void DynamicPropagator::correctOrientation(const Eigen::Quaterniond& q_WB) {
   d.knot.q_WP = *unit * d.config.body.q_BP();
   d.stuck = false;
   d.setCurrent(d.knot_time, d.knot);
-}
-
-void DynamicPropagator::restartInputOrder() {
-  impl_->torque_sample_stamp = -std::numeric_limits<double>::infinity();
-  impl_->rate_sample_stamp = -std::numeric_limits<double>::infinity();
 }
 
 bool DynamicPropagator::anchored() const { return impl_->anchored; }

@@ -113,7 +113,6 @@ Propagator::InputOrderRestart DynamicScheduler::restartInputOrder(Source source)
                                   [source](const Input& i) { return i.source == source; });
   const auto dropped = static_cast<std::size_t>(pending_.end() - old);
   pending_.erase(old, pending_.end());
-  dynamic_.restartInputOrder();
   return {false, dropped};
 }
 
