@@ -10,6 +10,7 @@
 #include "attitude_propagator/estimation/attitude_fix.h"
 #include "attitude_propagator/estimation/orientation_covariance.h"
 #include "attitude_propagator/limits.h"
+#include "attitude_propagator/models/sample_door.h"
 #include "attitude_propagator/numerics/quaternion.h"
 #include "attitude_propagator/time/publish_grid.h"
 
@@ -260,8 +261,13 @@ void AttitudeEngine::submit(const Input& raw) {
   ++counters_.received;
   Input input = raw;
   if (input.source != Source::Torque) input.stamp -= rate_delay_ns_;  // the rate's own instant
-  if (!input.value.allFinite() || !input.rate_covariance_B.allFinite()) {
-    countOutcome(StampOutcome::RejectedNonFinite, input.source, input.stamp);
+  // The door (sample_door.h) before the source's order: a refused value never counts as the
+  // source's newest, which would make the next on-time inputs stragglers.
+  std::optional<StampOutcome> refused =
+      refusedValue(input.value, doorBound(input.source == Source::Torque));
+  if (!input.rate_covariance_B.allFinite()) refused = StampOutcome::RejectedNonFinite;
+  if (refused) {
+    countOutcome(*refused, input.source, input.stamp);
     return;
   }
   if (tooFarAhead(input.stamp)) {

@@ -84,6 +84,38 @@ TEST(EngineKinematic, NonFiniteAndBadCovarianceAreRejectedWithTheStateUnchanged)
   EXPECT_EQ(sink.states.size(), 1u);
 }
 
+// sample_door.h: a refused value (non-finite, or a rate above kMaxBodyRate, a torque above
+// kMaxTorque) is refused before its source's order sees it. Stamped ahead of the stream, it
+// would otherwise become the source's newest, and every on-time input after it a straggler.
+TEST(EngineKinematic, ARefusedRateNeverCountsInItsSourcesOrder) {
+  Recorder sink;
+  ap::AttitudeEngine engine(kinematicConfig(), sink);
+  engine.submit(rate(at(0.0), Eigen::Vector3d::UnitZ()));
+  engine.submit(rate(at(0.5), Eigen::Vector3d(2.0 * ap::kMaxBodyRate, 0.0, 0.0)));
+  engine.submit(rate(at(0.6), Eigen::Vector3d(NAN, 0.0, 0.0)));
+  engine.submit(rate(at(0.01), Eigen::Vector3d::UnitZ()));
+  engine.submit(rate(at(0.02), Eigen::Vector3d::UnitZ()));
+  EXPECT_EQ(engine.counters().rejected_out_of_range, 1u);
+  EXPECT_EQ(engine.counters().rejected_non_finite, 1u);
+  EXPECT_EQ(engine.counters().dropped_stale, 0u);
+  ASSERT_EQ(sink.states.size(), 3u);
+  EXPECT_EQ(sink.states.back().stamp, at(0.02));
+}
+
+TEST(EngineDynamic, ARefusedTorqueNeverCountsInItsSourcesOrder) {
+  Recorder sink;
+  ap::AttitudeEngine engine(torqueConfig(), sink);
+  runClock(engine, 0.0, 1.0, 0.01);
+  engine.submit(torque(at(1.5), Eigen::Vector3d(0.0, 2.0 * ap::kMaxTorque, 0.0)));
+  engine.submit(torque(at(1.01), Eigen::Vector3d(0.4, 0.0, 0.0)));
+  EXPECT_EQ(engine.counters().rejected_out_of_range, 1u);
+  EXPECT_EQ(engine.counters().dropped_stale, 0u);
+  runClock(engine, 1.0, 2.0, 0.01);
+  const ap::EngineState* s = sink.stateAt(at(2.0));
+  ASSERT_NE(s, nullptr);
+  EXPECT_NEAR(s->w_B.x(), 0.2 * 0.99, 1e-12);  // 0.4 N m about x on inertia 2 for 0.99 s
+}
+
 TEST(EngineKinematic, GyroBiasIsSubtractedFromItsStampOn) {
   Recorder sink;
   ap::EngineConfig config = kinematicConfig();

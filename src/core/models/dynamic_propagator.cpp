@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "attitude_propagator/models/sample_door.h"
 #include "attitude_propagator/numerics/dynamic_step.h"
 #include "attitude_propagator/numerics/quaternion.h"
 #include "attitude_propagator/numerics/torque_free_motion.h"
@@ -381,8 +382,7 @@ StampOutcome DynamicPropagator::advanceTo(double t) {
 StampOutcome DynamicPropagator::setTorque(double t, const Eigen::Vector3d& tau, TorqueFrame frame) {
   Impl& d = *impl_;
   d.beginCall();
-  if (!std::isfinite(t) || !tau.allFinite()) return StampOutcome::RejectedNonFinite;
-  if (!(tau.norm() <= kMaxTorque)) return StampOutcome::RejectedOutOfRange;
+  if (const auto refused = refusedSample(t, tau, doorBound(true))) return *refused;
   if (!integratorInfo(d.integrator).takes_torque && !tau.isZero(0.0)) {
     throw std::logic_error("DynamicPropagator::setTorque: integrator '" +
                            integratorName(d.integrator) + "' cannot take a torque");
@@ -403,8 +403,7 @@ StampOutcome DynamicPropagator::setTorque(double t, const Eigen::Vector3d& tau, 
 StampOutcome DynamicPropagator::setRate(double t, const Eigen::Vector3d& w_B) {
   Impl& d = *impl_;
   d.beginCall();
-  if (!std::isfinite(t) || !w_B.allFinite()) return StampOutcome::RejectedNonFinite;
-  if (!(w_B.norm() <= kMaxBodyRate)) return StampOutcome::RejectedOutOfRange;
+  if (const auto refused = refusedSample(t, w_B, doorBound(false))) return *refused;
   const StampOutcome outcome = d.placeInput(t);
   if (!stateHoldsAtStamp(outcome)) return outcome;
   const bool ok = d.insertKnot(t, [&d, &w_B, t]() {

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "attitude_propagator/limits.h"
+#include "attitude_propagator/models/sample_door.h"
 #include "attitude_propagator/numerics/quaternion.h"
 
 namespace attitude_propagator {
@@ -113,8 +114,9 @@ KinematicPropagator::KinematicPropagator(const KinematicConfig& config)
 }
 
 StampOutcome KinematicPropagator::addSample(double t, const Eigen::Vector3d& w_B) {
-  const bool valid = std::isfinite(t) && w_B.allFinite() && w_B.norm() <= kMaxBodyRate;
-  if (average_stamp_ == AverageStamp::End || !valid) return addFiltered(t, w_B);
+  // The door first (sample_door.h): what passes it is finite and in range all the way down.
+  if (const auto refused = refusedSample(t, w_B, doorBound(false))) return *refused;
+  if (average_stamp_ == AverageStamp::End) return addFiltered(t, w_B);
   // A start- or mid-stamped mean waits for the next sample, which shows where it ends.
   const std::optional<double> waiting = interval_ends_.waiting();
   if (waiting && t <= *waiting) return StampOutcome::DroppedStale;
@@ -123,10 +125,7 @@ StampOutcome KinematicPropagator::addSample(double t, const Eigen::Vector3d& w_B
 }
 
 StampOutcome KinematicPropagator::addFiltered(double t, const Eigen::Vector3d& w_B) {
-  if (stamp_filter_ == StampFilter::None || !std::isfinite(t) || !w_B.allFinite() ||
-      !(w_B.norm() <= kMaxBodyRate)) {
-    return addStamped(t, w_B);
-  }
+  if (stamp_filter_ == StampFilter::None) return addStamped(t, w_B);
   const SensorClockFilter::Result clock = clock_.filter(t);
   const StampOutcome outcome = addStamped(clock.t, w_B);
   restamp(clock, w_B, outcome);
@@ -152,9 +151,6 @@ void KinematicPropagator::restamp(const SensorClockFilter::Result& clock,
 }
 
 StampOutcome KinematicPropagator::addStamped(double t, const Eigen::Vector3d& w_B) {
-  if (!std::isfinite(t) || !w_B.allFinite()) return StampOutcome::RejectedNonFinite;
-  // The door bound of limits.h: |w| h stays far inside the doubles, so no step turns NaN.
-  if (!(w_B.norm() <= kMaxBodyRate)) return StampOutcome::RejectedOutOfRange;
   if (!anchored_) {
     anchor(t, w_B);
     return StampOutcome::Anchored;
