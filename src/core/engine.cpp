@@ -12,6 +12,7 @@
 #include "attitude_propagator/limits.h"
 #include "attitude_propagator/models/sample_door.h"
 #include "attitude_propagator/numerics/quaternion.h"
+#include "attitude_propagator/time/one_state_per_stamp.h"
 #include "attitude_propagator/time/publish_grid.h"
 
 namespace attitude_propagator {
@@ -467,7 +468,7 @@ EngineState AttitudeEngine::stateAt(Stamp stamp) const {
 }
 
 void AttitudeEngine::emitState(Stamp stamp) {
-  if (last_published_ && stamp <= *last_published_) return;  // one per stamp
+  if (!publishable(stamp, last_published_)) return;
   EngineState s = stateAt(stamp);
   if (!s.q_WB.coeffs().allFinite() || !s.w_B.allFinite()) {
     // The core guarantees finite states; if that ever breaks, never hand NaN on.

@@ -8,6 +8,7 @@
 #include <variant>
 
 #include "attitude_propagator/models/engine_config.h"
+#include "attitude_propagator/time/one_state_per_stamp.h"
 
 namespace attitude_propagator {
 
@@ -167,7 +168,7 @@ std::optional<ModelResult> DynamicScheduler::nextDue(std::optional<Stamp> last_p
 
 std::optional<ModelResult> DynamicScheduler::publishGridStamp(Stamp stamp,
                                                               std::optional<Stamp> last_published) {
-  if (last_published && stamp <= *last_published) return std::nullopt;
+  if (!publishable(stamp, last_published)) return std::nullopt;  // the engine would not
   const double t = time_.coreTime(stamp);
   if (dynamic_.anchored() && t < dynamic_.time()) return std::nullopt;  // set_state pinned later
   ModelResult r;
