@@ -5,6 +5,7 @@
 
 #include "attitude_propagator/estimation/orientation_covariance.h"
 #include "attitude_propagator/messages/conversions.h"
+#include "attitude_propagator/messages/refusal_table.h"
 
 namespace attitude_propagator {
 
@@ -14,20 +15,8 @@ FixFrames FixFrames::of(const NodeConfig& config) {
 }
 
 const char* fixRefusedCounter(Refused why) {
-  switch (why) {
-    case Refused::NoTransform:
-      return "fixes_refused_no_tf";
-    case Refused::WrongType:
-      return "fixes_refused_type";
-    case Refused::NoTime:
-      return "fixes_refused_no_time";
-    case Refused::NoOrientation:
-      return "fixes_refused_no_orientation";
-    case Refused::FixBodyFrame:
-      return "fixes_refused_body_frame";
-    default:
-      return "?";  // not a fix's refusal
-  }
+  const char* counter = refusalRow(why).fix_counter;
+  return counter ? counter : "?";  // "?": not a fix's refusal
 }
 
 Eigen::Matrix3d orientationBlock(const boost::array<double, 36>& covariance) {
@@ -66,25 +55,8 @@ FixDecoder::FixDecoder(FixFrames frames)
                              geometry_msgs::QuaternionStamped, sensor_msgs::Imu>()) {}
 
 Decoded<Fix> FixDecoder::refuse(Refusal refusal) {
-  switch (refusal.why) {
-    case Refused::NoTransform:
-      ++refusals_.no_tf;
-      break;
-    case Refused::WrongType:
-      ++refusals_.type;
-      break;
-    case Refused::NoTime:
-      ++refusals_.no_time;
-      break;
-    case Refused::NoOrientation:
-      ++refusals_.no_orientation;
-      break;
-    case Refused::FixBodyFrame:
-      ++refusals_.body_frame;
-      break;
-    default:
-      break;  // the decoder makes no other
-  }
+  const RefusalRow& row = refusalRow(refusal.why);
+  if (row.fix_count) ++(refusals_.*row.fix_count);
   return {std::nullopt, std::move(refusal)};
 }
 

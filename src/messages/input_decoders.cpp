@@ -5,6 +5,7 @@
 
 #include "attitude_propagator/messages/conversions.h"
 #include "attitude_propagator/messages/imu_input.h"
+#include "attitude_propagator/messages/refusal_table.h"
 
 namespace attitude_propagator {
 
@@ -21,45 +22,15 @@ const char* inputTopicName(Source source) {
 }
 
 const char* refusedCounter(Refused why) {
-  switch (why) {
-    case Refused::NoRate:
-      return "rejected_no_rate";
-    case Refused::BadCovariance:
-      return "rejected_covariance";
-    case Refused::WrongType:
-      return "rejected_type";
-    case Refused::NoTransform:
-      return "dropped_no_tf";
-    case Refused::NoTime:
-      return "dropped_no_time";
-    case Refused::BiasFrame:
-      return "rejected_bias";
-    case Refused::NoOrientation:
-      return "fixes_refused_no_orientation";
-    case Refused::FixBodyFrame:
-      return "fixes_refused_body_frame";
-  }
-  return "?";
+  const RefusalRow& row = refusalRow(why);
+  return row.input_counter ? row.input_counter : row.fix_counter;
 }
 
 void countRefusal(AttitudeEngine& engine, Refused why) {
-  switch (why) {
-    case Refused::NoRate:
-      return engine.reject(Rejection::NoRate);
-    case Refused::BadCovariance:
-      return engine.reject(Rejection::BadCovariance);
-    case Refused::WrongType:
-      return engine.reject(Rejection::WrongType);
-    case Refused::NoTransform:
-      return engine.reject(Rejection::NoTransform);
-    case Refused::NoTime:
-      return engine.reject(Rejection::NoTime);
-    case Refused::BiasFrame:
-      return engine.rejectBias();
-    case Refused::NoOrientation:
-    case Refused::FixBodyFrame:
-      return;  // a fix: FixDecoder counts it (fix_decoder.h)
-  }
+  const RefusalRow& row = refusalRow(why);
+  if (row.rejection) engine.reject(*row.rejection);
+  if (row.bias) engine.rejectBias();
+  // A fix's refusal only: FixDecoder counts it (fix_decoder.h).
 }
 
 DecoderFrames DecoderFrames::of(const NodeConfig& config) {

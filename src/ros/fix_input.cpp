@@ -8,6 +8,7 @@
 #include <ros/serialization.h>
 
 #include "attitude_propagator/messages/conversions.h"
+#include "attitude_propagator/messages/refusal_table.h"
 #include "attitude_propagator/ros/log_text.h"
 #include "attitude_propagator/ros/node_queues.h"
 
@@ -93,11 +94,9 @@ void FixInput::diagnose(diagnostic_updater::DiagnosticStatusWrapper& status,
                         const AttitudeEngine& engine) const {
   const FixRefusals& r = decoder_.refusals();
   status.add("fixes_refused", r.total());
-  status.add(fixRefusedCounter(Refused::NoTransform), r.no_tf);
-  status.add(fixRefusedCounter(Refused::WrongType), r.type);
-  status.add(fixRefusedCounter(Refused::NoTime), r.no_time);
-  status.add(fixRefusedCounter(Refused::NoOrientation), r.no_orientation);
-  status.add(fixRefusedCounter(Refused::FixBodyFrame), r.body_frame);
+  for (const RefusalRow& row : refusalTable()) {
+    if (row.fix_count) status.add(row.fix_counter, r.*row.fix_count);
+  }
   status.add("fixes_pending", engine.pendingFixes());
   status.add("fixes_lost", gaps_.lost());
   status.add("fixes_other_type", other_type_.empty() ? std::string("none") : other_type_);

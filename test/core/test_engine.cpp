@@ -508,6 +508,23 @@ TEST(EngineDynamic, ALateInputIsHandedOnWithTheStateAtItsOwnStamp) {
   EXPECT_ROTATION_NEAR(sink.states.back().q_WB, aboutAxis(Eigen::Vector3d::UnitZ(), 0.2), 1e-12);
 }
 
+// design.md §5.5, §6.6: after ~reset the dynamic model anchors at the first grid stamp it may
+// publish, after the last one published, so the state published there is the initial state.
+// A tick at the stamp already published anchors nothing: anchored there, the model would
+// publish the initial state turned by 0.2 rad/s for 0.02 s at the next grid stamp.
+TEST(EngineDynamic, AfterResetTheFirstStatePublishedIsTheInitialState) {
+  Recorder sink;
+  ap::AttitudeEngine engine(spinningSphereConfig(), sink);
+  runClock(engine, 0.0, 1.0, 0.01);
+  ASSERT_EQ(sink.states.back().stamp, at(1.0));
+  engine.reset();
+  engine.clockTick(at(1.0));
+  EXPECT_EQ(sink.states.back().stamp, at(1.0));
+  engine.clockTick(at(1.02));
+  ASSERT_EQ(sink.states.back().stamp, at(1.02));
+  EXPECT_ROTATION_NEAR(sink.states.back().q_WB, Eigen::Quaterniond::Identity(), 0.0);
+}
+
 TEST(EngineDynamic, TheClockGoingBackResetsAndPublishesTheInitialStateAtOnce) {
   Recorder sink;
   ap::AttitudeEngine engine(spinningSphereConfig(), sink);
