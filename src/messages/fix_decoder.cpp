@@ -5,6 +5,7 @@
 
 #include "attitude_propagator/estimation/orientation_covariance.h"
 #include "attitude_propagator/messages/conversions.h"
+#include "attitude_propagator/messages/input_roles.h"
 #include "attitude_propagator/messages/refusal_table.h"
 
 namespace attitude_propagator {
@@ -50,9 +51,7 @@ std::optional<std::uint32_t> headerSeq(const std::uint8_t* data, std::size_t siz
 }
 
 FixDecoder::FixDecoder(FixFrames frames)
-    : frames_(std::move(frames)),
-      type_(TopicType::anyOf<geometry_msgs::PoseWithCovarianceStamped, geometry_msgs::PoseStamped,
-                             geometry_msgs::QuaternionStamped, sensor_msgs::Imu>()) {}
+    : frames_(std::move(frames)), type_(TopicType::accepting(inputRoleOf(InputRole::Fix).types)) {}
 
 Decoded<Fix> FixDecoder::refuse(Refusal refusal) {
   const RefusalRow& row = refusalRow(refusal.why);

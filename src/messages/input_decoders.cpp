@@ -5,21 +5,12 @@
 
 #include "attitude_propagator/messages/conversions.h"
 #include "attitude_propagator/messages/imu_input.h"
+#include "attitude_propagator/messages/input_roles.h"
 #include "attitude_propagator/messages/refusal_table.h"
 
 namespace attitude_propagator {
 
-const char* inputTopicName(Source source) {
-  switch (source) {
-    case Source::Imu:
-      return "imu/data_raw";
-    case Source::Twist:
-      return "body_twist";
-    case Source::Torque:
-      return "torque";
-  }
-  return "input";
-}
+const char* inputTopicName(Source source) { return inputRoleOf(source).topic; }
 
 const char* refusedCounter(Refused why) {
   const RefusalRow& row = refusalRow(why);
@@ -175,8 +166,8 @@ std::string TopicType::accepted() const {
 
 InputDecoders::InputDecoders(DecoderFrames frames)
     : frames_(std::move(frames)),
-      twist_type_(TopicType::of<geometry_msgs::Twist, geometry_msgs::TwistStamped>()),
-      torque_type_(TopicType::of<geometry_msgs::Wrench, geometry_msgs::WrenchStamped>()) {}
+      twist_type_(TopicType::accepting(inputRoleOf(Source::Twist).types)),
+      torque_type_(TopicType::accepting(inputRoleOf(Source::Torque).types)) {}
 
 DecodedInput InputDecoders::refuse(Refusal refusal) {
   DecodedInput out;

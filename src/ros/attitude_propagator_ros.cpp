@@ -10,6 +10,7 @@
 #include "attitude_propagator/messages/aiding_counters.h"
 #include "attitude_propagator/messages/conversions.h"
 #include "attitude_propagator/messages/imu_input.h"
+#include "attitude_propagator/messages/input_roles.h"
 #include "attitude_propagator/messages/outputs.h"
 #include "attitude_propagator/messages/set_state_request.h"
 #include "attitude_propagator/ros/input_text.h"
@@ -76,15 +77,10 @@ AttitudePropagatorRos::~AttitudePropagatorRos() = default;
 void AttitudePropagatorRos::refuseFeedbackLoops() const {
   const std::vector<NamedTopic> outputs{{"imu/data", imu_nh_.resolveName("data")},
                                         {"attitude_state", nh_.resolveName("attitude_state")}};
-  std::vector<NamedTopic> inputs{{"gyro_bias", nh_.resolveName("gyro_bias")},
-                                 {"orientation_fix", nh_.resolveName("orientation_fix")}};
-  if (config_.rate_input == RateInput::Imu) {
-    inputs.push_back({"imu/data_raw", imu_nh_.resolveName("data_raw")});
-  } else if (config_.rate_input == RateInput::Twist) {
-    inputs.push_back({"body_twist", nh_.resolveName("body_twist")});
+  std::vector<NamedTopic> inputs;
+  for (const InputRoleRow& row : inputRoleTable()) {
+    if (subscribed(row, config_)) inputs.push_back({row.topic, nh_.resolveName(row.topic)});
   }
-  if (config_.torque_input) inputs.push_back({"torque", nh_.resolveName("torque")});
-  if (config_.parameters.use_mag) inputs.push_back({"imu/mag", imu_nh_.resolveName("mag")});
   if (const auto loop = feedbackLoop(outputs, inputs)) throw std::invalid_argument(*loop);
 }
 
@@ -105,18 +101,20 @@ void AttitudePropagatorRos::advertise() {
 void AttitudePropagatorRos::subscribe() {
   const auto hints = ros::TransportHints().tcpNoDelay();
   const auto queue = static_cast<std::uint32_t>(config_.parameters.input_queue_size);
-  if (config_.rate_input == RateInput::Imu) {
+  // Which topics: input_roles.h (the feedback-loop check reads the same).
+  auto takes = [this](const InputRoleRow& row) { return subscribed(row, config_); };
+  if (takes(inputRoleOf(Source::Imu))) {
     rate_sub_ = imu_nh_.subscribe("data_raw", queue, &AttitudePropagatorRos::onImu, this, hints);
-  } else if (config_.rate_input == RateInput::Twist) {
+  } else if (takes(inputRoleOf(Source::Twist))) {
     rate_sub_ = nh_.subscribe("body_twist", queue, &AttitudePropagatorRos::onTwist, this, hints);
   }
-  if (config_.parameters.use_mag) {
+  if (takes(inputRoleOf(InputRole::Field))) {
     mag_sub_ = imu_nh_.subscribe("mag", queue, &AttitudePropagatorRos::onMag, this, hints);
   }
-  if (engine_->dynamicModel() && config_.torque_input) {
+  if (takes(inputRoleOf(Source::Torque))) {
     torque_sub_ = nh_.subscribe("torque", queue, &AttitudePropagatorRos::onTorque, this, hints);
   }
-  if (config_.rate_input != RateInput::None) {
+  if (takes(inputRoleOf(InputRole::Bias))) {
     bias_sub_ = nh_.subscribe("gyro_bias", kSparseQueueSize, &AttitudePropagatorRos::onGyroBias,
                               this, hints);
   }

@@ -43,6 +43,7 @@
 #include "attitude_propagator/messages/conversions.h"
 #include "attitude_propagator/messages/fix_decoder.h"
 #include "attitude_propagator/messages/input_decoders.h"
+#include "attitude_propagator/messages/input_roles.h"
 #include "attitude_propagator/numerics/quaternion.h"
 #include "bag_input.h"
 #include "command_line.h"
@@ -894,9 +895,12 @@ class Evaluation {
 };
 
 void Evaluation::checkTopics(BagSet& bag) {
-  rates_type_ = requireTopic(bag, o_.rates_topic, "rate",
-                             {typeOf<sensor_msgs::Imu>(), typeOf<geometry_msgs::Twist>(),
-                              typeOf<geometry_msgs::TwistStamped>()});
+  std::vector<MessageTypeId> rate_types;
+  for (const InputRoleRow& row : inputRoleTable()) {
+    if (row.role == InputRole::Rate)
+      rate_types.insert(rate_types.end(), row.types.begin(), row.types.end());
+  }
+  rates_type_ = requireTopic(bag, o_.rates_topic, "rate", rate_types);
   rates_topic_ = o_.rates_topic;
   if (!o_.truth_topic.empty()) {
     truth_type_ = requireTopic(
@@ -922,14 +926,11 @@ void Evaluation::checkTopics(BagSet& bag) {
       !(truth_type_ == typeOf<sensor_msgs::Imu>().first && rates_type_ == truth_type_))
     throw UsageError("the rate and truth topics are the same");
   if (o_.parameters.use_mag) {
-    requireTopic(bag, o_.mag_topic, "magnetometer", {typeOf<sensor_msgs::MagneticField>()});
+    requireTopic(bag, o_.mag_topic, "magnetometer", inputRoleOf(InputRole::Field).types);
     mag_topic_ = o_.mag_topic;
   }
   if (!o_.fixes_topic.empty()) {
-    fixes_type_ = requireTopic(
-        bag, o_.fixes_topic, "fix",
-        {typeOf<geometry_msgs::PoseWithCovarianceStamped>(), typeOf<geometry_msgs::PoseStamped>(),
-         typeOf<geometry_msgs::QuaternionStamped>(), typeOf<sensor_msgs::Imu>()});
+    fixes_type_ = requireTopic(bag, o_.fixes_topic, "fix", inputRoleOf(InputRole::Fix).types);
     fixes_topic_ = o_.fixes_topic;
   }
 }

@@ -47,6 +47,7 @@
 #include "attitude_propagator/messages/frame_source.h"
 #include "attitude_propagator/messages/imu_input.h"
 #include "attitude_propagator/messages/input_decoders.h"
+#include "attitude_propagator/messages/input_roles.h"
 #include "attitude_propagator/messages/outputs.h"
 #include "attitude_propagator/models/kinematic_propagator.h"
 #include "attitude_propagator/quoted_text.h"
@@ -575,19 +576,16 @@ class BagPropagator : public EngineSink {
 std::vector<std::string> BagPropagator::checkTopics() {
   std::vector<std::string> topics;
   const bool dynamic = config_.model == Model::Dynamic;
-  if (config_.rate_input == RateInput::Imu) {
-    requireTopic(bags_, o_.rates_topic, "rate", {typeOf<sensor_msgs::Imu>()});
-  } else if (config_.rate_input == RateInput::Twist) {
-    requireTopic(bags_, o_.rates_topic, "rate",
-                 {typeOf<geometry_msgs::Twist>(), typeOf<geometry_msgs::TwistStamped>()});
+  if (config_.rate_input != RateInput::None) {
+    const Source source = config_.rate_input == RateInput::Imu ? Source::Imu : Source::Twist;
+    requireTopic(bags_, o_.rates_topic, "rate", inputRoleOf(source).types);
   }
   if (config_.rate_input != RateInput::None) {
     rates_ = o_.rates_topic;
     topics.push_back(rates_);
   }
   if (dynamic && config_.torque_input) {
-    requireTopic(bags_, o_.torque_topic, "torque",
-                 {typeOf<geometry_msgs::Wrench>(), typeOf<geometry_msgs::WrenchStamped>()});
+    requireTopic(bags_, o_.torque_topic, "torque", inputRoleOf(Source::Torque).types);
     torque_ = o_.torque_topic;
     topics.push_back(torque_);
   }
@@ -602,20 +600,17 @@ std::vector<std::string> BagPropagator::checkTopics() {
   }
   if (!o_.fixes_topic.empty()) {
     // Every type the node takes; a second type on the topic is the decoder's to refuse.
-    requireTopic(
-        bags_, o_.fixes_topic, "fix",
-        {typeOf<geometry_msgs::PoseWithCovarianceStamped>(), typeOf<geometry_msgs::PoseStamped>(),
-         typeOf<geometry_msgs::QuaternionStamped>(), typeOf<sensor_msgs::Imu>()});
+    requireTopic(bags_, o_.fixes_topic, "fix", inputRoleOf(InputRole::Fix).types);
     fixes_ = o_.fixes_topic;
     topics.push_back(fixes_);
   }
   if (config_.parameters.use_mag) {
-    requireTopic(bags_, o_.mag_topic, "magnetometer", {typeOf<sensor_msgs::MagneticField>()});
+    requireTopic(bags_, o_.mag_topic, "magnetometer", inputRoleOf(InputRole::Field).types);
     mag_ = o_.mag_topic;
     topics.push_back(mag_);
   }
   if (config_.rate_input != RateInput::None && topicType(bags_, o_.bias_topic)) {
-    requireTopic(bags_, o_.bias_topic, "gyro bias", {typeOf<geometry_msgs::Vector3Stamped>()});
+    requireTopic(bags_, o_.bias_topic, "gyro bias", inputRoleOf(InputRole::Bias).types);
     bias_ = o_.bias_topic;
     topics.push_back(bias_);
   }

@@ -209,14 +209,9 @@ void deserializeInto(const Serialized& message, std::vector<std::uint8_t>& buffe
 /// another accepted one later, is WrongType.
 class TopicType {
  public:
-  template <class Plain, class Stamped>
-  static TopicType of() {
-    return anyOf<Plain, Stamped>();
-  }
-  /// Accepts each of `M...`, in that order (the first is plainType(), the second stampedType()).
-  template <class... M>
-  static TopicType anyOf() {
-    return TopicType({{ros::message_traits::datatype<M>(), ros::message_traits::md5sum<M>()}...});
+  /// Accepts the types of an input topic's row (input_roles.h), in their order.
+  static TopicType accepting(const std::vector<std::pair<std::string, std::string>>& types) {
+    return TopicType(types);
   }
   /// Nothing when the message's type is the topic's (fixing it at the first), else WrongType
   /// naming the type received.
