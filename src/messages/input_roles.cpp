@@ -55,6 +55,20 @@ const InputRoleRow& inputRoleOf(InputRole role) {
   throw std::logic_error("inputRoleOf: not a role of one topic");
 }
 
+std::string typesText(InputRole role) {
+  std::vector<std::string> names;
+  for (const InputRoleRow& row : inputRoleTable()) {
+    if (row.role != role) continue;
+    for (const MessageTypeId& type : row.types) names.push_back(type.first);
+  }
+  std::string out;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (i > 0) out += i + 1 == names.size() ? " or " : ", ";
+    out += names[i];
+  }
+  return out;
+}
+
 bool subscribed(const InputRoleRow& row, const NodeConfig& config) {
   switch (row.role) {
     case InputRole::Rate:

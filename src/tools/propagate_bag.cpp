@@ -1043,12 +1043,11 @@ std::string BagPropagator::firstRateFrame() {
       deserializeInto(m, buffer_, *imu_msg_);
       return tf2FrameId(imu_msg_->header.frame_id);
     }
-    if (isType<geometry_msgs::TwistStamped>(m)) {
-      geometry_msgs::TwistStamped twist;
-      deserializeInto(m, buffer_, twist);
-      return tf2FrameId(twist.header.frame_id);
-    }
-    break;  // a plain Twist: in the body
+    // Any other rate type through a decoder of its own, whose type rule the run's does not
+    // share: the frame its reading names (none for a plain Twist: in the body).
+    InputDecoders probe(DecoderFrames::of(config_));
+    const Decoded<Reading> reading = probe.readTwistTopic(m, m.getTime());
+    return reading ? tf2FrameId(reading->frame_id) : std::string();
   }
   return {};
 }
