@@ -497,7 +497,7 @@ int main(int argc, char** argv) {
     std::printf(
         "| stream | filter | tilt RMS (deg) | tilt max (deg) | heading RMS (deg) | heading RMS "
         "during the disturbance (deg) | heading max (deg) |\n|---|---|---|---|---|---|---|\n");
-    std::vector<std::string> targets, notes;
+    std::vector<std::string> targets, notes, consistency;
     for (const Stream& s : streams) {
       // The scene's own extremes, so the table says what the filters faced.
       double max_horizontal = 0, max_tilt = 0;
@@ -559,6 +559,15 @@ int main(int argc, char** argv) {
                                        verdict(em[j].heading_disturbed / p.heading_disturbed)
                                  : std::string(" | ")) +
                           " | " + bias + " |");
+        std::string row =
+            "| " + label + " | " + engines[j].first + " | " + fmt(r.tilt_nees, "%.3g") + " |";
+        for (int a = 0; a < 3; ++a) {
+          row += " " + fmt(r.bias_nees(a), "%.3g") +
+                 (s.observable(a) == 0 ? " (unobservable)" : "") + " | " +
+                 fmt(r.bias_error(a) / kDeg, "%+.3f") + " / " +
+                 fmt(r.bias_stddev(a) / kDeg, "%.3f") + " |";
+        }
+        consistency.push_back(row);
         std::string nees;
         for (int a = 0; a < 3; ++a) {
           nees += std::string(a ? ", " : "") + "xyz"[a] + " " + fmt(r.bias_nees(a), "%.3g") +
@@ -607,6 +616,13 @@ int main(int argc, char** argv) {
         "0.05 deg/s):\n\n| stream | engine | tilt RMS | tilt max | heading RMS | heading RMS "
         "during the disturbance | bias error (deg/s) |\n|---|---|---|---|---|---|---|\n");
     for (const std::string& t : targets) std::printf("%s\n", t.c_str());
+    std::printf(
+        "\nConsistency (means after %.0f s; the tilt's NEES 2 and the bias' 1 per axis if the "
+        "covariance is honest):\n\n| stream | engine | tilt NEES | bias NEES x | bias x error / "
+        "stddev (deg/s) | bias NEES y | bias y error / stddev | bias NEES z | bias z error / "
+        "stddev |\n|---|---|---|---|---|---|---|---|---|\n",
+        kSettle);
+    for (const std::string& c : consistency) std::printf("%s\n", c.c_str());
     std::printf("\n");
     for (const std::string& n : notes) std::printf("- %s\n", n.c_str());
     return 0;
