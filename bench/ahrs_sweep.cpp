@@ -20,7 +20,11 @@
 // the handheld stream alone (the vehicle streams held out); Madgwick runs at beta in
 // {0.01, 0.03, 0.1, 0.3} and the gain with the lowest attitude RMS is kept per stream.
 // Prints a markdown table; writes the tilt (and heading) error of the engine and of the kept
-// gain every 0.2 s to the CSV given (for bench/plot.py, docs/ahrs.png).
+// gain every 0.2 s to the CSV given (for bench/plot.py, docs/ahrs.png), with the engine's
+// normalised estimation errors squared (NEES) there: the tilt's (2 degrees of freedom, the
+// error's horizontal part against the 2 x 2 block of the published covariance) and the bias'
+// per axis (1 each). Their means after kSettle are printed; a consistent filter has them near
+// 2 and 1.
 // Usage: bench_ahrs [out.csv] [--design-only]  (--design-only: without the held-out streams)
 #include <algorithm>
 #include <cmath>
@@ -228,7 +232,40 @@ struct Stream {
 
 struct Errors {
   std::vector<double> t, tilt, heading;  // every sample (rad)
+  // The engine's NEES every sample (empty for Madgwick): the tilt's, the bias' per body axis.
+  std::vector<double> tilt_nees;
+  std::vector<Eigen::Vector3d> bias_nees;
 };
+
+// The tilt's NEES: the error dtheta_B = Log(q^-1 q_true) (the engine's body-frame error, truth =
+// q (x) Exp(dtheta_B)) on the plane normal to the estimate's up u = C_BW e_z, B = [e1 e2], against
+// that plane's block of the published covariance: e = B^T dtheta, e^T (B^T P_B B)^-1 e, chi-square
+// with 2 degrees of freedom when the covariance is honest. The rotation about u (the heading) is
+// left out: gravity does not see it.
+double tiltNees(const Eigen::Quaterniond& q, const Eigen::Quaterniond& truth,
+                const Eigen::Matrix3d& P_B) {
+  const Eigen::Vector3d dtheta = ap::logMap(q.conjugate() * truth);
+  const Eigen::Vector3d u = q.conjugate() * Eigen::Vector3d::UnitZ();
+  Eigen::Index least = 0;
+  u.cwiseAbs().minCoeff(&least);
+  Eigen::Matrix<double, 3, 2> B;
+  B.col(0) = u.cross(Eigen::Vector3d::Unit(least)).normalized();
+  B.col(1) = u.cross(B.col(0));
+  const Eigen::Vector2d e = B.transpose() * dtheta;
+  const Eigen::Matrix2d S = B.transpose() * P_B * B;
+  return e.dot(S.ldlt().solve(e));
+}
+
+double meanAfterSettle(const std::vector<double>& t, const std::vector<double>& v) {
+  double s = 0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    if (t[i] < kSettle) continue;
+    s += v[i];
+    ++n;
+  }
+  return n ? s / n : NAN;
+}
 
 struct Metrics {
   double tilt_rms = 0, tilt_max = 0, heading_rms = NAN, heading_disturbed = NAN, heading_max = NAN;
@@ -268,8 +305,10 @@ void record(Errors& e, double t, const Eigen::Quaterniond& q, const Eigen::Quate
 
 struct EngineRun {
   Errors errors;
-  Eigen::Vector3d bias_error = Eigen::Vector3d::Zero();   // rad/s
-  Eigen::Vector3d bias_stddev = Eigen::Vector3d::Zero();  // rad/s
+  double tilt_nees = NAN;                                      // mean after kSettle
+  Eigen::Vector3d bias_nees = Eigen::Vector3d::Constant(NAN);  // mean after kSettle, per axis
+  Eigen::Vector3d bias_error = Eigen::Vector3d::Zero();        // rad/s
+  Eigen::Vector3d bias_stddev = Eigen::Vector3d::Zero();       // rad/s
   ap::AidingCounters accel, mag;
 };
 
@@ -311,7 +350,18 @@ EngineRun runEngine(const Stream& s, double accel_stddev) {
     engine.submit(input);
     engine.submitAcceleration(input.stamp, x.f_B, Eigen::Matrix3d::Zero());
     if (s.mag) engine.submitMagneticField(input.stamp, x.m_B, Eigen::Matrix3d::Zero());
-    record(run.errors, x.t, engine.state().q_WB, x.truth);
+    const ap::EngineState state = engine.state();
+    record(run.errors, x.t, state.q_WB, x.truth);
+    run.errors.tilt_nees.push_back(tiltNees(state.q_WB, x.truth, state.P_B));
+    const Eigen::Vector3d db = state.gyro_bias_estimate_B - s.bias;
+    run.errors.bias_nees.push_back(
+        db.cwiseProduct(db).cwiseQuotient(state.gyro_bias_stddev_B.cwiseAbs2()));
+  }
+  run.tilt_nees = meanAfterSettle(run.errors.t, run.errors.tilt_nees);
+  for (int a = 0; a < 3; ++a) {
+    std::vector<double> axis;
+    for (const Eigen::Vector3d& n : run.errors.bias_nees) axis.push_back(n(a));
+    run.bias_nees(a) = meanAfterSettle(run.errors.t, axis);
   }
   run.bias_error = engine.gyroBiasEstimate() - s.bias;
   run.bias_stddev = engine.gyroBiasStddev();
@@ -387,7 +437,9 @@ int main(int argc, char** argv) {
     const std::string csv_path = argc > 1 && argv[1][0] != '-' ? argv[1] : "ahrs.csv";
     std::FILE* csv = std::fopen(csv_path.c_str(), "w");
     if (csv == nullptr) throw std::runtime_error("cannot write " + csv_path);
-    std::fprintf(csv, "stream,filter,t,tilt_deg,heading_deg\n");
+    std::fprintf(csv,
+                 "stream,filter,t,tilt_deg,heading_deg,tilt_nees,bias_nees_x,bias_nees_y,"
+                 "bias_nees_z\n");
 
     // --design-only: the held-out streams are not run (while a rule is designed on the others).
     bool design_only = false;
@@ -445,7 +497,7 @@ int main(int argc, char** argv) {
     std::printf(
         "| stream | filter | tilt RMS (deg) | tilt max (deg) | heading RMS (deg) | heading RMS "
         "during the disturbance (deg) | heading max (deg) |\n|---|---|---|---|---|---|---|\n");
-    std::vector<std::string> targets, notes;
+    std::vector<std::string> targets, notes, consistency;
     for (const Stream& s : streams) {
       // The scene's own extremes, so the table says what the filters faced.
       double max_horizontal = 0, max_tilt = 0;
@@ -507,13 +559,29 @@ int main(int argc, char** argv) {
                                        verdict(em[j].heading_disturbed / p.heading_disturbed)
                                  : std::string(" | ")) +
                           " | " + bias + " |");
-        char line[600];
+        std::string row =
+            "| " + label + " | " + engines[j].first + " | " + fmt(r.tilt_nees, "%.3g") + " |";
+        for (int a = 0; a < 3; ++a) {
+          row += " " + fmt(r.bias_nees(a), "%.3g") +
+                 (s.observable(a) == 0 ? " (unobservable)" : "") + " | " +
+                 fmt(r.bias_error(a) / kDeg, "%+.3f") + " / " +
+                 fmt(r.bias_stddev(a) / kDeg, "%.3f") + " |";
+        }
+        consistency.push_back(row);
+        std::string nees;
+        for (int a = 0; a < 3; ++a) {
+          nees += std::string(a ? ", " : "") + "xyz"[a] + " " + fmt(r.bias_nees(a), "%.3g") +
+                  (s.observable(a) == 0 ? " (unobservable)" : "");
+        }
+        char line[800];
         std::snprintf(line, sizeof line,
                       "%s, %s: bias error (deg/s) %+.3f %+.3f %+.3f, its stddev %.3f %.3f %.3f; "
+                      "NEES after %.0f s (mean): tilt %.3g (2 if honest), bias %s (1 if honest); "
                       "gravity %s%s",
                       label.c_str(), engines[j].first.c_str(), r.bias_error.x() / kDeg,
                       r.bias_error.y() / kDeg, r.bias_error.z() / kDeg, r.bias_stddev.x() / kDeg,
-                      r.bias_stddev.y() / kDeg, r.bias_stddev.z() / kDeg, counters(r.accel).c_str(),
+                      r.bias_stddev.y() / kDeg, r.bias_stddev.z() / kDeg, kSettle, r.tilt_nees,
+                      nees.c_str(), counters(r.accel).c_str(),
                       s.mag ? ("; field " + counters(r.mag)).c_str() : "");
         notes.push_back(line);
       }
@@ -529,9 +597,16 @@ int main(int argc, char** argv) {
           {"engine_accel_stddev_" + fmt(chosen, "%g"), &runs[1].errors},
           {"madgwick_beta_" + fmt(gains[best], "%g"), &peers[best]}};
       for (const auto& [name, e] : series) {
+        const bool engine = !e->tilt_nees.empty();
         for (std::size_t k = 0; k < e->t.size(); k += 20) {
-          std::fprintf(csv, "%s,%s,%.1f,%.4g,%s\n", s.name.c_str(), name.c_str(), e->t[k],
-                       e->tilt[k] / kDeg, s.mag ? fmt(e->heading[k] / kDeg, "%.4g").c_str() : "");
+          std::string nees = ",,,";
+          if (engine) {
+            nees = fmt(e->tilt_nees[k], "%.4g") + "," + fmt(e->bias_nees[k].x(), "%.4g") + "," +
+                   fmt(e->bias_nees[k].y(), "%.4g") + "," + fmt(e->bias_nees[k].z(), "%.4g");
+          }
+          std::fprintf(csv, "%s,%s,%.1f,%.4g,%s,%s\n", s.name.c_str(), name.c_str(), e->t[k],
+                       e->tilt[k] / kDeg, s.mag ? fmt(e->heading[k] / kDeg, "%.4g").c_str() : "",
+                       nees.c_str());
         }
       }
     }
@@ -541,6 +616,13 @@ int main(int argc, char** argv) {
         "0.05 deg/s):\n\n| stream | engine | tilt RMS | tilt max | heading RMS | heading RMS "
         "during the disturbance | bias error (deg/s) |\n|---|---|---|---|---|---|---|\n");
     for (const std::string& t : targets) std::printf("%s\n", t.c_str());
+    std::printf(
+        "\nConsistency (means after %.0f s; the tilt's NEES 2 and the bias' 1 per axis if the "
+        "covariance is honest):\n\n| stream | engine | tilt NEES | bias NEES x | bias x error / "
+        "stddev (deg/s) | bias NEES y | bias y error / stddev | bias NEES z | bias z error / "
+        "stddev |\n|---|---|---|---|---|---|---|---|---|\n",
+        kSettle);
+    for (const std::string& c : consistency) std::printf("%s\n", c.c_str());
     std::printf("\n");
     for (const std::string& n : notes) std::printf("- %s\n", n.c_str());
     return 0;
