@@ -157,7 +157,7 @@ Several bags (the parts of `rosbag record --split`) are read as one stream merge
 time, in whatever order they are given.
 
 )"),
-       valueOption("--rates", "TOPIC", typesText(InputRole::Rate) + " (default /imu/data_raw)",
+       valueOption("--rates", "TOPIC", typesText(InputRole::Rate) + "\n(default /imu/data_raw)",
                    to(o.rates_topic)),
        valueOption("--truth", "TOPIC",
                    "geometry_msgs/PoseStamped, PoseWithCovarianceStamped, TransformStamped,\n"
