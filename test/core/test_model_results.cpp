@@ -102,6 +102,9 @@ TEST(KinematicModelResults, AReplayReturnsWhatTheLiveStepReturned) {
   const ap::ModelResult on_time = live.submit(next, std::nullopt);
   live.restore(saved);
   const ap::ModelResult again = live.replay(ap::ModelStep{next, false});
+  // Against the step itself: a covariance step over the 0.02 s between the two stamps.
+  EXPECT_EQ(again.covariance, Covariance::Step);
+  EXPECT_NEAR(again.h, 0.02, 1e-12);
   EXPECT_EQ(again.covariance, on_time.covariance);
   EXPECT_EQ(again.h, on_time.h);
   EXPECT_EQ(again.w_step, on_time.w_step);
