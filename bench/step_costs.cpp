@@ -64,9 +64,11 @@ void kinematicStepCost(benchmark::State& state, Integrator method) {
   benchmark::ClobberMemory();
 }
 
+/// `lost_every`: every so many samples one is not delivered (0: none), so that interval means
+/// are filled in and auto's prediction for lost means runs (auto_integrator.h).
 void addSampleCost(benchmark::State& state, Integrator method,
                    ap::RateSamples kind = ap::RateSamples::Instantaneous,
-                   ap::StampFilter filter = ap::StampFilter::None) {
+                   ap::StampFilter filter = ap::StampFilter::None, std::size_t lost_every = 0) {
   // Rates cycle through a table (cheap to read, not constant); time keeps increasing.
   std::vector<Eigen::Vector3d> rates(1024);
   for (std::size_t i = 0; i < rates.size(); ++i) rates[i] = rateAt(i * kDt);
@@ -77,7 +79,9 @@ void addSampleCost(benchmark::State& state, Integrator method,
   ap::KinematicPropagator propagator(config);
   double t = 0.0;
   std::size_t i = 0;
+  std::size_t n = 0;
   for (auto _ : state) {
+    if (lost_every > 0 && ++n % lost_every == 0) t += kDt;  // the one before was lost
     propagator.addSample(t, rates[i]);
     t += kDt;
     i = (i + 1) & 1023;
@@ -90,15 +94,25 @@ void registerKinematic() {
     const std::string name = ap::integratorName(m);
     benchmark::RegisterBenchmark(("kinematicStep/" + name).c_str(), kinematicStepCost, m);
     benchmark::RegisterBenchmark(("addSample/" + name).c_str(), addSampleCost, m,
-                                 ap::RateSamples::Instantaneous, ap::StampFilter::None);
+                                 ap::RateSamples::Instantaneous, ap::StampFilter::None,
+                                 std::size_t{0});
   }
   // The real-stream paths, next to addSample/cf4 in the same run: averaged samples (delta-angle
   // cubic, gap check), and the same with the sensor-clock stamp filter.
   benchmark::RegisterBenchmark("addSample/cf4_interval_average", addSampleCost, Integrator::Cf4,
-                               ap::RateSamples::IntervalAverage, ap::StampFilter::None);
+                               ap::RateSamples::IntervalAverage, ap::StampFilter::None,
+                               std::size_t{0});
   benchmark::RegisterBenchmark("addSample/cf4_interval_average_sensor_clock", addSampleCost,
                                Integrator::Cf4, ap::RateSamples::IntervalAverage,
-                               ap::StampFilter::SensorClock);
+                               ap::StampFilter::SensorClock, std::size_t{0});
+  // auto on means with one lost in 37: fills, and from the first on the prediction that picks
+  // cf4 or exp2 for lost means, beside auto on the same means with none lost.
+  benchmark::RegisterBenchmark("addSample/auto_interval_average", addSampleCost, Integrator::Auto,
+                               ap::RateSamples::IntervalAverage, ap::StampFilter::None,
+                               std::size_t{0});
+  benchmark::RegisterBenchmark("addSample/auto_interval_average_lossy", addSampleCost,
+                               Integrator::Auto, ap::RateSamples::IntervalAverage,
+                               ap::StampFilter::None, 37);
 }
 
 ap::RigidBody bodyOf(const bench::DynamicScene& scene) {
