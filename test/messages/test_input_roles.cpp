@@ -46,6 +46,17 @@ TEST(InputRoles, TheDecodersAcceptARowsTypesInItsOrder) {
   EXPECT_EQ(fixes.type().accepted(), joined(ap::inputRoleOf(ap::InputRole::Fix).types));
 }
 
+TEST(InputRoles, TypesTextNamesARolesTypesInTheTablesOrder) {
+  EXPECT_EQ(ap::typesText(ap::InputRole::Rate),
+            "sensor_msgs/Imu, geometry_msgs/Twist or geometry_msgs/TwistStamped");
+  EXPECT_EQ(ap::typesText(ap::InputRole::Bias), "geometry_msgs/Vector3Stamped");
+  // TopicType::accepting keeps a row's order: the first is the plain type, the second the
+  // stamped one.
+  const ap::TopicType torque = ap::TopicType::accepting(ap::inputRoleOf(ap::Source::Torque).types);
+  EXPECT_EQ(torque.plainType(), "geometry_msgs/Wrench");
+  EXPECT_EQ(torque.stampedType(), "geometry_msgs/WrenchStamped");
+}
+
 // n-1, n, n+1 of each condition: a node takes exactly the topics of its configuration.
 TEST(InputRoles, ANodeTakesTheTopicsOfItsConfiguration) {
   auto taken = [](const ap::NodeConfig& c) {
