@@ -81,7 +81,8 @@ struct SincDecimator {
 };
 
 /// FIFO reads: a driver reads the sensor's FIFO every `batch` samples, the read delayed by a
-/// latency draw about its mean (the mean is no filter's to see). Repeated: every sample of the
+/// latency draw: half-normal, sigma |N(0, 1)| (never negative, so no read is received before its
+/// newest sample is taken; a tail as light as the normal's). Repeated: every sample of the
 /// read gets the receipt stamp. Spaced: the k-th newest gets the receipt stamp less k periods.
 /// A batch of 1 is the per-sample stream with the same latency distribution.
 enum class Fifo { Repeated, Spaced };
@@ -95,7 +96,7 @@ inline std::vector<double> fifoStamps(double hz, int batch, Fifo form, double si
   std::vector<double> stamps{0.0};
   for (long first = 1; first + batch - 1 <= samples_after_anchor; first += batch) {
     const long newest = first + batch - 1;
-    const double receipt = newest / hz + sigma * normalRandom(state);
+    const double receipt = newest / hz + sigma * std::abs(normalRandom(state));
     for (long k = first; k <= newest; ++k) {
       stamps.push_back(form == Fifo::Repeated ? receipt : receipt - (newest - k) / hz);
     }

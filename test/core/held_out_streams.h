@@ -105,8 +105,9 @@ struct StreamSpec {
   bool averaged = false;                     // the gyro delivers interval means ...
   AverageStamp stamped = AverageStamp::End;  // ... stamped at the interval's end, mid or start
   double jitter = 0.0;                       // s, receipt jitter (standard deviation)
-  double drop = 0.0;                         // probability a sample is lost
-  bool mems = false;                         // angle random walk and 16-bit quantisation
+  double latency = 0.0;  // s: received after a latency >= 0, half-normal latency |N(0, 1)|
+  double drop = 0.0;     // probability a sample is lost
+  bool mems = false;     // angle random walk and 16-bit quantisation
   Filter lowpass = Filter::None;
   int fifo_batch = 0;  // > 0: FIFO reads of this many samples
   gyro_streams::Fifo fifo_form = gyro_streams::Fifo::Repeated;
@@ -226,6 +227,7 @@ inline std::vector<Sample> makeStream(const Motion& motion, const StreamSpec& sp
         }
       }
       if (spec.jitter > 0.0) stamp += spec.jitter * normalRandom(state);
+      if (spec.latency > 0.0) stamp += spec.latency * std::abs(normalRandom(state));
       if (k > 3 && spec.drop > 0.0 && uniformRandom(state) < spec.drop) continue;
     }
     samples.push_back({stamp - spec.rate_delay, w});

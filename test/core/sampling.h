@@ -21,6 +21,13 @@ inline double normalRandom(std::uint64_t& state) {
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
 }
 
+/// Reproducible latencies of mean and standard deviation sigma: exponential draws (the wait in a
+/// queue), never negative, their floor 0 and their density there 1 / sigma. A receipt stamp is
+/// the sample's time plus a latency: no sample is received before it is taken.
+inline double latencyRandom(std::uint64_t& state, double sigma) {
+  return -sigma * std::log(1.0 - uniformRandom(state));
+}
+
 /// Mean of f over [a, b] by 5-point Gauss-Legendre: exact for polynomials of degree 9; for a
 /// rate of frequency omega the error is about (omega (b - a))^10 / 10^9, below 1e-20 on the
 /// tests' scenes (frequencies below 10 rad/s, b - a of a few ms).

@@ -102,7 +102,7 @@ std::vector<StreamSpec> streamSpecs(const std::string& motion) {
   add("point_5pct_lost", 120.0).drop = 0.05;
   add("jitter_0.05ms", 333.0).jitter = 5e-5;
   StreamSpec& filtered = add("jitter_0.05ms_sensor_clock", 333.0);
-  filtered.jitter = 5e-5;
+  filtered.latency = 5e-5;  // receipt stamps: a latency >= 0 (the causal filter's model)
   filtered.stamp_filter = StampFilter::SensorClock;
   add("jitter_0.6ms", 600.0).jitter = 6e-4;
   StreamSpec& jittered_means = add("means_jitter_0.2ms", 250.0);

@@ -7,6 +7,11 @@
 // fits the line t(n) by least squares with exponential forgetting, and returns the line at
 // the sample's index: the receipt jitter is averaged over the filter's memory.
 //
+// Causal: a receipt stamp is the sample's time plus a latency >= 0, so the line is lowered onto
+// the lower envelope of the receipt stamps (the least latency) and a returned stamp is never
+// later than the receipt stamp it came from (docs/numerics.md §3). The constant part of the
+// latency stays in the stamps: no stamp tells it (`rate_delay` removes a known one).
+//
 // A stamp is returned when its sample arrives, from the line known then; the line keeps
 // improving afterwards. RestampCorrection carries the later, better stamps of the samples
 // already integrated into the orientation, to first order.
@@ -70,7 +75,7 @@ class SensorClockFilter {
   };
 
   enum class Verdict {
-    Modelled,  ///< the stamp joined the fit; the line's value at its index is returned
+    Modelled,  ///< the stamp joined the fit; the lowered line's value at its index is returned
     /// An outlier: the line's value at the next index is returned, or the stamp itself when
     /// earlier (a rate gone up); the fit unchanged.
     Rejected,
@@ -92,9 +97,11 @@ class SensorClockFilter {
   SensorClockFilter() : SensorClockFilter(Options{}) {}
   explicit SensorClockFilter(const Options& options);
 
-  /// Feeds a receipt stamp (finite, seconds) and returns the sensor-clock stamp. The returned
-  /// stamps increase strictly, by kMinStampStep at least, until a restart (a jump restarts at the
-  /// stamp as it came; every other restart no earlier than kMinStampStep after the last).
+  /// Feeds a receipt stamp (finite, seconds) and returns the sensor-clock stamp, never later
+  /// than t_receipt. The returned stamps increase strictly, by kMinStampStep at least, until a
+  /// restart (a jump restarts at the stamp as it came; every other restart no earlier than
+  /// kMinStampStep after the last); where the receipt stamps themselves advance by less (repeated
+  /// stamps before a period is known), that wins and the stamp follows the last by kMinStampStep.
   Result filter(double t_receipt);
 
   /// Forgets the model: the next stamp starts it again.
@@ -102,11 +109,14 @@ class SensorClockFilter {
 
   /// Sensor period (s), 0 before two stamps.
   double period() const { return slope_; }
-  /// Stamp of the model's sample index 0 (the first since the last start): t(n) = offset + period
-  /// n.
-  double offset() const { return base_t_ + (origin_t_ - slope_ * static_cast<double>(index_)); }
-  /// The line's stamp of sample `index` (since the last start) minus t: how far the model now
-  /// puts that sample from the stamp t it was given, free of the round-off of epoch-sized stamps.
+  /// Stamp of the model's sample index 0 (the first since the last start), on the line lowered
+  /// onto the receipt stamps' lower envelope: t(n) = offset + period n.
+  double offset() const {
+    return base_t_ + (origin_t_ + envelope_ - slope_ * static_cast<double>(index_));
+  }
+  /// The (lowered) line's stamp of sample `index` (since the last start) minus t: how far the
+  /// model now puts that sample from the stamp t it was given, free of the round-off of
+  /// epoch-sized stamps.
   double lineMinus(std::uint64_t index, double t) const;
   /// Standard deviation of the stamps about the line (s).
   double jitter() const;
@@ -131,7 +141,8 @@ class SensorClockFilter {
   std::uint64_t fallbacks() const { return fallbacks_; }
   /// Samples whose returned stamp differs from their receipt stamp, since construction.
   std::uint64_t moved() const { return moved_; }
-  /// The most a returned stamp was later than its receipt stamp (s, >= 0), and earlier.
+  /// The most a returned stamp was later than its receipt stamp (s, >= 0: 0 unless receipt
+  /// stamps came less than kMinStampStep apart), and earlier.
   double largestLater() const { return largest_later_; }
   double largestEarlier() const { return largest_earlier_; }
 
@@ -145,8 +156,11 @@ class SensorClockFilter {
   static double after(double t);
   void shiftOrigin(std::uint64_t steps, double dt);
   void moveNewest(std::uint64_t steps);
-  Result repeated();
-  double lineAt(std::uint64_t index) const;
+  Result repeated(double t_receipt);
+  double lineRelative(std::uint64_t index) const;
+  double lowerLine(std::uint64_t index) const;
+  void followEnvelope(double t_receipt, bool new_draw);
+  double causal(double t_line, double t_receipt) const;
   void add(double y);
   void refit();
   double medianRecentInterval() const;
@@ -164,9 +178,13 @@ class SensorClockFilter {
   std::uint64_t index_ = 0;         // the newest point of the fit
   std::uint64_t sample_index_ = 0;  // the sample last returned (behind index_ inside a batch)
   double newest_y_ = 0.0;           // y of the newest point, at x = 0 until the origin moves on
-  std::uint64_t samples_ = 0;       // since the last start
-  std::uint64_t draws_ = 0;         // latency draws (batches) since the last start
-  bool warm_ = false;               // stamps can be rejected
+  double envelope_ = 0.0;           // the lower envelope of receipt stamp - line (s, <= 0)
+  double block_least_ = 0.0;        // its least over the current block of draws (<= 0)
+  double previous_block_least_ = 0.0;
+  std::uint64_t block_draws_ = 1;
+  std::uint64_t samples_ = 0;  // since the last start
+  std::uint64_t draws_ = 0;    // latency draws (batches) since the last start
+  bool warm_ = false;          // stamps can be rejected
   int rejected_in_a_row_ = 0;
   int skipped_in_a_row_ = 0;
   std::uint64_t rejected_ = 0, missed_ = 0, restarts_ = 0;

@@ -16,6 +16,11 @@ namespace {
 constexpr double kJitterFloor = 1e-3;
 // More lost periods than this between two stamps is no longer a drop but a restart.
 constexpr double kMaxSkip = 1e6;
+// The lower envelope is the least receipt stamp less the line over the current block of this
+// many latency draws and the block before: it forgets what is older than two blocks (a line
+// still learning, a spread gone), and the least of 100 to 200 draws lies within a hundredth of
+// the spread of its floor when the latency's density there is of the order of 1 / spread.
+constexpr std::uint64_t kEnvelopeDraws = 100;
 
 }  // namespace
 
@@ -64,8 +69,7 @@ double SensorClockFilter::after(double t) {
 
 double SensorClockFilter::lineMinus(std::uint64_t index, double t) const {
   // base_t_ - t is exact for nearby stamps; the line's part is relative to base_t_.
-  return (base_t_ - t) +
-         (origin_t_ + slope_ * (static_cast<double>(index) - static_cast<double>(index_)));
+  return (base_t_ - t) + (lineRelative(index) + envelope_);
 }
 
 namespace {
@@ -167,7 +171,7 @@ SensorClockFilter::Result SensorClockFilter::model(double t_receipt) {
     start(t_receipt);
     return {t_receipt, Verdict::Restarted, 0};
   }
-  if (repeat) return repeated();
+  if (repeat) return repeated(t_receipt);
   // Since the line's stamp at the newest index; t_receipt - base_t_ is exact, and origin_t_ is
   // kept relative to base_t_ so that epoch-sized stamps lose nothing step after step.
   const double dt = (t_receipt - base_t_) - origin_t_;
@@ -218,7 +222,7 @@ SensorClockFilter::Result SensorClockFilter::model(double t_receipt) {
     // restart that follows would then have to go back.
     shiftOrigin(1, slope_);
     sample_index_ = index_;
-    last_output_ = std::max(std::min(base_t_ + origin_t_, t_receipt), after(last_output_));
+    last_output_ = causal(lowerLine(index_), t_receipt);
     return {last_output_, Verdict::Rejected, 0};
   }
   if (boundary) rejected_in_a_row_ = 0;
@@ -237,18 +241,17 @@ SensorClockFilter::Result SensorClockFilter::model(double t_receipt) {
   add(r);
   refit();
   sample_index_ = own;
+  followEnvelope(t_receipt, boundary);
   // The line through noisy stamps can move back by a hair while it learns; stamps must not.
-  const double out =
-      std::max({lineAt(sample_index_), last_output_ + 0.5 * slope_, after(last_output_)});
-  last_output_ = out;
-  return {out, Verdict::Modelled, lost};
+  last_output_ = causal(std::max(lowerLine(sample_index_), last_output_ + 0.5 * slope_), t_receipt);
+  return {last_output_, Verdict::Modelled, lost};
 }
 
 // A repeated stamp: the next sample of the same batch, at the next index. The batch's stamp
 // belongs to its newest sample, so when the batch turns out longer than the periods its stamp
 // counted, its point in the fit moves on with the samples. The line's value at the index is
 // returned: each sample its own stamp.
-SensorClockFilter::Result SensorClockFilter::repeated() {
+SensorClockFilter::Result SensorClockFilter::repeated(double t_receipt) {
   if (run_ == 2 && !boundary_as_batch_) {
     // The batch's first stamp was taken for a single sample after boundary_missed_ lost ones:
     // it was the oldest of this batch. Its stamp stays (already returned); the count is undone.
@@ -266,13 +269,48 @@ SensorClockFilter::Result SensorClockFilter::repeated() {
       moveNewest(sample_index_ - index_);
     }
   }
-  last_output_ = std::max(lineAt(sample_index_), after(last_output_));
+  followEnvelope(t_receipt, false);
+  last_output_ = causal(lowerLine(sample_index_), t_receipt);
   return {last_output_, Verdict::Modelled, 0};
 }
 
-double SensorClockFilter::lineAt(std::uint64_t index) const {
-  return base_t_ +
-         (origin_t_ + slope_ * (static_cast<double>(index) - static_cast<double>(index_)));
+double SensorClockFilter::lineRelative(std::uint64_t index) const {
+  return origin_t_ + slope_ * (static_cast<double>(index) - static_cast<double>(index_));
+}
+
+double SensorClockFilter::lowerLine(std::uint64_t index) const {
+  return base_t_ + (lineRelative(index) + envelope_);
+}
+
+// A receipt stamp is the sample's time plus a latency, and a latency is never negative: the
+// sample was taken no later than it was received. Least squares put the line through the middle
+// of the receipt stamps (the sample's time plus the mean latency), so the line is lowered onto
+// their lower envelope, the least receipt stamp less the line (the sample's time plus the least
+// latency). The least of n draws of a latency whose density at its floor is f0 lies 1 / (n f0)
+// above the floor, where the mean of n draws is off by sigma / sqrt(n): the floor is the better
+// known of the two. The constant part of the latency stays in the stamps (no stamp tells it;
+// `rate_delay` removes a known one). The envelope is the least over two blocks of
+// kEnvelopeDraws draws (the current and the one before, so that it forgets), never above the
+// line; a stamp below it lowers it at once. It is learned once warm: before, the line is still
+// a guess, and the receipt stamps bound it alone.
+void SensorClockFilter::followEnvelope(double t_receipt, bool new_draw) {
+  if (!warm_) return;
+  if (new_draw && ++block_draws_ > kEnvelopeDraws) {
+    previous_block_least_ = block_least_;
+    block_least_ = 0.0;
+    block_draws_ = 1;
+  }
+  block_least_ = std::min(block_least_, (t_receipt - base_t_) - lineRelative(sample_index_));
+  envelope_ = std::min(block_least_, previous_block_least_);
+}
+
+// The one rule for every stamp taken from the line: no later than the receipt stamp it came
+// from (the envelope is an estimate; a stamp below it is the better one), and after the stamp
+// returned before by kMinStampStep (no stamp published twice). The second wins only where the
+// receipt stamps themselves do not advance by kMinStampStep (repeated stamps before a period is
+// known, bursts a nanosecond apart).
+double SensorClockFilter::causal(double t_line, double t_receipt) const {
+  return std::max(std::min(t_line, t_receipt), after(last_output_));
 }
 
 // A restart where the stamps went on (a new rate): the new line starts no earlier than the last
@@ -296,6 +334,8 @@ void SensorClockFilter::start(double t_receipt) {
   index_ = 0;
   sample_index_ = 0;
   newest_y_ = 0.0;
+  envelope_ = block_least_ = previous_block_least_ = 0.0;
+  block_draws_ = 1;
   batch_rejected_ = false;
   boundary_as_batch_ = repeated_;
   boundary_missed_ = 0;
