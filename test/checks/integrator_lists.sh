@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# The lists of integrators kept by hand outside the core name the methods of its table
+# The lists of integrators outside the core name the methods of its table
 # (src/core/numerics/integrator.cpp), in the table's order: the reconfigure enum
-# (cfg/AttitudePropagator.cfg), evaluate_bag_core's --integrators default in its --help (printed
+# (cfg/AttitudePropagator.cfg generates it from the table's source), evaluate_bag_core's --integrators default in its --help (printed
 # from its option table, from the default list, which reads the table), evaluate_bag's
 # colours (nodes/evaluate_bag, those of the benchmark charts: bench/plot.py's PALETTE in the
 # sweep's order, kinematic methods first), the fuzz targets' integrator codes (fuzz_support.h, in
@@ -66,10 +66,17 @@ def one_match(path, pattern):
 if not names or names[0] != "auto" or not kinematic or not dynamic:
     errors.append("integrator_table printed no usable table: %r" % rows)
 
-# The reconfigure enum: every name, auto first.
-cfg = assigned("cfg/AttitudePropagator.cfg", "integrators")
-if cfg is not None:
-    expect("cfg/AttitudePropagator.cfg integrators", [n for n, _ in cfg], names)
+# The reconfigure enum, as the build generated it from the table's source: every name, auto
+# first (the generated module of the built workspace).
+from attitude_propagator.cfg import AttitudePropagatorConfig  # noqa: E402
+
+enum = [p for p in AttitudePropagatorConfig.config_description["parameters"]
+        if p["name"] == "integrator"]
+if len(enum) != 1:
+    errors.append("AttitudePropagatorConfig: %d integrator parameters, expected 1" % len(enum))
+else:
+    expect("the reconfigure enum (cfg/AttitudePropagator.cfg, generated)",
+           [c["name"] for c in ast.literal_eval(enum[0]["edit_method"])["enum"]], names)
 
 # evaluate_bag_core: the default reads the table; its help text spells it out.
 core = "src/tools/evaluate_bag_core.cpp"

@@ -23,7 +23,8 @@ namespace attitude_propagator {
 
 enum class Model { Auto, Kinematic, Dynamic };
 
-/// In the table's order (integrator.cpp checks it).
+/// In the table's order (integrator.cpp checks it). A new method is appended at the end, never
+/// inserted: a row's index is also its fuzz targets' code and its place in the reconfigure enum.
 enum class Integrator {
   Auto,
   Euler,
@@ -85,6 +86,8 @@ struct IntegratorInfo {
   Integrator id = Integrator::Auto;
   /// The parameter value: lower case, digits and '_'.
   const char* name = "";
+  /// One line for the reconfigure enum's choice (cfg/AttitudePropagator.cfg reads it).
+  const char* summary = "";
   /// Declared orders of convergence on smooth input; 0 where the method has no fixed order
   /// (adaptive, exact) or does not drive the model. Tests measure them.
   int kinematic_order = 0;  ///< from instantaneous rate samples
