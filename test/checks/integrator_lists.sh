@@ -91,23 +91,28 @@ if len(help_lists) != 1:
 else:
     expect("evaluate_bag_core --help --integrators", help_lists[0].split(","), kinematic)
 
-# The benchmark charts give each method the next PALETTE entry in the order it first appears in
-# the sweep (kinematic methods, then the dynamic ones not yet seen), then one more to the dynamic
-# use of each method of both models (rk4); evaluate_bag uses the same colours for the kinematic
-# methods.
-palette = assigned("bench/plot.py", "PALETTE")
-charted = (kinematic + [m for m in dynamic if m not in kinematic] +
-           ["dynamic " + m for m in dynamic if m in kinematic])
-if palette is not None:
-    colours = [c for c, _ in palette]
-    if len(palette) < len(charted) or len(set(colours[:len(charted)])) < len(charted):
-        errors.append("bench/plot.py PALETTE: %d distinct colours for the %d methods %s"
-                      % (len(set(colours)), len(charted), charted))
-    evaluate_colours = assigned("nodes/evaluate_bag", "COLOURS")
+# The benchmark charts give each method the next style of its kind (bench/plot.py:
+# KINEMATIC_STYLES for the kinematic methods, DYNAMIC_STYLES for the dynamic ones not kinematic,
+# BOTH_MODELS_STYLES for the dynamic use of each method of both models, rk4) in the order it first
+# appears in the sweep, the table's; evaluate_bag colours the kinematic methods, in the table's
+# order, with the same colours (KINEMATIC_COLOURS). Every method needs a style of its own.
+styles = {kind: assigned("bench/plot.py", kind)
+          for kind in ("KINEMATIC_STYLES", "DYNAMIC_STYLES", "BOTH_MODELS_STYLES")}
+if None not in styles.values():
+    wanted = {"KINEMATIC_STYLES": kinematic,
+              "DYNAMIC_STYLES": [m for m in dynamic if m not in kinematic],
+              "BOTH_MODELS_STYLES": ["dynamic " + m for m in dynamic if m in kinematic]}
+    for kind, methods in wanted.items():
+        if len(styles[kind]) < len(methods):
+            errors.append("bench/plot.py %s: %d styles for the %d methods %s (add one)"
+                          % (kind, len(styles[kind]), len(methods), methods))
+    every = [c for kind in styles for c, _ in styles[kind]]
+    if len(set(every)) != len(every):
+        errors.append("bench/plot.py: a colour appears twice in the styles: %s" % every)
+    evaluate_colours = assigned("nodes/evaluate_bag", "KINEMATIC_COLOURS")
     if evaluate_colours is not None:
-        expect("nodes/evaluate_bag COLOURS", evaluate_colours,
-               {m: colours[i % len(colours)] for i, m in enumerate(kinematic)})
-        expect("nodes/evaluate_bag COLOURS order", list(evaluate_colours), kinematic)
+        expect("nodes/evaluate_bag KINEMATIC_COLOURS", evaluate_colours,
+               [c for c, _ in styles["KINEMATIC_STYLES"]], "bench/plot.py's KINEMATIC_STYLES")
 
 # The fuzz seeds: the names the targets index, the methods seeded, and the corpus they write.
 sys.path.insert(0, "test/fuzz")
