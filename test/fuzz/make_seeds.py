@@ -12,7 +12,8 @@ HERE = pathlib.Path(__file__).resolve().parent
 # The integrators by code (fuzz_support.h's integratorCodes(): the rows of the core's table, in
 # its order, a new method appended at the end): the targets pick a name by its index here.
 # KINEMATIC and DYNAMIC: the methods that drive each model, each seeded once. All three are read
-# from the table's source, a row being the text from `IntegratorInfo m;` to `return m;`;
+# from the table's source, a row being the text from its `IntegratorInfo m;` line to its
+# `return m;` line;
 # test/checks/integrator_lists.sh checks them against the built table, and the corpus against
 # seeds().
 TABLE = HERE.parents[1] / "src" / "core" / "numerics" / "integrator.cpp"
@@ -21,9 +22,9 @@ TABLE = HERE.parents[1] / "src" / "core" / "numerics" / "integrator.cpp"
 def table_rows():
     """(name, kinematic, dynamic) per row of the integrator table, in its order."""
     rows = []
-    for text in TABLE.read_text().split("IntegratorInfo m;")[1:]:
-        text = text[:text.index("return m;")]
-        name = re.findall(r'^ *m\.name = "([a-z0-9_]+)";$', text, re.M)
+    for text in re.split(r"^ *IntegratorInfo m;$", TABLE.read_text(), flags=re.M)[1:]:
+        text = re.split(r"^ *return m;$", text, flags=re.M)[0]
+        name = re.findall(r'^ *m\.name =\s*"([a-z0-9_]+)";$', text, re.M)
         if len(name) != 1:
             raise ValueError("%s: a row without one m.name line: %r" % (TABLE, text))
         rows.append((name[0], "m.kinematic_step = " in text, "m.dynamic_step = " in text))

@@ -31,10 +31,11 @@ using keeps::kUnitNorm;
 
 // One row per method, in the enumeration's order, each built field by field: a field not named
 // keeps IntegratorInfo's default (integrator.h). Adding an integrator means its step function,
-// its declaration above and one row appended at the end here (docs/design.md §4.2). The rows'
-// `m.name = "..."` and `m.summary = "..."` lines are also read as text, by
-// cfg/AttitudePropagator.cfg (the reconfigure enum) and test/fuzz/make_seeds.py: one of each
-// per row, each on one line.
+// its declaration above and one row appended at the end here (docs/design.md §4.2). The rows
+// are also read as text, by cfg/AttitudePropagator.cfg (the reconfigure enum: name and summary)
+// and test/fuzz/make_seeds.py (name and step functions): a row runs from its line
+// `IntegratorInfo m;` to its line `return m;`, with one `m.name = "...";` and one
+// `m.summary = "...";` statement (a literal string each, no concatenation).
 constexpr IntegratorInfo kIntegrators[] = {
     [] {
       IntegratorInfo m;
