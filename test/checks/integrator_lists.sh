@@ -1,14 +1,15 @@
 #!/usr/bin/env bash
-# The lists of integrators outside the core name the methods of its table
-# (src/core/numerics/integrator.cpp), in the table's order: the reconfigure enum
-# (cfg/AttitudePropagator.cfg generates it from the table's source), evaluate_bag_core's --integrators default in its --help (printed
-# from its option table, from the default list, which reads the table), evaluate_bag's
-# colours (nodes/evaluate_bag, those of the benchmark charts: bench/plot.py's PALETTE in the
-# sweep's order, kinematic methods first), the fuzz targets' integrator codes (fuzz_support.h, in
-# the order of their codes, not the table's) and seeds (test/fuzz/make_seeds.py, its corpus
-# and fuzz_parameters.cpp's refused names); bench/bag_throughput.sh's loop and
-# docs/bag_tools.md's sentence read the table instead of naming the methods. The table comes from the core's API through the integrator_table
-# program, so this needs the built workspace (scripts/test.sh builds first).
+# What names the integrators outside the core agrees with its table
+# (src/core/numerics/integrator.cpp), in the table's order. Read from the table's source: the
+# reconfigure enum (cfg/AttitudePropagator.cfg generates it; compared as the build generated it)
+# and the fuzz seeds (test/fuzz/make_seeds.py's NAMES, KINEMATIC and DYNAMIC, its corpus, and
+# fuzz_parameters.cpp's refused names after NAMES). Read through the core: evaluate_bag_core's
+# --integrators default in its --help and the fuzz targets' codes (fuzz_support.h). Read from
+# that --help: bench/bag_throughput.sh's loop and evaluate_bag's colours. Lists kept by hand:
+# the chart styles (bench/plot.py's KINEMATIC_STYLES, DYNAMIC_STYLES, BOTH_MODELS_STYLES: one
+# free for every method) and evaluate_bag's KINEMATIC_COLOURS (plot.py's kinematic colours).
+# docs/bag_tools.md points at the table. The table comes from the core's API through the
+# integrator_table program, so this needs the built workspace (scripts/test.sh builds first).
 source "$(dirname "${BASH_SOURCE[0]}")/../../scripts/common.sh"
 source_ros
 # Under catkin's run_tests (test/checks/junit.py) the workspace's environment is already set.
