@@ -38,6 +38,7 @@ enum class Integrator {
   Splitting4,
   Dopri5,
   Exact,
+  EulerMid,
 };
 
 class RateWindow;        // kinematic_step.h
