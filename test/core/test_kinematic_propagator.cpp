@@ -44,10 +44,7 @@ class KinematicPolicy : public ::testing::TestWithParam<ap::Integrator> {
     const ap::Integrator method = GetParam();
     if (ap::integratorInfo(method).keeps & ap::keeps::kConstantRate) return h;
     const double z = 0.5 * h;
-    // euler_mid: euler's step, on a constant rate.
-    if (method == ap::Integrator::Euler || method == ap::Integrator::EulerMid) {
-      return 2.0 * std::atan(z);
-    }
+    if (method == ap::Integrator::Euler) return 2.0 * std::atan(z);
     if (method == ap::Integrator::Rk4) {
       return 2.0 * std::atan2(z - z * z * z / 6.0, 1.0 - z * z / 2.0 + z * z * z * z / 24.0);
     }
@@ -215,7 +212,6 @@ const DocumentedIntegrator kDocumentedIntegrators[] = {
     {ap::Integrator::Splitting4, "splitting4", false, true},
     {ap::Integrator::Dopri5, "dopri5", false, true},
     {ap::Integrator::Exact, "exact", false, true},
-    {ap::Integrator::EulerMid, "euler_mid", true, false},
 };
 
 }  // namespace
@@ -232,11 +228,11 @@ TEST(IntegratorNames, MatchTheDocumentedNamesBothWays) {
     EXPECT_EQ(ap::supportsDynamic(entry.id), entry.dynamic);
     documented.emplace_back(entry.name);
   }
-  // EulerMid is the last enumerator: one documented name per enumerator, and no more in the table.
-  EXPECT_EQ(static_cast<std::size_t>(ap::Integrator::EulerMid) + 1, documented.size());
+  // Exact is the last enumerator: one documented name per enumerator, and no more in the table.
+  EXPECT_EQ(static_cast<std::size_t>(ap::Integrator::Exact) + 1, documented.size());
   EXPECT_EQ(ap::integratorNames(), documented);
   EXPECT_EQ(ap::integratorNames(ap::integratorsFor(ap::Model::Kinematic)),
-            (std::vector<std::string>{"euler", "rk4", "exp", "exp2", "cf4", "euler_mid"}));
+            (std::vector<std::string>{"euler", "rk4", "exp", "exp2", "cf4"}));
   EXPECT_EQ(ap::integratorNames(ap::integratorsFor(ap::Model::Dynamic)),
             (std::vector<std::string>{"rk4", "implicit_midpoint", "splitting", "splitting4",
                                       "dopri5", "exact"}));

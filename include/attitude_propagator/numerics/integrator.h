@@ -38,7 +38,6 @@ enum class Integrator {
   Splitting4,
   Dopri5,
   Exact,
-  EulerMid,
 };
 
 class RateWindow;        // kinematic_step.h

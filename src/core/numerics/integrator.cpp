@@ -20,8 +20,6 @@ Eigen::Quaterniond kinematicExp2(const Eigen::Quaterniond&, const RateWindow&, s
                                  RateSamples);
 Eigen::Quaterniond kinematicCf4(const Eigen::Quaterniond&, const RateWindow&, std::size_t,
                                 RateSamples);
-Eigen::Quaterniond kinematicEulerMid(const Eigen::Quaterniond&, const RateWindow&, std::size_t,
-                                     RateSamples);
 
 namespace {
 
@@ -164,17 +162,6 @@ constexpr IntegratorInfo kIntegrators[] = {
       m.dynamic_step = &DynamicStepper::exact;  // the solution: no declared order
       m.keeps = kUnitNorm | kEnergy | kMomentum | kExactFlow;
       m.auto_for = auto_for::kTorqueFree;
-      return m;
-    }(),
-    [] {
-      IntegratorInfo m;
-      m.id = Integrator::EulerMid;
-      m.name = "euler_mid";
-      m.summary = "kinematic, order 2, euler on the mid-interval rate";
-      m.kinematic_step = &kinematicEulerMid;
-      m.kinematic_order = 2;
-      m.averaged_order = 2;
-      m.samples = 2;
       return m;
     }(),
 };

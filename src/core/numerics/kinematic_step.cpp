@@ -300,13 +300,4 @@ Eigen::Quaterniond kinematicCf4(const Eigen::Quaterniond& q_WB, const RateWindow
   return cf4Update(q_WB, window, i, intervalLength(window, i), kind);
 }
 
-/// euler_mid: q + (h/2) q (x) (0, (w_i + w_{i+1})/2); averaged: as euler.
-Eigen::Quaterniond kinematicEulerMid(const Eigen::Quaterniond& q_WB, const RateWindow& window,
-                                     std::size_t i, RateSamples kind) {
-  const Eigen::Vector3d w = kind == RateSamples::IntervalAverage
-                                ? Eigen::Vector3d(window[i + 1].w_B)
-                                : Eigen::Vector3d(0.5 * (window[i].w_B + window[i + 1].w_B));
-  return eulerUpdate(q_WB, w, intervalLength(window, i));
-}
-
 }  // namespace attitude_propagator
