@@ -9,7 +9,7 @@
 # one pass; each run three times, the fastest kept (the machine may be shared). Prints per run
 # the wall time, the CPU time (user + system), the multiple of real time, the ratio to the I/O
 # floor and the peak resident memory (GNU time), and evaluate_bag_core's time against the sum of
-# the five propagate_bag runs. Bag output is uncompressed (the default); cf4 is also run with
+# the propagate_bag runs, one per kinematic integrator. Bag output is uncompressed (the default); cf4 is also run with
 # --compression lz4. The same with --csv output when CSV=1.
 #
 # Usage: bash bench/bag_throughput.sh [SECONDS_OF_DATA] [WORK_DIR]   (from the devel space built
@@ -24,6 +24,10 @@ WORK="${2:-/tmp/attitude_propagator_bag_bench}"
 BIN="${WORKSPACE}/devel/lib/attitude_propagator"
 mkdir -p "$WORK"
 BAG="$WORK/coning_${SECONDS_OF_DATA}s.bag"
+# The kinematic integrators, in the table's order: evaluate_bag_core's --integrators default.
+IFS=, read -r -a INTEGRATORS < <("$BIN/evaluate_bag_core" --help |
+  sed -n 's/^ *--integrators LIST  *comma-separated (default \([a-z0-9_,]*\))$/\1/p')
+[ "${#INTEGRATORS[@]}" -gt 0 ] || { echo "no integrators in evaluate_bag_core --help"; exit 1; }
 
 if [ ! -f "$BAG" ]; then
   echo "writing $BAG ..."
@@ -92,7 +96,7 @@ run_propagate() {  # output option (-o FILE.bag or --csv FILE.csv)
     --no-progress --io-floor)
   report "I/O floor" "$floor" "$rss" "$floor" "$floor_cpu" "$floor_cpu"
   SUM=0
-  for integrator in euler rk4 exp exp2 cf4; do
+  for integrator in "${INTEGRATORS[@]}"; do
     read -r wall rss cpu < <(measure "$BIN/propagate_bag" "$BAG" "$out_opt" "$out_file" \
       --no-progress --set integrator="$integrator")
     report "$integrator" "$wall" "$rss" "$floor" "$cpu" "$floor_cpu"
@@ -111,10 +115,10 @@ run_propagate() {  # output option (-o FILE.bag or --csv FILE.csv)
 
 run_propagate -o "$WORK/out.bag"
 
-echo "evaluate_bag_core (5 integrators x 2 rate_samples readings, one pass):"
+echo "evaluate_bag_core (${#INTEGRATORS[@]} integrators x 2 rate_samples readings, one pass):"
 read -r wall rss _ < <(measure "$BIN/evaluate_bag_core" "$BAG" --truth /truth --csv "$WORK/eval" --no-progress)
-awk -v w="$wall" -v m="$rss" -v sum="$SUM" \
-  'BEGIN { printf "  %-22s %8.3f s  %5.2fx the sum of the five propagate_bag runs (%.3f s)  %6.1f MB RSS\n", "all methods", w, w / sum, sum, m / 1024 }'
+awk -v w="$wall" -v m="$rss" -v sum="$SUM" -v n="${#INTEGRATORS[@]}" \
+  'BEGIN { printf "  %-22s %8.3f s  %5.2fx the sum of the %d propagate_bag runs (%.3f s)  %6.1f MB RSS\n", "all methods", w, w / sum, n, sum, m / 1024 }'
 "$BIN/evaluate_bag_core" "$BAG" --truth /truth --csv "$WORK/eval" --no-progress
 
 if [ "${CSV:-0}" = 1 ]; then run_propagate --csv "$WORK/out.csv"; fi

@@ -32,16 +32,20 @@ SCENES = KINEMATIC_SCENES + DYNAMIC_SCENES
 TOLERANCES = [1e-6, 1e-9, 1e-12]
 FLOOR = 1e-16  # zero errors are drawn here on log axes
 
-# One colour and marker per method, the same in every chart: the methods take these in the
-# order they first appear in the sweep (the core's table order), so a new method gets the next
-# free style without an edit here (test/checks/integrator_lists.sh checks that one is free). A
-# method of both models (rk4: order 2 from rate samples in the kinematic model, the classical
-# order 4 in the dynamic one) is two methods to a reader: its dynamic use takes the next free
-# style after all methods, and the charts and the text name it per model.
-PALETTE = [("tab:red", "v"), ("tab:blue", "o"), ("tab:orange", "s"), ("tab:olive", "D"),
-           ("tab:green", "^"), ("tab:purple", "s"), ("tab:brown", "D"), ("tab:pink", "^"),
-           ("black", "*"), ("tab:cyan", "P"), ("darkgoldenrod", "X"), ("tab:gray", "p"),
-           ("navy", "h"), ("lime", "<"), ("teal", ">")]
+# One colour and marker per method, the same in every chart. Each kind of method takes the next
+# free style of its own list in the order the methods first appear in the sweep (the core's table
+# order): kinematic methods from KINEMATIC_STYLES, the dynamic ones from DYNAMIC_STYLES, so a new
+# method gets the next free style of its kind without an edit here and no other method's style
+# moves (test/checks/integrator_lists.sh checks that one is free, and that evaluate_bag's
+# kinematic colours are these). A method of both models (rk4: order 2 from rate samples in the
+# kinematic model, the classical order 4 in the dynamic one) is two methods to a reader: its
+# dynamic use takes the next of BOTH_MODELS_STYLES, and the charts and the text name it per
+# model.
+KINEMATIC_STYLES = [("tab:red", "v"), ("tab:blue", "o"), ("tab:orange", "s"), ("tab:olive", "D"),
+                    ("tab:green", "^"), ("tab:gray", "p"), ("navy", "h")]
+DYNAMIC_STYLES = [("tab:purple", "s"), ("tab:brown", "D"), ("tab:pink", "^"), ("black", "*"),
+                  ("tab:cyan", "P"), ("lime", "<"), ("teal", ">")]
+BOTH_MODELS_STYLES = [("darkgoldenrod", "X")]
 STYLE = {}
 BOTH_MODELS = set()  # methods the sweep runs in the kinematic and in the dynamic model
 
@@ -97,7 +101,10 @@ def num(row, key):
 def style(method, model=None):
     key = name(method, model)
     if key not in STYLE:
-        STYLE[key] = PALETTE[len(STYLE) % len(PALETTE)]
+        styles = (KINEMATIC_STYLES if model == "kinematic" else
+                  BOTH_MODELS_STYLES if method in BOTH_MODELS else DYNAMIC_STYLES)
+        taken = sum(1 for s in STYLE.values() if s in styles)
+        STYLE[key] = styles[taken % len(styles)]
     return STYLE[key]
 
 

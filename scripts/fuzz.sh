@@ -80,9 +80,11 @@ finding_summary() {
     "$1" | head -n 6
 }
 
-# The integrator codes (fuzz_support.h's integratorCodes(), in code order).
-mapfile -t codes < <(sed -n '/std::vector<std::string> codes = {/,/};/p' \
-  "$fuzz_dir/fuzz_support.h" | grep -o '"[a-z0-9_]*"' | tr -d '"')
+# The integrator codes (fuzz_support.h's integratorCodes(): the table's rows, in code order), as
+# make_seeds.py reads them from the table's source.
+mapfile -t codes < <(cd "$fuzz_dir" &&
+  /usr/bin/python3 -B -c 'import make_seeds; print("\n".join(make_seeds.NAMES))')
+[ "${#codes[@]}" -gt 0 ] || { echo "fuzz: no integrator codes from make_seeds.py"; exit 2; }
 # The method a regression input's file name starts with (the longest such name), or nothing.
 method_named() {
   local file="$1" best="" code

@@ -1,14 +1,15 @@
 #!/usr/bin/env bash
-# The lists of integrators kept by hand outside the core name the methods of its table
-# (src/core/numerics/integrator.cpp), in the table's order: the reconfigure enum
-# (cfg/AttitudePropagator.cfg), evaluate_bag_core's --integrators default in its --help (printed
-# from its option table, from the default list, which reads the table), evaluate_bag's
-# colours (nodes/evaluate_bag, those of the benchmark charts: bench/plot.py's PALETTE in the
-# sweep's order, kinematic methods first), the fuzz targets' integrator codes (fuzz_support.h, in
-# the order of their codes, not the table's) and seeds (test/fuzz/make_seeds.py, its corpus
-# and fuzz_parameters.cpp's refused names), bench/bag_throughput.sh's loop and
-# docs/bag_tools.md's sentence. The table comes from the core's API through the integrator_table
-# program, so this needs the built workspace (scripts/test.sh builds first).
+# What names the integrators outside the core agrees with its table
+# (src/core/numerics/integrator.cpp), in the table's order. Read from the table's source: the
+# reconfigure enum (cfg/AttitudePropagator.cfg generates it; compared as the build generated it)
+# and the fuzz seeds (test/fuzz/make_seeds.py's NAMES, KINEMATIC and DYNAMIC, its corpus, and
+# fuzz_parameters.cpp's refused names after NAMES). Read through the core: evaluate_bag_core's
+# --integrators default in its --help and the fuzz targets' codes (fuzz_support.h). Read from
+# that --help: bench/bag_throughput.sh's loop and evaluate_bag's colours. Lists kept by hand:
+# the chart styles (bench/plot.py's KINEMATIC_STYLES, DYNAMIC_STYLES, BOTH_MODELS_STYLES: one
+# free for every method) and evaluate_bag's KINEMATIC_COLOURS (plot.py's kinematic colours).
+# docs/bag_tools.md points at the table. The table comes from the core's API through the
+# integrator_table program, so this needs the built workspace (scripts/test.sh builds first).
 source "$(dirname "${BASH_SOURCE[0]}")/../../scripts/common.sh"
 source_ros
 # Under catkin's run_tests (test/checks/junit.py) the workspace's environment is already set.
@@ -66,10 +67,17 @@ def one_match(path, pattern):
 if not names or names[0] != "auto" or not kinematic or not dynamic:
     errors.append("integrator_table printed no usable table: %r" % rows)
 
-# The reconfigure enum: every name, auto first.
-cfg = assigned("cfg/AttitudePropagator.cfg", "integrators")
-if cfg is not None:
-    expect("cfg/AttitudePropagator.cfg integrators", [n for n, _ in cfg], names)
+# The reconfigure enum, as the build generated it from the table's source: every name, auto
+# first (the generated module of the built workspace).
+from attitude_propagator.cfg import AttitudePropagatorConfig  # noqa: E402
+
+enum = [p for p in AttitudePropagatorConfig.config_description["parameters"]
+        if p["name"] == "integrator"]
+if len(enum) != 1:
+    errors.append("AttitudePropagatorConfig: %d integrator parameters, expected 1" % len(enum))
+else:
+    expect("the reconfigure enum (cfg/AttitudePropagator.cfg, generated)",
+           [c["name"] for c in ast.literal_eval(enum[0]["edit_method"])["enum"]], names)
 
 # evaluate_bag_core: the default reads the table; its help text spells it out.
 core = "src/tools/evaluate_bag_core.cpp"
@@ -84,39 +92,39 @@ if len(help_lists) != 1:
 else:
     expect("evaluate_bag_core --help --integrators", help_lists[0].split(","), kinematic)
 
-# The benchmark charts give each method the next PALETTE entry in the order it first appears in
-# the sweep (kinematic methods, then the dynamic ones not yet seen), then one more to the dynamic
-# use of each method of both models (rk4); evaluate_bag uses the same colours for the kinematic
-# methods.
-palette = assigned("bench/plot.py", "PALETTE")
-charted = (kinematic + [m for m in dynamic if m not in kinematic] +
-           ["dynamic " + m for m in dynamic if m in kinematic])
-if palette is not None:
-    colours = [c for c, _ in palette]
-    if len(palette) < len(charted) or len(set(colours[:len(charted)])) < len(charted):
-        errors.append("bench/plot.py PALETTE: %d distinct colours for the %d methods %s"
-                      % (len(set(colours)), len(charted), charted))
-    evaluate_colours = assigned("nodes/evaluate_bag", "COLOURS")
+# The benchmark charts give each method the next style of its kind (bench/plot.py:
+# KINEMATIC_STYLES for the kinematic methods, DYNAMIC_STYLES for the dynamic ones not kinematic,
+# BOTH_MODELS_STYLES for the dynamic use of each method of both models, rk4) in the order it first
+# appears in the sweep, the table's; evaluate_bag colours the kinematic methods, in the table's
+# order, with the same colours (KINEMATIC_COLOURS). Every method needs a style of its own.
+styles = {kind: assigned("bench/plot.py", kind)
+          for kind in ("KINEMATIC_STYLES", "DYNAMIC_STYLES", "BOTH_MODELS_STYLES")}
+if None not in styles.values():
+    wanted = {"KINEMATIC_STYLES": kinematic,
+              "DYNAMIC_STYLES": [m for m in dynamic if m not in kinematic],
+              "BOTH_MODELS_STYLES": ["dynamic " + m for m in dynamic if m in kinematic]}
+    for kind, methods in wanted.items():
+        if len(styles[kind]) < len(methods):
+            errors.append("bench/plot.py %s: %d styles for the %d methods %s (add one)"
+                          % (kind, len(styles[kind]), len(methods), methods))
+    every = [c for kind in styles for c, _ in styles[kind]]
+    if len(set(every)) != len(every):
+        errors.append("bench/plot.py: a colour appears twice in the styles: %s" % every)
+    evaluate_colours = assigned("nodes/evaluate_bag", "KINEMATIC_COLOURS")
     if evaluate_colours is not None:
-        expect("nodes/evaluate_bag COLOURS", evaluate_colours,
-               {m: colours[i % len(colours)] for i, m in enumerate(kinematic)})
-        expect("nodes/evaluate_bag COLOURS order", list(evaluate_colours), kinematic)
+        expect("nodes/evaluate_bag KINEMATIC_COLOURS", evaluate_colours,
+               [c for c, _ in styles["KINEMATIC_STYLES"]], "bench/plot.py's KINEMATIC_STYLES")
 
 # The fuzz seeds: the names the targets index, the methods seeded, and the corpus they write.
 sys.path.insert(0, "test/fuzz")
 import make_seeds  # noqa: E402
 
-# The fuzz targets name a method by its code (fuzz_support.h's integratorCodes(), frozen and
-# appended to): make_seeds.py's NAMES is that list, and it codes every method of the table.
-codes = one_match("test/fuzz/fuzz_support.h",
-                  r"static const std::vector<std::string> codes = \{([^}]*)\}")
-if codes is not None:
-    expect("test/fuzz/make_seeds.py NAMES", make_seeds.NAMES,
-           ast.literal_eval("[" + codes + "]"), "fuzz_support.h's integratorCodes()")
-expect("the methods coded in test/fuzz/make_seeds.py NAMES", sorted(make_seeds.NAMES),
-       sorted(names), "the integrator table")
-expect("test/fuzz/make_seeds.py KINEMATIC", make_seeds.KINEMATIC, kinematic)
-expect("test/fuzz/make_seeds.py DYNAMIC", make_seeds.DYNAMIC, dynamic)
+# The fuzz targets name a method by its code, its row in the table (fuzz_support.h's
+# integratorCodes() is the core's integratorNames()); make_seeds.py reads the same rows from the
+# table's source.
+one_match("test/fuzz/fuzz_support.h",
+          r"static const std::vector<std::string> codes = attitude_propagator::integratorNames\(\);")
+expect("test/fuzz/make_seeds.py NAMES", make_seeds.NAMES, names)
 refused = one_match("test/fuzz/fuzz_parameters.cpp",
                     r"for \(const char\* refused : \{([^}]*)\}\)")
 if refused is not None:
@@ -136,14 +144,12 @@ for target, files in seeds.items():
         errors.append("%s differs from make_seeds.py's seeds (run python3 "
                       "test/fuzz/make_seeds.py): %s" % (folder, " ".join(differ)))
 
-# Benchmark and documentation of the bag tools: every kinematic method.
-loop = one_match("bench/bag_throughput.sh", r"for integrator in ([a-z0-9_ ]+); do")
-if loop is not None:
-    expect("bench/bag_throughput.sh integrators", loop.split(), kinematic)
-sentence = one_match("docs/bag_tools.md", r"\*\*`evaluate_bag`\*\* runs ([a-z0-9_, ]+?),? each")
-if sentence is not None:
-    expect("docs/bag_tools.md evaluate_bag's methods",
-           [n.strip() for n in sentence.replace(" and ", ", ").split(",")], kinematic)
+# Benchmark and documentation of the bag tools: every kinematic method, read from the table
+# (bag_throughput.sh loops over evaluate_bag_core's --integrators default; bag_tools.md points
+# at the table rather than naming the methods).
+one_match("bench/bag_throughput.sh", r'for integrator in "\$\{INTEGRATORS\[@\]\}"; do')
+one_match("bench/bag_throughput.sh", r"evaluate_bag_core\" --help \|")
+one_match("docs/bag_tools.md", r"\*\*`evaluate_bag`\*\* runs every kinematic integrator of the table")
 
 for line in errors:
     print("integrator lists:", line)

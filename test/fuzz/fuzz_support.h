@@ -22,6 +22,8 @@
 
 #include <Eigen/Geometry>
 
+#include "attitude_propagator/numerics/integrator.h"
+
 namespace attitude_propagator_fuzz {
 
 /// Doubles that break numerics: signed zeros, the edges of the double range, squares that
@@ -161,17 +163,15 @@ class ByteReader {
 };
 
 /// The integrators by code: an input names its integrator by one byte, an index into this
-/// list (a byte past its end wraps around). Frozen: a new method is appended at the end, never
-/// inserted, and nothing is reordered or removed, so an input whose byte is below the list's
-/// length means the same method whatever the core's table holds. make_seeds.py's NAMES is this
-/// list and test/checks/integrator_lists.sh checks that it names every method of the table; the
-/// regression inputs named after a method are checked to read that method from such a byte
-/// (scripts/fuzz.sh --regressions, through FUZZ_TRACE's "integrator code" line).
+/// list (a byte past its end wraps around). The code is the method's row in the core's table
+/// (integrator.h): rows are appended, never inserted, reordered or removed, so an input whose
+/// byte is below the list's length means the same method whatever the table holds later.
+/// make_seeds.py's NAMES reads the same rows from the table's source (test/checks/
+/// integrator_lists.sh checks it against the built table); the regression inputs named after a
+/// method are checked to read that method from such a byte (scripts/fuzz.sh --regressions,
+/// through FUZZ_TRACE's "integrator code" line).
 inline const std::vector<std::string>& integratorCodes() {
-  static const std::vector<std::string> codes = {
-      "auto",      "euler",      "rk4",    "exp",   "exp2", "cf4", "implicit_midpoint",
-      "splitting", "splitting4", "dopri5", "exact",
-  };
+  static const std::vector<std::string> codes = attitude_propagator::integratorNames();
   return codes;
 }
 

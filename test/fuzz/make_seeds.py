@@ -5,17 +5,35 @@ and call sequences the node produces instead of from random bytes.
     python3 test/fuzz/make_seeds.py
 The encoders below mirror the decoding in fuzz_*.cpp; keep them in step."""
 import pathlib
+import re
 import struct
 
 HERE = pathlib.Path(__file__).resolve().parent
-# The integrators by code (fuzz_support.h's integratorCodes(): frozen, a new method appended at
-# the end): the targets pick a name by its index here. KINEMATIC and DYNAMIC: the methods that drive each
-# model, each seeded once. test/checks/integrator_lists.sh checks all three against the table,
-# and the corpus against seeds().
-NAMES = ["auto", "euler", "rk4", "exp", "exp2", "cf4", "implicit_midpoint", "splitting",
-         "splitting4", "dopri5", "exact"]
-KINEMATIC = ["euler", "rk4", "exp", "exp2", "cf4"]
-DYNAMIC = ["rk4", "implicit_midpoint", "splitting", "splitting4", "dopri5", "exact"]
+# The integrators by code (fuzz_support.h's integratorCodes(): the rows of the core's table, in
+# its order, a new method appended at the end): the targets pick a name by its index here.
+# KINEMATIC and DYNAMIC: the methods that drive each model, each seeded once. All three are read
+# from the table's source, a row being the text from its `IntegratorInfo m;` line to its
+# `return m;` line;
+# test/checks/integrator_lists.sh checks them against the built table, and the corpus against
+# seeds().
+TABLE = HERE.parents[1] / "src" / "core" / "numerics" / "integrator.cpp"
+
+
+def table_rows():
+    """(name, kinematic, dynamic) per row of the integrator table, in its order."""
+    rows = []
+    for text in re.split(r"^ *IntegratorInfo m;$", TABLE.read_text(), flags=re.M)[1:]:
+        text = re.split(r"^ *return m;$", text, flags=re.M)[0]
+        name = re.findall(r'^ *m\.name =\s*"([a-z0-9_]+)";$', text, re.M)
+        if len(name) != 1:
+            raise ValueError("%s: a row without one m.name line: %r" % (TABLE, text))
+        rows.append((name[0], "m.kinematic_step = " in text, "m.dynamic_step = " in text))
+    return rows
+
+
+NAMES = [name for name, _, _ in table_rows()]
+KINEMATIC = [name for name, kinematic, _ in table_rows() if kinematic]
+DYNAMIC = [name for name, _, dynamic in table_rows() if dynamic]
 SPECIAL = {0.0: 0, 1.0: 2, 0.5: 4, 1e-3: 5, 0.1: 7, 10.0: 8, 1e6: 11, 1e12: 12, 1e154: 14,
            1e200: 16, 1e300: 17, 1e-300: 21, 1.7e9: 24, float("nan"): 31, float("inf"): 33,
            2.0: 35, 3.0: 36, 20.0: 38, 4.0: 39}

@@ -6,10 +6,11 @@
 // (IntegratorInfo below): its name, the models it drives with their declared orders, the rate
 // samples it reads, what it keeps exactly, and its step function. Names, error messages, the
 // parameter documentation, the choice of `auto`, the tests' method lists and order bounds, the
-// benchmarks and evaluate_bag_core's methods all read the table; the lists kept by hand outside C++
-// (the reconfigure enum, the fuzz seeds, evaluate_bag's colours) are checked against it by
-// test/checks/integrator_lists.sh. Adding an integrator: an enumerator below, a step function,
-// a row (docs/design.md §4.2).
+// benchmarks, evaluate_bag_core's methods and the fuzz codes all read the table; outside C++ the
+// reconfigure enum and the fuzz seeds read its source, the bag tools' scripts and charts its
+// methods through evaluate_bag_core (test/checks/integrator_lists.sh checks each against the
+// built table). Adding an integrator: an enumerator below, a step function, its declaration and
+// a row appended in integrator.cpp (docs/design.md §4.2).
 #pragma once
 
 #include <cstddef>
@@ -23,7 +24,8 @@ namespace attitude_propagator {
 
 enum class Model { Auto, Kinematic, Dynamic };
 
-/// In the table's order (integrator.cpp checks it).
+/// In the table's order (integrator.cpp checks it). A new method is appended at the end, never
+/// inserted: a row's index is also its fuzz targets' code and its place in the reconfigure enum.
 enum class Integrator {
   Auto,
   Euler,
@@ -85,6 +87,8 @@ struct IntegratorInfo {
   Integrator id = Integrator::Auto;
   /// The parameter value: lower case, digits and '_'.
   const char* name = "";
+  /// One line for the reconfigure enum's choice (cfg/AttitudePropagator.cfg reads it).
+  const char* summary = "";
   /// Declared orders of convergence on smooth input; 0 where the method has no fixed order
   /// (adaptive, exact) or does not drive the model. Tests measure them.
   int kinematic_order = 0;  ///< from instantaneous rate samples

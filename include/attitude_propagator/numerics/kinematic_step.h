@@ -109,37 +109,7 @@ Eigen::Quaterniond kinematicStep(Integrator method, const Eigen::Quaterniond& q_
                                  const RateWindow& window,
                                  RateSamples kind = RateSamples::Instantaneous);
 
-// The methods' step functions (KinematicStepFunction, integrator.h), h = t_{i+1} - t_i.
-// Instantaneous samples: w_j is the rate at t_j. Interval-averaged samples: w_{i+1} is the mean
-// rate over the interval.
-
-/// euler: q + (h/2) q (x) (0, w_i); averaged: q + (h/2) q (x) (0, w_{i+1}).
-Eigen::Quaterniond kinematicEuler(const Eigen::Quaterniond& q_WB, const RateWindow& window,
-                                  std::size_t i, RateSamples kind);
-
-/// rk4: classical RK4 with the rate at the midpoint from the linear interpolant; averaged: on
-/// the linear rate whose means over the last two intervals are w_i, w_{i+1}.
-Eigen::Quaterniond kinematicRk4(const Eigen::Quaterniond& q_WB, const RateWindow& window,
-                                std::size_t i, RateSamples kind);
-
-/// exp: q (x) Exp(h w_i), the rate of the sample opening the interval held; averaged:
-/// q (x) Exp(h w_{i+1}), exact for a piecewise-constant rate.
-Eigen::Quaterniond kinematicExp(const Eigen::Quaterniond& q_WB, const RateWindow& window,
-                                std::size_t i, RateSamples kind);
-
-/// exp2: q (x) Exp(h (w_i + w_{i+1})/2); averaged: q (x) Exp(h w_{i+1} + h^3/(6 (h + h_p))
-/// w_i x w_{i+1}), the two-sample coning correction (Savage's (1/12) dtheta_{k-1} x dtheta_k
-/// on a regular grid) on uneven stamps, h_p the previous interval; Exp(h w_{i+1}) on the first
-/// interval.
-Eigen::Quaterniond kinematicExp2(const Eigen::Quaterniond& q_WB, const RateWindow& window,
-                                 std::size_t i, RateSamples kind);
-
-/// cf4: q (x) Exp(h(a A + b B)) (x) Exp(h(b A + a B)), A, B the window's interpolant at the
-/// Gauss points. With four samples that is the cubic; with fewer, the
-/// lower-degree interpolant (start-up). A window whose interpolant would amplify noise by more
-/// than kMaxNoiseGain loses its oldest samples (lower degree). Averaged: A, B from
-/// averagedRate() (the delta-angle polynomial), with the same noise guard.
-Eigen::Quaterniond kinematicCf4(const Eigen::Quaterniond& q_WB, const RateWindow& window,
-                                std::size_t i, RateSamples kind);
+// The methods' own step functions are the table's (IntegratorInfo::kinematic_step): defined and
+// documented in kinematic_step.cpp, declared in integrator.cpp above the rows that name them.
 
 }  // namespace attitude_propagator

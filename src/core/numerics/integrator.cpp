@@ -8,6 +8,19 @@
 
 namespace attitude_propagator {
 
+// The kinematic step functions (KinematicStepFunction, defined and documented in
+// kinematic_step.cpp), named only by the rows below.
+Eigen::Quaterniond kinematicEuler(const Eigen::Quaterniond&, const RateWindow&, std::size_t,
+                                  RateSamples);
+Eigen::Quaterniond kinematicRk4(const Eigen::Quaterniond&, const RateWindow&, std::size_t,
+                                RateSamples);
+Eigen::Quaterniond kinematicExp(const Eigen::Quaterniond&, const RateWindow&, std::size_t,
+                                RateSamples);
+Eigen::Quaterniond kinematicExp2(const Eigen::Quaterniond&, const RateWindow&, std::size_t,
+                                 RateSamples);
+Eigen::Quaterniond kinematicCf4(const Eigen::Quaterniond&, const RateWindow&, std::size_t,
+                                RateSamples);
+
 namespace {
 
 using keeps::kConstantRate;
@@ -17,13 +30,19 @@ using keeps::kMomentum;
 using keeps::kUnitNorm;
 
 // One row per method, in the enumeration's order, each built field by field: a field not named
-// keeps IntegratorInfo's default (integrator.h). Adding an integrator means its step function
-// and one row here (docs/design.md §4.2).
+// keeps IntegratorInfo's default (integrator.h). Adding an integrator means its step function,
+// its declaration above and one row appended at the end here (docs/design.md §4.2). The rows
+// are also read as text, by cfg/AttitudePropagator.cfg (the reconfigure enum: name and summary)
+// and test/fuzz/make_seeds.py (name and step functions): a row runs from its line
+// `IntegratorInfo m;` to its line `return m;`, with one `m.name = "...";` and one
+// `m.summary = "...";` statement (a literal string each, no concatenation).
 constexpr IntegratorInfo kIntegrators[] = {
     [] {
       IntegratorInfo m;
       m.id = Integrator::Auto;
       m.name = "auto";
+      m.summary =
+          "cf4 kinematic (exp2 or rk4 where the stream calls for it), exact torque-free, else rk4";
       m.takes_torque = true;
       return m;
     }(),
@@ -31,6 +50,7 @@ constexpr IntegratorInfo kIntegrators[] = {
       IntegratorInfo m;
       m.id = Integrator::Euler;
       m.name = "euler";
+      m.summary = "kinematic, order 1";
       m.kinematic_step = &kinematicEuler;
       m.kinematic_order = 1;
       m.averaged_order = 2;  // the interval mean carries the rotation angle exactly
@@ -41,6 +61,7 @@ constexpr IntegratorInfo kIntegrators[] = {
       IntegratorInfo m;
       m.id = Integrator::Rk4;
       m.name = "rk4";
+      m.summary = "kinematic order 2 from samples, dynamic order 4";
       m.kinematic_step = &kinematicRk4;
       // On sampled rates rk4 sees only the linear interpolant at the midpoint: second order
       // from point samples, third from interval means (the linear rate of two means).
@@ -57,6 +78,7 @@ constexpr IntegratorInfo kIntegrators[] = {
       IntegratorInfo m;
       m.id = Integrator::Exp;
       m.name = "exp";
+      m.summary = "kinematic, exact for a constant rate";
       m.kinematic_step = &kinematicExp;
       m.kinematic_order = 1;
       m.averaged_order = 2;  // the interval mean carries the rotation angle exactly
@@ -68,6 +90,7 @@ constexpr IntegratorInfo kIntegrators[] = {
       IntegratorInfo m;
       m.id = Integrator::Exp2;
       m.name = "exp2";
+      m.summary = "kinematic, order 2";
       m.kinematic_step = &kinematicExp2;
       m.kinematic_order = 2;
       m.averaged_order = 3;  // interval means: the two-sample coning correction
@@ -79,6 +102,7 @@ constexpr IntegratorInfo kIntegrators[] = {
       IntegratorInfo m;
       m.id = Integrator::Cf4;
       m.name = "cf4";
+      m.summary = "kinematic, order 4";
       m.kinematic_step = &kinematicCf4;
       m.kinematic_order = 4;
       m.averaged_order = 4;
@@ -92,6 +116,7 @@ constexpr IntegratorInfo kIntegrators[] = {
       IntegratorInfo m;
       m.id = Integrator::ImplicitMidpoint;
       m.name = "implicit_midpoint";
+      m.summary = "dynamic, order 2, keeps energy and |M|";
       m.dynamic_step = &DynamicStepper::implicitMidpoint;
       m.dynamic_order = 2;
       m.keeps = kUnitNorm | kEnergy | kMomentum;
@@ -102,6 +127,7 @@ constexpr IntegratorInfo kIntegrators[] = {
       IntegratorInfo m;
       m.id = Integrator::Splitting;
       m.name = "splitting";
+      m.summary = "dynamic, order 2, Strang splitting of the free rotor";
       m.dynamic_step = &DynamicStepper::splitting;
       m.dynamic_order = 2;
       m.keeps = kUnitNorm | kMomentum;
@@ -112,6 +138,7 @@ constexpr IntegratorInfo kIntegrators[] = {
       IntegratorInfo m;
       m.id = Integrator::Splitting4;
       m.name = "splitting4";
+      m.summary = "dynamic, order 4, Yoshida composition of splitting";
       m.dynamic_step = &DynamicStepper::splitting4;
       m.dynamic_order = 4;
       m.keeps = kUnitNorm | kMomentum;
@@ -122,6 +149,7 @@ constexpr IntegratorInfo kIntegrators[] = {
       IntegratorInfo m;
       m.id = Integrator::Dopri5;
       m.name = "dopri5";
+      m.summary = "dynamic, adaptive 5(4)";
       m.dynamic_step = &DynamicStepper::dopri5;  // adaptive: no declared order
       m.takes_torque = true;
       return m;
@@ -130,6 +158,7 @@ constexpr IntegratorInfo kIntegrators[] = {
       IntegratorInfo m;
       m.id = Integrator::Exact;
       m.name = "exact";
+      m.summary = "dynamic, torque-free closed form";
       m.dynamic_step = &DynamicStepper::exact;  // the solution: no declared order
       m.keeps = kUnitNorm | kEnergy | kMomentum | kExactFlow;
       m.auto_for = auto_for::kTorqueFree;

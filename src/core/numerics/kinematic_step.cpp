@@ -243,12 +243,20 @@ Eigen::Quaterniond kinematicStep(Integrator method, const Eigen::Quaterniond& q_
   return kinematicStep(method, q_WB, window, window.size() - 2, kind);
 }
 
+// The methods' step functions (KinematicStepFunction, integrator.h), named only by the
+// integrator table (integrator.cpp declares them above its rows). h = t_{i+1} - t_i.
+// Instantaneous samples: w_j is the rate at t_j. Interval-averaged samples: w_{i+1} is the mean
+// rate over the interval.
+
+/// euler: q + (h/2) q (x) (0, w_i); averaged: q + (h/2) q (x) (0, w_{i+1}).
 Eigen::Quaterniond kinematicEuler(const Eigen::Quaterniond& q_WB, const RateWindow& window,
                                   std::size_t i, RateSamples kind) {
   const std::size_t held = kind == RateSamples::IntervalAverage ? i + 1 : i;
   return eulerUpdate(q_WB, window[held].w_B, intervalLength(window, i));
 }
 
+/// rk4: classical RK4 with the rate at the midpoint from the linear interpolant; averaged: on
+/// the linear rate whose means over the last two intervals are w_i, w_{i+1}.
 Eigen::Quaterniond kinematicRk4(const Eigen::Quaterniond& q_WB, const RateWindow& window,
                                 std::size_t i, RateSamples kind) {
   const double h = intervalLength(window, i);
@@ -259,12 +267,18 @@ Eigen::Quaterniond kinematicRk4(const Eigen::Quaterniond& q_WB, const RateWindow
   return rk4Update(q_WB, w1 - half_change, w1 + half_change, h, w1);
 }
 
+/// exp: q (x) Exp(h w_i), the rate of the sample opening the interval held; averaged:
+/// q (x) Exp(h w_{i+1}), exact for a piecewise-constant rate.
 Eigen::Quaterniond kinematicExp(const Eigen::Quaterniond& q_WB, const RateWindow& window,
                                 std::size_t i, RateSamples kind) {
   const std::size_t held = kind == RateSamples::IntervalAverage ? i + 1 : i;
   return q_WB * expMap(intervalLength(window, i) * window[held].w_B);
 }
 
+/// exp2: q (x) Exp(h (w_i + w_{i+1})/2); averaged: q (x) Exp(h w_{i+1} + h^3/(6 (h + h_p))
+/// w_i x w_{i+1}), the two-sample coning correction (Savage's (1/12) dtheta_{k-1} x dtheta_k
+/// on a regular grid) on uneven stamps, h_p the previous interval; Exp(h w_{i+1}) on the first
+/// interval.
 Eigen::Quaterniond kinematicExp2(const Eigen::Quaterniond& q_WB, const RateWindow& window,
                                  std::size_t i, RateSamples kind) {
   const double h = intervalLength(window, i);
@@ -276,6 +290,11 @@ Eigen::Quaterniond kinematicExp2(const Eigen::Quaterniond& q_WB, const RateWindo
   return q_WB * expMap(h * w1 + (h * h * h / 12.0) * w1.cross(slope));
 }
 
+/// cf4: q (x) Exp(h(a A + b B)) (x) Exp(h(b A + a B)), A, B the window's interpolant at the
+/// Gauss points. With four samples that is the cubic; with fewer, the
+/// lower-degree interpolant (start-up). A window whose interpolant would amplify noise by more
+/// than kMaxNoiseGain loses its oldest samples (lower degree). Averaged: A, B from
+/// averagedRate() (the delta-angle polynomial), with the same noise guard.
 Eigen::Quaterniond kinematicCf4(const Eigen::Quaterniond& q_WB, const RateWindow& window,
                                 std::size_t i, RateSamples kind) {
   return cf4Update(q_WB, window, i, intervalLength(window, i), kind);
