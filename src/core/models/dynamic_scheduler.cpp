@@ -233,8 +233,9 @@ void DynamicScheduler::reconfigure(const EngineConfig& next) {
     d.setState(t, dynamic_.state());
     const double timeout = next.dynamic->torque_timeout;
     if (held_torque_ && !(timeout > 0.0 && t - time_.coreTime(held_torque_->stamp) >= timeout)) {
-      // At its own stamp, behind the new anchor: it acts from the anchor, and a torque in
-      // transit stamped after it is still newer, not stale.
+      // At its own stamp, behind the new anchor: placed as a late input, it acts from the
+      // anchor. Whether a torque in transit is newer is its source's order, which lives in the
+      // engine (SourceTimeline) and outlives this propagator.
       d.setTorque(time_.coreTime(held_torque_->stamp), held_torque_->value, held_torque_->frame);
     }
   }
