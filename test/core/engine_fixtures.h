@@ -80,6 +80,23 @@ inline ap::EngineConfig torqueConfig() {
   return c;
 }
 
+/// A generic body for torque tests: principal moments kGenericMoments about the columns of
+/// genericAxes(), a rotation of the body axes about a generic axis, so that no two axes respond
+/// alike. A torque along principal axis i from rest spins the body about that axis alone
+/// (Euler's equations: w x I w = 0), w_B(t) = tau t / I_i, which rk4 integrates exactly.
+const Eigen::Vector3d kGenericMoments(1.5, 2.5, 3.0);
+inline Eigen::Matrix3d genericAxes() {
+  return Eigen::AngleAxisd(0.7, Eigen::Vector3d(1.0, -2.0, 3.0).normalized()).toRotationMatrix();
+}
+inline ap::EngineConfig genericTorqueConfig() {
+  ap::EngineConfig c = torqueConfig();
+  const Eigen::Matrix3d axes = genericAxes();
+  Eigen::Matrix3d I_B = axes * kGenericMoments.asDiagonal() * axes.transpose();
+  I_B = 0.5 * (I_B + I_B.transpose());
+  c.dynamic->body = ap::RigidBody::fromTensor(I_B);
+  return c;
+}
+
 /// A torque-free sphere turning at 0.2 rad/s about z (exact model).
 inline ap::EngineConfig spinningSphereConfig() {
   ap::EngineConfig c;

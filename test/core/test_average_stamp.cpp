@@ -23,7 +23,7 @@ namespace {
 const Eigen::Vector3d kW(0.1, 0.2, 0.3);
 
 std::optional<double> endOf(ap::IntervalEnds& ends, double t) {
-  const std::optional<ap::RateSample> s = ends.push({t, kW});
+  const std::optional<ap::RateSample> s = ends.push({t, kW}).ended;
   return s ? std::optional<double>(s->t) : std::nullopt;
 }
 
@@ -55,6 +55,31 @@ TEST(IntervalEnds, ALostSampleLeavesTheIntervalOneNominalPeriodLong) {
     ap::IntervalEnds lossy(position);
     for (int k = 0; k <= 3; ++k) endOf(lossy, 0.01 * k);
     EXPECT_NEAR(*endOf(lossy, 0.0451), 0.03 + half * 0.01, 1e-15);
+  }
+}
+
+// time_policy.h: a stamp at or before the newest one taken is stale, by any amount. Here the
+// newest is the mean waiting: one an ulp before it and one at it are refused and leave it
+// waiting (its interval still ends at the next stamp after it); one an ulp after it is taken.
+TEST(IntervalEnds, AStampAtOrBeforeTheWaitingOneIsStaleAndKeepsItWaiting) {
+  for (ap::AverageStamp position : {ap::AverageStamp::Start, ap::AverageStamp::Mid}) {
+    const double half = position == ap::AverageStamp::Mid ? 0.5 : 1.0;
+    ap::IntervalEnds ends(position);
+    endOf(ends, 1.00);
+    endOf(ends, 1.01);
+    for (double t : {std::nextafter(1.01, 0.0), 1.01, 0.5}) {
+      const ap::IntervalEnds::Pushed pushed = ends.push({t, -kW});
+      EXPECT_TRUE(pushed.stale) << t;
+      EXPECT_FALSE(pushed.ended) << t;
+      EXPECT_EQ(*ends.waiting(), 1.01) << t;
+    }
+    const double after = std::nextafter(1.01, 2.0);
+    const ap::IntervalEnds::Pushed taken = ends.push({after, -kW});
+    EXPECT_FALSE(taken.stale);
+    ASSERT_TRUE(taken.ended);
+    EXPECT_EQ(taken.ended->w_B, kW);  // the waiting mean, not a refused one
+    EXPECT_NEAR(taken.ended->t, 1.01 + half * (after - 1.01), 1e-15);
+    EXPECT_EQ(*ends.waiting(), after);
   }
 }
 

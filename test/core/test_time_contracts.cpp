@@ -159,7 +159,7 @@ constexpr double kSlow = 0.0123;              // s: 81 Hz after it, beyond 1.5 f
 
 /// Where `ends` puts the end of the interval of the sample waiting, given the next stamp.
 double endOf(ap::IntervalEnds& ends, double next) {
-  const std::optional<ap::RateSample> ended = ends.push({next, kRate});
+  const std::optional<ap::RateSample> ended = ends.push({next, kRate}).ended;
   EXPECT_TRUE(ended) << next;
   return ended ? ended->t : -1.0;
 }
@@ -180,7 +180,7 @@ TEST(IntervalEndsHistory, ClearForgetsThePeriodsOfTheStreamBefore) {
     for (int k = 1; k <= 8; ++k) endOf(ends, 1.0 + kFast * k);
     ends.clear();
     const double t0 = 1.07;
-    EXPECT_FALSE(ends.push({t0, kRate}));  // waits again, as the first sample does
+    EXPECT_FALSE(ends.push({t0, kRate}).ended);  // waits again, as the first sample does
     for (int k = 1; k <= known; ++k) {
       EXPECT_NEAR(endOf(ends, t0 + kSlow * k), t0 + kSlow * k, 1e-14) << k;
     }

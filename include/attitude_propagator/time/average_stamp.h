@@ -9,6 +9,7 @@
 #include <string>
 
 #include "attitude_propagator/numerics/kinematic_step.h"
+#include "attitude_propagator/time/time_policy.h"
 
 namespace attitude_propagator {
 
@@ -32,9 +33,16 @@ class IntervalEnds {
  public:
   explicit IntervalEnds(AverageStamp position) : position_(position) {}
 
-  /// Takes the newest sample; returns the one before it, stamped at its interval's end, or
-  /// nothing for the first sample (it waits for the next).
-  std::optional<RateSample> push(const RateSample& next);
+  /// What push did with a sample.
+  struct Pushed {
+    /// Stamped at or before the sample waiting (isStale): refused, the waiting one kept.
+    bool stale = false;
+    /// The sample before it, stamped at its interval's end; nothing for the first sample (it
+    /// waits for the next) or a stale one.
+    std::optional<RateSample> ended;
+  };
+  /// Takes the newest sample unless it is stale; hands on the one waiting before it.
+  Pushed push(const RateSample& next);
   /// The stamp of the sample waiting, if any.
   std::optional<double> waiting() const {
     return held_ ? std::optional<double>(held_->t) : std::nullopt;

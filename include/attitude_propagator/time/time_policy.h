@@ -37,7 +37,13 @@ struct TimePolicy {
 
 enum class StampClass { Forward, Stale, Gap };
 
-/// Classifies stamp t against the last accepted stamp.
+/// The one rule of staleness: a stamp at or before the newest one a model has taken, by any
+/// amount, is stale (DroppedStale). classifyStamp applies it to the model's time, IntervalEnds
+/// to the mean waiting for its interval's end.
+bool isStale(double newest, double t);
+
+/// Classifies stamp t against the last accepted stamp: stale (isStale), a gap beyond max_dt, or
+/// a step forward.
 StampClass classifyStamp(double last, double t, const TimePolicy& policy);
 
 /// True for the outcomes after which the propagator's state holds at the new stamp.

@@ -118,10 +118,9 @@ StampOutcome KinematicPropagator::addSample(double t, const Eigen::Vector3d& w_B
   if (const auto refused = refusedSample(t, w_B, doorBound(false))) return *refused;
   if (average_stamp_ == AverageStamp::End) return addFiltered(t, w_B);
   // A start- or mid-stamped mean waits for the next sample, which shows where it ends.
-  const std::optional<double> waiting = interval_ends_.waiting();
-  if (waiting && t <= *waiting) return StampOutcome::DroppedStale;
-  const std::optional<RateSample> ended = interval_ends_.push({t, w_B});
-  return ended ? addFiltered(ended->t, ended->w_B) : StampOutcome::Waiting;
+  const IntervalEnds::Pushed pushed = interval_ends_.push({t, w_B});
+  if (pushed.stale) return StampOutcome::DroppedStale;
+  return pushed.ended ? addFiltered(pushed.ended->t, pushed.ended->w_B) : StampOutcome::Waiting;
 }
 
 StampOutcome KinematicPropagator::addFiltered(double t, const Eigen::Vector3d& w_B) {

@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "attitude_propagator/quoted_text.h"
+#include "attitude_propagator/time/time_policy.h"
 
 namespace attitude_propagator {
 
@@ -35,19 +36,23 @@ double IntervalEnds::nominalPeriod(double interval) const {
   return sorted[n / 2];
 }
 
-std::optional<RateSample> IntervalEnds::push(const RateSample& next) {
-  std::optional<RateSample> ready;
+IntervalEnds::Pushed IntervalEnds::push(const RateSample& next) {
+  Pushed pushed;
+  if (held_ && isStale(held_->t, next.t)) {
+    pushed.stale = true;
+    return pushed;
+  }
   if (held_) {
     const double interval = next.t - held_->t;
     const double period = nominalPeriod(interval);
     // Regular: the interval reaches the next stamp (start) or the boundary halfway to it (mid).
     const double length = interval <= 1.5 * period ? interval : period;
-    ready =
+    pushed.ended =
         RateSample{held_->t + (position_ == AverageStamp::Mid ? 0.5 : 1.0) * length, held_->w_B};
     intervals_[count_++ % intervals_.size()] = interval;
   }
   held_ = next;
-  return ready;
+  return pushed;
 }
 
 void IntervalEnds::clear() {

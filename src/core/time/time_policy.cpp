@@ -2,8 +2,10 @@
 
 namespace attitude_propagator {
 
+bool isStale(double newest, double t) { return t <= newest; }
+
 StampClass classifyStamp(double last, double t, const TimePolicy& policy) {
-  if (t <= last) return StampClass::Stale;
+  if (isStale(last, t)) return StampClass::Stale;
   return t - last > policy.max_dt ? StampClass::Gap : StampClass::Forward;
 }
 
