@@ -126,6 +126,31 @@ TEST(OutcomeTable, EveryRejectionHasACounterOfItsOwnOfAnUnusedInput) {
   EXPECT_EQ(engine.counters().rejected_type, 0u);
 }
 
+// A note's "so far" is its outcome's count: the event's where the row has one, else the
+// input's; every other note names a counter of the engine's table, each its own.
+TEST(OutcomeTable, EveryNoteOnceReportingTheCounterOfItsOutcome) {
+  const std::vector<ap::NoteRow>& notes = ap::noteTable();
+  ASSERT_EQ(notes.size(), static_cast<std::size_t>(ap::EngineNote::StampFilterMisfit) + 1);
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < notes.size(); ++i) {
+    EXPECT_EQ(static_cast<std::size_t>(notes[i].kind), i);
+    EXPECT_EQ(ap::noteCounter(notes[i].kind), notes[i].counter);
+    if (notes[i].kind == ap::EngineNote::StampFilterMisfit) {
+      EXPECT_EQ(notes[i].counter, nullptr);
+      continue;
+    }
+    const ap::CounterInfo* info = infoOf(notes[i].counter);
+    ASSERT_NE(info, nullptr) << i;
+    EXPECT_TRUE(names.insert(info->name).second) << info->name;
+  }
+  for (const ap::StampOutcome outcome : kStampOutcomes) {
+    const ap::StampOutcomeRow& row = ap::stampOutcomeRow(outcome);
+    if (!row.note) continue;
+    EXPECT_EQ(ap::noteCounter(*row.note), row.event ? row.event : row.input)
+        << ap::outcomeName(outcome);
+  }
+}
+
 // The engine counts and notes what the rows say: a stale input (input counter and note), a
 // gap (accepted, gaps and a note), and the clock: a gap of the dynamic model's grid (gaps and a
 // note, no input counted).

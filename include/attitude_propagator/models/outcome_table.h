@@ -64,4 +64,15 @@ const char* fixOutcomeName(FixOutcome outcome);
 /// The counter a Rejection counts in.
 std::uint64_t EngineCounters::*rejectionCounter(Rejection why);
 
+/// The counter a note reports with its "so far": the event or input counter of the outcome it
+/// comes with (stampOutcomeTable), else the engine's own for it (a jump, a refused future stamp,
+/// a full queue, ...); nullptr for StampFilterMisfit (a state, shown in the diagnostics).
+struct NoteRow {
+  EngineNote::Kind kind;
+  std::uint64_t EngineCounters::*counter;
+};
+/// Every EngineNote::Kind once, in the enum's order.
+const std::vector<NoteRow>& noteTable();
+std::uint64_t EngineCounters::*noteCounter(EngineNote::Kind kind);
+
 }  // namespace attitude_propagator

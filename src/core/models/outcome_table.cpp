@@ -97,4 +97,27 @@ std::uint64_t EngineCounters::*rejectionCounter(Rejection why) {
   return &C::rejected_type;  // unreachable: every Rejection is above
 }
 
+const std::vector<NoteRow>& noteTable() {
+  static const std::vector<NoteRow> table = {
+      {Note::Gap, &C::gaps},
+      {Note::StampsJumpedBack, &C::jumps_back},
+      {Note::Future, &C::rejected_future},
+      {Note::ClockJumpedBack, &C::resets},
+      {Note::ClockTwoTimelines, &C::clock_conflicts},
+      {Note::Stale, &C::dropped_stale},
+      {Note::NonFinite, &C::rejected_non_finite},
+      {Note::OutOfRange, &C::rejected_out_of_range},
+      {Note::FailedStep, &C::failed_steps},
+      {Note::PendingFull, &C::pending_overflow},
+      {Note::Deferred, &C::deferred_ticks},
+      {Note::HeldAhead, &C::held_ahead},
+      {Note::StampFilterMisfit, nullptr},
+  };
+  return table;
+}
+
+std::uint64_t EngineCounters::*noteCounter(EngineNote::Kind kind) {
+  return noteTable().at(static_cast<std::size_t>(kind)).counter;
+}
+
 }  // namespace attitude_propagator
