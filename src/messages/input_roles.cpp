@@ -55,16 +55,20 @@ const InputRoleRow& inputRoleOf(InputRole role) {
   throw std::logic_error("inputRoleOf: not a role of one topic");
 }
 
-std::string typesText(InputRole role) {
-  std::vector<std::string> names;
+std::vector<MessageTypeId> typesOf(InputRole role) {
+  std::vector<MessageTypeId> types;
   for (const InputRoleRow& row : inputRoleTable()) {
-    if (row.role != role) continue;
-    for (const MessageTypeId& type : row.types) names.push_back(type.first);
+    if (row.role == role) types.insert(types.end(), row.types.begin(), row.types.end());
   }
+  return types;
+}
+
+std::string typesText(InputRole role) {
+  const std::vector<MessageTypeId> types = typesOf(role);
   std::string out;
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    if (i > 0) out += i + 1 == names.size() ? " or " : ", ";
-    out += names[i];
+  for (std::size_t i = 0; i < types.size(); ++i) {
+    if (i > 0) out += i + 1 == types.size() ? " or " : ", ";
+    out += types[i].first;
   }
   return out;
 }

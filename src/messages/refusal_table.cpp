@@ -1,5 +1,6 @@
 #include "attitude_propagator/messages/refusal_table.h"
 
+#include <cstring>
 #include <stdexcept>
 
 namespace attitude_propagator {
@@ -30,6 +31,17 @@ const RefusalRow& refusalRow(Refused why) {
     if (row.why == why) return row;
   }
   throw std::logic_error("refusalRow: a Refused without a row");
+}
+
+std::string fixRefusalCounts(const FixRefusals& refusals) {
+  static const std::size_t prefix = std::strlen("fixes_refused_");
+  std::string out;
+  for (const RefusalRow& row : refusalTable()) {
+    if (!row.fix_counter) continue;
+    out += (out.empty() ? "" : ", ") + std::string(row.fix_counter + prefix) + " " +
+           std::to_string(refusals.*row.fix_count);
+  }
+  return out;
 }
 
 }  // namespace attitude_propagator

@@ -44,6 +44,7 @@
 #include "attitude_propagator/messages/fix_decoder.h"
 #include "attitude_propagator/messages/input_decoders.h"
 #include "attitude_propagator/messages/input_roles.h"
+#include "attitude_propagator/messages/refusal_table.h"
 #include "attitude_propagator/numerics/quaternion.h"
 #include "bag_input.h"
 #include "command_line.h"
@@ -894,12 +895,7 @@ class Evaluation {
 };
 
 void Evaluation::checkTopics(BagSet& bag) {
-  std::vector<MessageTypeId> rate_types;
-  for (const InputRoleRow& row : inputRoleTable()) {
-    if (row.role == InputRole::Rate)
-      rate_types.insert(rate_types.end(), row.types.begin(), row.types.end());
-  }
-  rates_type_ = requireTopic(bag, o_.rates_topic, "rate", rate_types);
+  rates_type_ = requireTopic(bag, o_.rates_topic, "rate", typesOf(InputRole::Rate));
   rates_topic_ = o_.rates_topic;
   if (!o_.truth_topic.empty()) {
     truth_type_ = requireTopic(
@@ -1594,13 +1590,11 @@ void Evaluation::reportFixes(std::FILE* out) const {
   const FixRefusals& r = fix_decoder_->refusals();
   auto u = [](std::uint64_t x) { return static_cast<unsigned long long>(x); };
   std::fprintf(out,
-               "  fixes %s (%s): %llu, refused before the engines %llu (no_tf %llu: only "
-               "fixed_frame and body_frame, the rates' frame, are known here; type %llu, "
-               "no_time %llu, no_orientation %llu, body_frame %llu); per method "
-               "accepted/rejected_gate/too_old/"
-               "other/pending:",
-               fixes_topic_.c_str(), fixes_type_.c_str(), u(fix_count_), u(r.total()), u(r.no_tf),
-               u(r.type), u(r.no_time), u(r.no_orientation), u(r.body_frame));
+               "  fixes %s (%s): %llu, refused before the engines %llu (%s; no_tf: only "
+               "fixed_frame and body_frame, the rates' frame, are known here); per method "
+               "accepted/rejected_gate/too_old/other/pending:",
+               fixes_topic_.c_str(), fixes_type_.c_str(), u(fix_count_), u(r.total()),
+               fixRefusalCounts(r).c_str());
   for (const auto& m : methods_) {
     if (!m->started()) continue;
     const EngineCounters& c = m->counters();

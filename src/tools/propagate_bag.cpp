@@ -49,6 +49,7 @@
 #include "attitude_propagator/messages/input_decoders.h"
 #include "attitude_propagator/messages/input_roles.h"
 #include "attitude_propagator/messages/outputs.h"
+#include "attitude_propagator/messages/refusal_table.h"
 #include "attitude_propagator/models/kinematic_propagator.h"
 #include "attitude_propagator/quoted_text.h"
 #include "bag_input.h"
@@ -1006,11 +1007,8 @@ void BagPropagator::fixSummary(std::FILE* out) const {
     engine_terms += (engine_terms.empty() ? "" : " + ") + std::to_string(value) + " " + counter;
     if (counter == "accepted") engine_terms += " (" + std::to_string(c.fixes_reset) + " as resets)";
   });
-  std::fprintf(out,
-               "  fixes: %llu = %s + %llu pending at the end + %llu refused (no_tf %llu, type "
-               "%llu, no_time %llu, no_orientation %llu, body_frame %llu)",
-               u(n), engine_terms.c_str(), u(pending), u(r.total()), u(r.no_tf), u(r.type),
-               u(r.no_time), u(r.no_orientation), u(r.body_frame));
+  std::fprintf(out, "  fixes: %llu = %s + %llu pending at the end + %llu refused (%s)", u(n),
+               engine_terms.c_str(), u(pending), u(r.total()), fixRefusalCounts(r).c_str());
   if (accounted != n) {
     std::fprintf(out, " (%lld not accounted for)",
                  static_cast<long long>(n) - static_cast<long long>(accounted));

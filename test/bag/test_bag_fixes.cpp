@@ -247,9 +247,8 @@ TEST(BagFixes, SummaryAccountsForEveryFix) {
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("fixes: 8 = 2 accepted (0 as resets) + 0 rejected_gate + 1 too_old + "
                           "1 bad_quaternion + 0 bad_covariance + 0 queue_full + 0 future + 0 "
-                          "over_budget + 1 pending at the end + 3 refused (no_tf 1, type 1, "
-                          "no_time 0, "
-                          "no_orientation 0, body_frame 1)\n"),
+                          "over_budget + 1 pending at the end + 3 refused (type 1, no_tf 1, "
+                          "no_time 0, no_orientation 0, body_frame 1)\n"),
             std::string::npos)
       << r.output;
   // The terms add up (the line says so when they do not).

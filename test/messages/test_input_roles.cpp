@@ -8,6 +8,14 @@
 #include <sstream>
 #include <string>
 
+#include <geometry_msgs/Twist.h>
+#include <geometry_msgs/TwistStamped.h>
+#include <geometry_msgs/Wrench.h>
+#include <geometry_msgs/WrenchStamped.h>
+#include <ros/message_traits.h>
+#include <sensor_msgs/Imu.h>
+#include <sensor_msgs/MagneticField.h>
+
 #include "attitude_propagator/messages/fix_decoder.h"
 #include "attitude_propagator/messages/input_roles.h"
 
@@ -29,7 +37,9 @@ TEST(InputRoles, EveryTopicOnceAndEachSourceNamesItsRow) {
   for (const ap::InputRoleRow& row : ap::inputRoleTable()) {
     EXPECT_TRUE(topics.insert(row.topic).second) << row.topic;
     EXPECT_FALSE(row.types.empty()) << row.topic;
-    if (row.source) EXPECT_STREQ(ap::inputTopicName(*row.source), row.topic);
+    if (row.source) {
+      EXPECT_STREQ(ap::inputTopicName(*row.source), row.topic);
+    }
   }
   EXPECT_EQ(topics.size(), 6u);
   EXPECT_EQ(ap::inputRoleOf(ap::Source::Imu).role, ap::InputRole::Rate);
@@ -55,6 +65,23 @@ TEST(InputRoles, TypesTextNamesARolesTypesInTheTablesOrder) {
   const ap::TopicType torque = ap::TopicType::accepting(ap::inputRoleOf(ap::Source::Torque).types);
   EXPECT_EQ(torque.plainType(), "geometry_msgs/Wrench");
   EXPECT_EQ(torque.stampedType(), "geometry_msgs/WrenchStamped");
+}
+
+// A tool reading a topic of a role takes every type of every row of that role, as ROS names and
+// checks them (datatype and MD5 sum from the message traits), in the table's order.
+TEST(InputRoles, TypesOfARoleAreEveryTypeOfItsRowsAsRosChecksThem) {
+  auto id = [](auto message) {
+    using M = decltype(message);
+    return ap::MessageTypeId{ros::message_traits::datatype<M>(), ros::message_traits::md5sum<M>()};
+  };
+  EXPECT_EQ(ap::typesOf(ap::InputRole::Rate),
+            (std::vector<ap::MessageTypeId>{id(sensor_msgs::Imu{}), id(geometry_msgs::Twist{}),
+                                            id(geometry_msgs::TwistStamped{})}));
+  EXPECT_EQ(ap::typesOf(ap::InputRole::Torque),
+            (std::vector<ap::MessageTypeId>{id(geometry_msgs::Wrench{}),
+                                            id(geometry_msgs::WrenchStamped{})}));
+  EXPECT_EQ(ap::typesOf(ap::InputRole::Field),
+            (std::vector<ap::MessageTypeId>{id(sensor_msgs::MagneticField{})}));
 }
 
 // n-1, n, n+1 of each condition: a node takes exactly the topics of its configuration.

@@ -40,7 +40,9 @@ TEST(RefusalTable, CountRefusalCountsTheNamedCounterOnceAndNoOther) {
       const bool received = info.name == "received" && row.rejection;
       EXPECT_EQ(value, named || received ? 1u : 0u) << info.name;
     }
-    if (row.input_counter) EXPECT_STREQ(ap::refusedCounter(row.why), row.input_counter);
+    if (row.input_counter) {
+      EXPECT_STREQ(ap::refusedCounter(row.why), row.input_counter);
+    }
   }
 }
 
@@ -49,10 +51,14 @@ TEST(RefusalTable, EveryInputCounterIsTheEnginesAndEveryRowCountsSomewhere) {
   for (const ap::CounterInfo& info : ap::engineCounterTable()) engine_names.insert(info.name);
   for (const ap::RefusalRow& row : ap::refusalTable()) {
     EXPECT_TRUE(row.input_counter || row.fix_counter) << static_cast<int>(row.why);
-    if (row.input_counter) EXPECT_EQ(engine_names.count(row.input_counter), 1u);
+    if (row.input_counter) {
+      EXPECT_EQ(engine_names.count(row.input_counter), 1u);
+    }
     EXPECT_EQ(row.input_counter != nullptr, row.rejection.has_value() || row.bias);
     EXPECT_EQ(row.fix_counter != nullptr, row.fix_count != nullptr);
-    if (row.fix_counter) EXPECT_STREQ(ap::fixRefusedCounter(row.why), row.fix_counter);
+    if (row.fix_counter) {
+      EXPECT_STREQ(ap::fixRefusedCounter(row.why), row.fix_counter);
+    }
   }
 }
 
@@ -70,6 +76,21 @@ TEST(RefusalTable, ReachesEveryFieldOfFixRefusalsOnce) {
   }
   EXPECT_EQ(r.total(), expected);
   EXPECT_EQ(bit, std::uint64_t{1} << 5);  // five fix refusals
+}
+
+// The tools' summaries: each fix counter of the table once, in its order, by its short name with
+// its own field's count (distinct counts: a field read for another's name shows).
+TEST(RefusalTable, TheSummariesCountEachFixRefusalByItsShortName) {
+  ap::FixRefusals r;
+  r.no_tf = 11;
+  r.type = 12;
+  r.no_time = 13;
+  r.no_orientation = 14;
+  r.body_frame = 15;
+  EXPECT_EQ(ap::fixRefusalCounts(r),
+            "type 12, no_tf 11, no_time 13, no_orientation 14, body_frame 15");
+  EXPECT_EQ(ap::fixRefusalCounts(ap::FixRefusals{}),
+            "type 0, no_tf 0, no_time 0, no_orientation 0, body_frame 0");
 }
 
 }  // namespace

@@ -38,8 +38,11 @@ const InputRoleRow& inputRoleOf(Source source);
 /// The row of the one topic of `role` other than rates and torques (Bias, Fix, Field).
 const InputRoleRow& inputRoleOf(InputRole role);
 
-/// The accepted types of every row of `role`, in the table's order, as a message names them:
-/// "sensor_msgs/Imu, geometry_msgs/Twist or geometry_msgs/TwistStamped".
+/// The accepted types of every row of `role`, in the table's order (a tool reading a topic of
+/// that role takes any of them).
+std::vector<MessageTypeId> typesOf(InputRole role);
+/// typesOf(role) as a message names them: "sensor_msgs/Imu, geometry_msgs/Twist or
+/// geometry_msgs/TwistStamped".
 std::string typesText(InputRole role);
 
 /// Whether a node configured so takes the row's topic: the rates of `rate_input`; the torque

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "attitude_propagator/messages/fix_decoder.h"
@@ -28,5 +29,9 @@ struct RefusalRow {
 /// Every Refused once, in the enum's order.
 const std::vector<RefusalRow>& refusalTable();
 const RefusalRow& refusalRow(Refused why);
+
+/// A fix input's refusals as the tools' summaries give them: each fix counter of the table in
+/// its order, by its name without `fixes_refused_`: "type 0, no_tf 1, no_time 0, ...".
+std::string fixRefusalCounts(const FixRefusals& refusals);
 
 }  // namespace attitude_propagator
