@@ -27,6 +27,7 @@
 #include "attitude_propagator/estimation/replay_budget.h"
 #include "attitude_propagator/models/dynamic_propagator.h"
 #include "attitude_propagator/models/engine_config.h"
+#include "attitude_propagator/models/fix_history.h"
 #include "attitude_propagator/models/kinematic_propagator.h"
 #include "attitude_propagator/models/outcome_table.h"
 #include "attitude_propagator/models/propagator.h"
@@ -44,32 +45,6 @@ class EngineSink {
   /// An input was applied; `state` is the state at its stamp (or where it took effect).
   virtual void inputApplied(const Input& input, const EngineState& state) = 0;
   virtual void note(const EngineNote& note) = 0;
-};
-
-/// One entry of the fix history: a step of the model (a rate input as the model received it,
-/// after rate_delay and the configured bias, the bias estimate subtracted when it is applied;
-/// a torque; an advance of the dynamic model to a grid stamp) or a gravity or field measurement
-/// applied, and the model, its orientation and the error state after it, at the stamp the state
-/// then held at.
-struct FixHistoryEntry {
-  ModelStep step;
-  /// A measurement applied after the state before it (a replay applies it again, as it was
-  /// applied: fused or as a reset), stamped D further along the motion: q_f = q (x) D.
-  std::shared_ptr<const Measurement> measurement;
-  Eigen::Quaterniond D = Eigen::Quaterniond::Identity();
-  bool measurement_reset = false;
-  /// A measurement's own stamp (`stamp` is that of the state it was applied after): a
-  /// correction stamped before it, arriving later, goes before it.
-  Stamp measured = 0;
-  ModelSnapshot model;
-  Eigen::Quaterniond q_WB = Eigen::Quaterniond::Identity();
-  ErrorState error;
-  Stamp stamp = 0;
-  /// The state was not reached by a step (the newest one when the history started, a pinned
-  /// state): restored, never replayed.
-  bool base = false;
-  /// Names the entry while it is kept, wherever insertions and drops move it.
-  std::uint64_t id = 0;
 };
 
 /// Inputs arriving on average more than this many seconds away from the clock (behind, or
@@ -142,7 +117,7 @@ class AttitudeEngine {
   /// Fixes waiting for the rates to reach their stamps.
   std::size_t pendingFixes() const { return pending_fixes_.size(); }
   /// Rate inputs kept for late fixes (0 before the first fix).
-  std::size_t fixHistorySize() const { return history_size_; }
+  std::size_t fixHistorySize() const { return history_.size(); }
   /// estimate_gyro_bias: the estimated bias (rad/s, body frame), subtracted on top of
   /// gyroBias(), and its standard deviation per axis; zero otherwise.
   const Eigen::Vector3d& gyroBiasEstimate() const { return error_.bias_B; }
@@ -297,9 +272,6 @@ class AttitudeEngine {
     return config_.fixes.estimate_gyro_bias && input.source != Source::Torque;
   }
   void clearHistory();
-  FixHistoryEntry& historyEntry(std::size_t i) {
-    return history_[(history_head_ + i) % history_.size()];
-  }
   /// Applies a fix stamped at or before the newest entry, then again the fixes applied earlier
   /// that are stamped after it, in stamp order: the order they would have had on time.
   FixOutcome applyInStampOrder(const PendingFix& fix);
@@ -318,8 +290,6 @@ class AttitudeEngine {
   void applyAgain(const std::vector<AppliedFix>& fixes);
   /// Keeps an applied fix (stamped at or after those kept) to be applied again.
   void keepApplied(AppliedFix&& applied);
-  /// The index of the history entry named `id`; empty when it is no longer kept.
-  std::optional<std::size_t> findHistoryEntry(std::uint64_t id);
   /// Saves the model's state after a replayed step into its entry.
   void saveReplayed(FixHistoryEntry& entry);
   /// Whether a fix or measurement at `stamp`, its replay and the re-applications after it fit
@@ -364,13 +334,6 @@ class AttitudeEngine {
   }
   /// Applies again, as it was applied, the measurement of `entry` to the model's state.
   void reapplyMeasurement(const FixHistoryEntry& entry);
-  /// A new entry at position `pos` of the history (oldest first), the entries from it on moved
-  /// up by one; the oldest dropped when the memory bound is reached.
-  FixHistoryEntry& insertHistoryEntry(std::size_t& pos);
-  /// A new entry after the newest of the history (its id a new one): the next slot, grown or,
-  /// at the memory bound, the oldest.
-  FixHistoryEntry& nextHistorySlot();
-  FixHistoryEntry& appendHistorySlot();
   /// Fills `slot` with the model's state now.
   void fillEntry(FixHistoryEntry& slot);
   void countFix(FixOutcome outcome);
@@ -402,12 +365,9 @@ class AttitudeEngine {
   // waiting for the rates, the gate's run of rejections, and whether a replay is running (the
   // model's calls back then neither count nor publish).
   bool keep_history_ = false;
-  std::vector<FixHistoryEntry> history_;
-  std::size_t history_head_ = 0;
-  std::size_t history_size_ = 0;
+  FixHistory history_;
   std::vector<PendingFix> pending_fixes_;  // sorted by stamp, at most kMaxPendingFixes
   std::vector<AppliedFix> applied_fixes_;  // the newest applied, by stamp, kMaxFixesReapplied
-  std::uint64_t last_history_id_ = 0;      // the id of the newest entry recorded or inserted
   ReplayBudget replay_budget_;             // states replayed per second of stamp time
   std::optional<Stamp> forgotten_fix_;     // the newest applied fix's stamp no longer kept
   int rejected_in_a_row_ = 0;

@@ -663,7 +663,7 @@ FixOutcome AttitudeEngine::submitFix(Stamp stamp, const Eigen::Quaterniond& q_WB
     keep_history_ = true;
     recordHistory(ModelStep{}, true);
   }
-  if (history_size_ > 0 && stamp <= historyEntry(history_size_ - 1).stamp) {
+  if (!history_.empty() && stamp <= history_.newest().stamp) {
     outcome = applyInStampOrder(fix);
     countFix(outcome);
     return outcome;
@@ -685,8 +685,8 @@ FixOutcome AttitudeEngine::submitFix(Stamp stamp, const Eigen::Quaterniond& q_WB
 }
 
 void AttitudeEngine::applyDueFixes() {
-  while (!pending_fixes_.empty() && history_size_ > 0 &&
-         pending_fixes_.front().stamp <= historyEntry(history_size_ - 1).stamp) {
+  while (!pending_fixes_.empty() && !history_.empty() &&
+         pending_fixes_.front().stamp <= history_.newest().stamp) {
     const PendingFix fix = pending_fixes_.front();
     pending_fixes_.erase(pending_fixes_.begin());
     countFix(applyInStampOrder(fix));
@@ -695,8 +695,7 @@ void AttitudeEngine::applyDueFixes() {
 }
 
 void AttitudeEngine::clearHistory() {
-  history_head_ = 0;
-  history_size_ = 0;  // the entries' storage stays for reuse
+  history_.clear();
   applied_fixes_.clear();
   forgotten_fix_.reset();
   replay_budget_.clear();
@@ -708,42 +707,14 @@ void AttitudeEngine::recordHistory(const ModelStep& step, bool base) {
   const std::optional<Stamp> stamp = stampAt(*t);
   if (!stamp) return;
   replay_budget_.recorded(*stamp);
-  FixHistoryEntry* slot = &nextHistorySlot();
+  FixHistoryEntry* slot = &history_.append();
   slot->step = step;
   slot->step.input.payload.reset();  // the message is not kept
   slot->measurement.reset();
   fillEntry(*slot);
   slot->stamp = *stamp;
   slot->base = base;
-  // Keep the newest entry at or before newest - fix_history (a fix stamped exactly there needs
-  // it), drop the ones before it.
-  const Stamp span = static_cast<Stamp>(std::llround(config_.fixes.history * 1e9));
-  while (history_size_ > 1 && *stamp - historyEntry(1).stamp >= span) {
-    history_head_ = (history_head_ + 1) % history_.size();
-    --history_size_;
-  }
-}
-
-FixHistoryEntry& AttitudeEngine::nextHistorySlot() {
-  FixHistoryEntry& slot = appendHistorySlot();
-  slot.id = ++last_history_id_;  // a new entry, whatever the slot held before
-  return slot;
-}
-
-FixHistoryEntry& AttitudeEngine::appendHistorySlot() {
-  if (history_size_ < history_.size()) return historyEntry(history_size_++);
-  if (history_.size() < kMaxFixHistorySamples) {
-    // Grow the ring: oldest first again, then one more slot at the end.
-    std::rotate(history_.begin(), history_.begin() + static_cast<std::ptrdiff_t>(history_head_),
-                history_.end());
-    history_head_ = 0;
-    history_.emplace_back();
-    ++history_size_;
-    return history_.back();
-  }
-  FixHistoryEntry& slot = history_[history_head_];  // full: the oldest goes (limits.h)
-  history_head_ = (history_head_ + 1) % history_.size();
-  return slot;
+  history_.keepSpan(*stamp, static_cast<Stamp>(std::llround(config_.fixes.history * 1e9)));
 }
 
 // A fix stamped before fixes already applied (an earlier fix that arrived later) is applied at
@@ -781,9 +752,9 @@ AttitudeEngine::TakenFixes AttitudeEngine::takeAppliedAfter(Stamp stamp) {
   applied_fixes_.erase(later, applied_fixes_.end());
   for (auto g = taken.fixes.rbegin(); g != taken.fixes.rend(); ++g) {
     const FixHistoryEntry& was = g->before;
-    if (const std::optional<std::size_t> i = findHistoryEntry(was.id)) {
-      taken.replaced.push_back(historyEntry(*i));
-      historyEntry(*i) = was;
+    if (const std::optional<std::size_t> i = history_.find(was.id)) {
+      taken.replaced.push_back(history_[*i]);
+      history_[*i] = was;
     }
   }
   return taken;
@@ -791,17 +762,10 @@ AttitudeEngine::TakenFixes AttitudeEngine::takeAppliedAfter(Stamp stamp) {
 
 void AttitudeEngine::putBack(TakenFixes&& taken) {
   for (auto e = taken.replaced.rbegin(); e != taken.replaced.rend(); ++e) {
-    if (const std::optional<std::size_t> i = findHistoryEntry(e->id)) historyEntry(*i) = *e;
+    if (const std::optional<std::size_t> i = history_.find(e->id)) history_[*i] = *e;
   }
   applied_fixes_.insert(applied_fixes_.end(), std::make_move_iterator(taken.fixes.begin()),
                         std::make_move_iterator(taken.fixes.end()));
-}
-
-std::optional<std::size_t> AttitudeEngine::findHistoryEntry(std::uint64_t id) {
-  for (std::size_t i = history_size_; i > 0; --i) {
-    if (historyEntry(i - 1).id == id) return i - 1;
-  }
-  return std::nullopt;
 }
 
 void AttitudeEngine::applyAgain(const std::vector<AppliedFix>& fixes) {
@@ -835,28 +799,28 @@ void AttitudeEngine::keepApplied(AppliedFix&& applied) {
 // through D (dtheta_k = C(D) dtheta_f), so the error state is carried to t_f (moveErrorState),
 // the update made there, and the result carried back to t_k.
 std::optional<AttitudeEngine::Located> AttitudeEngine::locate(Stamp stamp) {
-  const std::size_t n = history_size_;
+  const std::size_t n = history_.size();
   if (n == 0) return std::nullopt;
-  const Stamp newest = historyEntry(n - 1).stamp;
+  const Stamp newest = history_[n - 1].stamp;
   const Stamp span = static_cast<Stamp>(std::llround(config_.fixes.history * 1e9));
   if (newest - stamp > span) return std::nullopt;
   std::size_t k = n;
-  while (k > 0 && historyEntry(k - 1).stamp > stamp) --k;
-  while (k > 0 && historyEntry(k - 1).measurement && historyEntry(k - 1).measured > stamp) --k;
+  while (k > 0 && history_[k - 1].stamp > stamp) --k;
+  while (k > 0 && history_[k - 1].measurement && history_[k - 1].measured > stamp) --k;
   if (k == 0) return std::nullopt;  // before the oldest state kept (or the anchor)
   --k;
-  const FixHistoryEntry& base = historyEntry(k);
+  const FixHistoryEntry& base = history_[k];
   propagator_->save(live_);  // the newest state, kept should the measurement not be applied
   propagator_->restore(base.model);
   Located at{k, base.q_WB, Eigen::Quaterniond::Identity()};
   std::size_t next = k + 1;
-  while (next < n && historyEntry(next).stamp <= base.stamp) ++next;
+  while (next < n && history_[next].stamp <= base.stamp) ++next;
   if (base.stamp < stamp && next < n) {
     if (propagator_->advanceForFix(coreTime(stamp))) {
       at.q_k = propagator_->state().q_WB;  // the model's own state at the stamp
     } else {
       const double a = static_cast<double>(stamp - base.stamp) /
-                       static_cast<double>(historyEntry(next).stamp - base.stamp);
+                       static_cast<double>(history_[next].stamp - base.stamp);
       at.D = expMap(a * logMap(at.q_k.conjugate() * stepFrom(k, next)));
     }
   }
@@ -864,14 +828,14 @@ std::optional<AttitudeEngine::Located> AttitudeEngine::locate(Stamp stamp) {
 }
 
 Eigen::Quaterniond AttitudeEngine::stepFrom(std::size_t k, std::size_t j) {
-  const FixHistoryEntry& next = historyEntry(j);
+  const FixHistoryEntry& next = history_[j];
   if (next.base || next.measurement) return next.q_WB;  // not reached by a step: as kept
   const ErrorState kept = error_;
-  error_ = historyEntry(k).error;  // the bias estimate the step is taken with
+  error_ = history_[k].error;  // the bias estimate the step is taken with
   replayStep(next.step);
   const Eigen::Quaterniond q = propagator_->state().q_WB;
   error_ = kept;
-  propagator_->restore(historyEntry(k).model);
+  propagator_->restore(history_[k].model);
   return q;
 }
 
@@ -880,7 +844,7 @@ FixOutcome AttitudeEngine::applyFix(const PendingFix& fix, FixHistoryEntry& befo
   if (!at) return FixOutcome::TooOld;
   const AttitudeFix measurement(fix.q_WB, fix.R_B, config_.fixes.gate);
   Eigen::Quaterniond q = at->q_k * at->D;  // at the fix's stamp
-  ErrorState e = moveErrorState(historyEntry(at->k).error, at->D);
+  ErrorState e = moveErrorState(history_[at->k].error, at->D);
   bool reset = config_.fixes.mode == FixMode::Reset;
   if (!reset && !fuseMeasurement(measurement, q, e).accepted) {
     if (rejected_in_a_row_ < kFixRejectionRun) {
@@ -897,30 +861,30 @@ FixOutcome AttitudeEngine::applyFix(const PendingFix& fix, FixHistoryEntry& befo
   // there), and the steps since are repeated from it. The entry as it was is kept with the fix,
   // for a fix or measurement stamped before it that arrives later (takeAppliedAfter); the ones
   // after it are rewritten by every replay.
-  before = historyEntry(at->k);
+  before = history_[at->k];
   propagator_->correctOrientation(q * at->D.conjugate());
   error_ = moveErrorState(e, at->D.conjugate());
-  saveReplayed(historyEntry(at->k));
+  saveReplayed(history_[at->k]);
   replayFrom(at->k + 1);
   return reset ? FixOutcome::Reset : FixOutcome::Accepted;
 }
 
 bool AttitudeEngine::replayAffordable(Stamp stamp) {
-  if (history_size_ == 0) return true;
+  if (history_.empty()) return true;
   // The states after the stamp are replayed once, and once more for each applied fix after it
   // (applied again): an upper bound of the work, known before anything changes.
   std::size_t after = 0;
-  for (std::size_t i = history_size_; i > 0 && historyEntry(i - 1).stamp > stamp; --i) ++after;
+  for (std::size_t i = history_.size(); i > 0 && history_[i - 1].stamp > stamp; --i) ++after;
   const auto again = static_cast<std::size_t>(applied_fixes_.end() - firstAppliedAfter(stamp));
-  return replay_budget_.affords(historyEntry(history_size_ - 1).stamp, after * (1 + again));
+  return replay_budget_.affords(history_.newest().stamp, after * (1 + again));
 }
 
 void AttitudeEngine::replayFrom(std::size_t first) {
-  if (first < history_size_) {
-    replay_budget_.charge(historyEntry(history_size_ - 1).stamp, history_size_ - first);
+  if (first < history_.size()) {
+    replay_budget_.charge(history_.newest().stamp, history_.size() - first);
   }
-  for (std::size_t i = first; i < history_size_; ++i) {
-    FixHistoryEntry& entry = historyEntry(i);
+  for (std::size_t i = first; i < history_.size(); ++i) {
+    FixHistoryEntry& entry = history_[i];
     if (entry.measurement) {
       reapplyMeasurement(entry);
     } else if (!entry.base) {

@@ -104,7 +104,7 @@ AidingOutcome AttitudeEngine::placeMeasurement(PendingMeasurement pm) {
     keep_history_ = true;
     recordHistory(ModelStep{}, true);
   }
-  if (history_size_ > 0 && pm.stamp <= historyEntry(history_size_ - 1).stamp) {
+  if (!history_.empty() && pm.stamp <= history_.newest().stamp) {
     const AidingOutcome outcome = applyMeasurement(pm);
     counters.count(outcome);
     return outcome;
@@ -129,8 +129,8 @@ AidingOutcome AttitudeEngine::placeMeasurement(PendingMeasurement pm) {
 }
 
 void AttitudeEngine::applyDueMeasurements() {
-  while (!pending_measurements_.empty() && history_size_ > 0 &&
-         pending_measurements_.front().stamp <= historyEntry(history_size_ - 1).stamp) {
+  while (!pending_measurements_.empty() && !history_.empty() &&
+         pending_measurements_.front().stamp <= history_.newest().stamp) {
     const PendingMeasurement pm = std::move(pending_measurements_.front());
     pending_measurements_.erase(pending_measurements_.begin());
     aidingCounters(pm.measurement->kind()).count(applyMeasurement(pm));
@@ -173,9 +173,9 @@ AidingOutcome AttitudeEngine::applyAtNewest(const Measurement& m, Stamp stamp,
   if (outcome == AidingOutcome::RejectedGate) return outcome;
   propagator_->correctOrientation(q);
   error_ = e;
-  if (!keep_history_ || history_size_ == 0) return outcome;
-  const Stamp state_stamp = historyEntry(history_size_ - 1).stamp;
-  FixHistoryEntry& entry = nextHistorySlot();
+  if (!keep_history_ || history_.empty()) return outcome;
+  const Stamp state_stamp = history_.newest().stamp;
+  FixHistoryEntry& entry = history_.append();
   entry.step = ModelStep{};
   entry.measurement = std::move(kept);
   entry.D = Eigen::Quaterniond::Identity();
@@ -188,8 +188,8 @@ AidingOutcome AttitudeEngine::applyAtNewest(const Measurement& m, Stamp stamp,
 }
 
 AidingOutcome AttitudeEngine::applyMeasurement(const PendingMeasurement& pm) {
-  const std::size_t n = history_size_;
-  if (n > 0 && historyEntry(n - 1).stamp == pm.stamp) {
+  const std::size_t n = history_.size();
+  if (n > 0 && history_[n - 1].stamp == pm.stamp) {
     // At the newest state: applied to it, nothing replayed.
     return applyAtNewest(*pm.measurement, pm.stamp, pm.value, pm.measurement);
   }
@@ -203,7 +203,7 @@ AidingOutcome AttitudeEngine::applyMeasurement(const PendingMeasurement& pm) {
     return AidingOutcome::TooOld;
   }
   Eigen::Quaterniond q = at->q_k * at->D;
-  ErrorState e = moveErrorState(historyEntry(at->k).error, at->D);
+  ErrorState e = moveErrorState(history_[at->k].error, at->D);
   bool reset = false;
   const AidingOutcome outcome = decideMeasurement(*pm.measurement, pm.stamp, pm.value, q, e, reset);
   if (outcome == AidingOutcome::RejectedGate) {
@@ -211,11 +211,11 @@ AidingOutcome AttitudeEngine::applyMeasurement(const PendingMeasurement& pm) {
     putBack(std::move(again));
     return outcome;
   }
-  const Stamp base_stamp = historyEntry(at->k).stamp;
+  const Stamp base_stamp = history_[at->k].stamp;
   propagator_->correctOrientation(q * at->D.conjugate());
   error_ = moveErrorState(e, at->D.conjugate());
   std::size_t pos = at->k + 1;
-  FixHistoryEntry& entry = insertHistoryEntry(pos);
+  FixHistoryEntry& entry = history_.insert(pos);
   entry.step = ModelStep{};
   entry.measurement = pm.measurement;
   entry.D = at->D;
@@ -239,26 +239,6 @@ void AttitudeEngine::reapplyMeasurement(const FixHistoryEntry& entry) {
   }
   propagator_->correctOrientation(q * entry.D.conjugate());
   error_ = moveErrorState(e, entry.D.conjugate());
-}
-
-FixHistoryEntry& AttitudeEngine::insertHistoryEntry(std::size_t& pos) {
-  // Oldest first again; at the memory bound the oldest goes.
-  std::rotate(history_.begin(), history_.begin() + static_cast<std::ptrdiff_t>(history_head_),
-              history_.end());
-  history_head_ = 0;
-  if (history_size_ >= kMaxFixHistorySamples && pos > 0) {
-    std::move(history_.begin() + 1, history_.begin() + static_cast<std::ptrdiff_t>(history_size_),
-              history_.begin());
-    --history_size_;
-    --pos;
-  }
-  if (history_size_ == history_.size()) history_.emplace_back();
-  std::move_backward(history_.begin() + static_cast<std::ptrdiff_t>(pos),
-                     history_.begin() + static_cast<std::ptrdiff_t>(history_size_),
-                     history_.begin() + static_cast<std::ptrdiff_t>(history_size_) + 1);
-  ++history_size_;
-  history_[pos].id = ++last_history_id_;
-  return history_[pos];
 }
 
 }  // namespace attitude_propagator
