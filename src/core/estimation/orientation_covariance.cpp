@@ -89,7 +89,7 @@ Eigen::Matrix3d clampWithCorrelations(const Eigen::Matrix3d& P, Eigen::Matrix3d*
   if (P_Bb) {
     // S = V diag(lambda) V^T with lambda_i clamped to c_i: the joint covariance
     // [S P_Bb; P_Bb^T P_bb] goes through the congruence T = diag(A, I),
-    //   A = V diag(s) V^T,  s_i = sqrt(c_i / lambda_i)  (0 where lambda_i <= 0),
+    //   A = V diag(s) V^T,  s_i = sqrt(c_i / lambda_i)  (0 where lambda_i < 0),
     // so A S A = V diag(c) V^T (the clamped S), P_Bb <- A P_Bb, P_bb unchanged. T P T^T is
     // semi-definite whenever P is, and the correlation of each eigen-direction v_i with each
     // bias component, v_i^T P_Bb e_j / sqrt(lambda_i P_bb,jj), is the same after (s_i cancels);
