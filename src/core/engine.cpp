@@ -528,9 +528,9 @@ void AttitudeEngine::propagateCovariance(double h, const Eigen::Vector3d& w_step
   const double q = config_.fixes.gyro_bias_random_walk;
   e.P_bb += q * q * h * Eigen::Matrix3d::Identity();
   capBiasCovariance(e);
-  const Eigen::Matrix3d symmetric = 0.5 * (P_B + P_B.transpose());
-  e.P_B = clampOrientationCovariance(P_B);
-  if (e.P_B != symmetric) e.P_Bb.setZero();  // clamped: the correlations are lost with it
+  // Clamped (the heading at its cap after an alignment without the field, every step), the
+  // correlations with the bias are scaled with it, not dropped (orientation_covariance.h).
+  e.P_B = clampOrientationCovariance(P_B, e.P_Bb);
 }
 
 void AttitudeEngine::capBiasCovariance(ErrorState& e) {

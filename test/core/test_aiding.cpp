@@ -1,9 +1,11 @@
 // Gravity and the magnetic field as measurements (docs/design.md §6.10, numerics.md §7.3):
 // the measurement models against closed forms and finite differences, the gates on both sides
 // of their thresholds, the alignment against the published tilt formulas, the observability of
-// the bias, late samples against on-time ones, and the filter against a truth.
+// the bias, the attitude block clamped with its correlations, late samples against on-time ones,
+// and the filter against a truth.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 
 #include <gtest/gtest.h>
@@ -14,6 +16,7 @@
 #include "attitude_propagator/estimation/attitude_fix.h"
 #include "attitude_propagator/estimation/gravity_direction.h"
 #include "attitude_propagator/estimation/magnetic_heading.h"
+#include "attitude_propagator/estimation/orientation_covariance.h"
 #include "attitude_propagator/numerics/quaternion.h"
 #include "engine_fixtures.h"
 #include "simulated_imu.h"
@@ -239,6 +242,160 @@ TEST(ErrorState, MovingItAlongTheMotionTurnsItsAttitudeBlocksByTheMotion) {
   const ap::ErrorState back = ap::moveErrorState(f, D.conjugate());
   EXPECT_LE((back.P_B - e.P_B).norm(), 1e-15);
   EXPECT_LE((back.P_Bb - e.P_Bb).norm(), 1e-15);
+}
+
+// ---- the attitude block clamped with its correlations ---------------------------------------
+
+using Matrix6 = Eigen::Matrix<double, 6, 6>;
+
+Matrix6 joint(const Eigen::Matrix3d& P_B, const Eigen::Matrix3d& P_Bb,
+              const Eigen::Matrix3d& P_bb) {
+  Matrix6 P;
+  P << P_B, P_Bb, P_Bb.transpose(), P_bb;
+  return P;
+}
+
+// A joint covariance built from its truth: in the attitude's eigen-directions V (variances
+// lambda) and the bias axes (stddevs sigma_b), Sigma = D C D with D = diag(sqrt(lambda),
+// sigma_b) and C a correlation matrix, so P = diag(V, I) Sigma diag(V, I)^T.
+struct JointTruth {
+  Eigen::Matrix3d V;
+  Eigen::Vector3d lambda;
+  Eigen::Vector3d sigma_b;
+  Matrix6 C;
+
+  Matrix6 covariance() const {
+    Eigen::Matrix<double, 6, 1> d;
+    d << lambda.cwiseSqrt(), sigma_b;
+    Matrix6 T = Matrix6::Identity();
+    T.topLeftCorner<3, 3>() = V;
+    return T * d.asDiagonal() * C * d.asDiagonal() * T.transpose();
+  }
+};
+
+JointTruth genericJoint(const Eigen::Vector3d& lambda) {
+  JointTruth t;
+  t.V = engine_fixtures::aboutAxis({0.3, -0.5, 0.8}, 1.1).toRotationMatrix();
+  t.lambda = lambda;
+  t.sigma_b = Eigen::Vector3d(0.01, 0.02, 0.015);
+  // C = [I R; R^T R^T R + D], D = I - diag(R^T R) >= 0 (R's columns shorter than 1): unit
+  // diagonal, the attitude's directions uncorrelated among themselves (V and lambda are the
+  // attitude block's eigen-decomposition), and the Schur complement D semi-definite.
+  Eigen::Matrix3d R;
+  R << 0.5, -0.2, 0.3,  //
+      0.1, 0.6, -0.4,   //
+      -0.3, 0.2, 0.7;
+  const Eigen::Matrix3d RtR = R.transpose() * R;
+  t.C.setIdentity();
+  t.C.topRightCorner<3, 3>() = R;
+  t.C.bottomLeftCorner<3, 3>() = R.transpose();
+  t.C.bottomRightCorner<3, 3>() = RtR;
+  t.C.bottomRightCorner<3, 3>().diagonal().setOnes();
+  return t;
+}
+
+double smallestEigenvalue(const Matrix6& P) {
+  return Eigen::SelfAdjointEigenSolver<Matrix6>(P).eigenvalues().minCoeff();
+}
+
+// An eigenvalue of the attitude block above the cap is lowered to it and its correlations with
+// the bias stay what they were: the result is the joint covariance built from the same truth
+// with that variance at the cap. The joint matrix stays symmetric and semi-definite.
+TEST(ClampedCovariance, AClampedDirectionKeepsItsCorrelationsWithTheBias) {
+  const double cap = ap::kMaxOrientationVariance;
+  const JointTruth before = genericJoint({0.02, 0.3, 1.5 * cap});
+  const Matrix6 P = before.covariance();
+  Eigen::Matrix3d P_Bb = P.topRightCorner<3, 3>();
+  const Eigen::Matrix3d P_B = ap::clampOrientationCovariance(P.topLeftCorner<3, 3>(), P_Bb);
+  JointTruth after = before;
+  after.lambda.z() = cap;
+  const Matrix6 expected = after.covariance();
+  const double scale = cap;
+  EXPECT_LE((P_B - expected.topLeftCorner<3, 3>()).norm(), 1e-13 * scale);
+  EXPECT_LE((P_Bb - expected.topRightCorner<3, 3>()).norm(), 1e-13 * scale);
+  const Matrix6 clamped = joint(P_B, P_Bb, P.bottomRightCorner<3, 3>());
+  EXPECT_EQ(P_B, P_B.transpose());  // the joint matrix symmetric: P_Bb appears on both sides
+  EXPECT_GE(smallestEigenvalue(clamped), -1e-15 * scale);
+  // The correlation coefficients, direction by direction, from the clamped matrix.
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d v = before.V.col(i);
+    for (int j = 0; j < 3; ++j) {
+      const double rho = v.dot(P_Bb.col(j)) / std::sqrt(v.dot(P_B * v) * P(3 + j, 3 + j));
+      EXPECT_NEAR(rho, before.C(i, 3 + j), 1e-12) << i << " " << j;
+    }
+  }
+  // And the same scene with a negative eigenvalue (round-off's kind): raised to zero, that
+  // direction has no correlation left, the others are kept.
+  JointTruth negative = genericJoint({0.02, 0.3, 0.5});
+  Matrix6 Pn = negative.covariance();
+  const Eigen::Vector3d v0 = negative.V.col(0);
+  Pn.topLeftCorner<3, 3>() -= 0.03 * v0 * v0.transpose();  // lambda_0 = -0.01
+  Eigen::Matrix3d P_Bb_n = Pn.topRightCorner<3, 3>();
+  const Eigen::Matrix3d P_B_n = ap::clampOrientationCovariance(Pn.topLeftCorner<3, 3>(), P_Bb_n);
+  EXPECT_LE(std::abs(v0.dot(P_B_n * v0)), 1e-15);
+  EXPECT_LE((P_Bb_n.transpose() * v0).norm(), 1e-15);
+  for (int i = 1; i < 3; ++i) {
+    const Eigen::Vector3d v = negative.V.col(i);
+    EXPECT_LE((P_Bb_n.transpose() * v - Pn.topRightCorner<3, 3>().transpose() * v).norm(), 1e-15);
+  }
+  EXPECT_GE(smallestEigenvalue(joint(P_B_n, P_Bb_n, Pn.bottomRightCorner<3, 3>())), -1e-15);
+}
+
+// Nothing to clamp: the cross-covariance is left bit for bit, whether the quick test lets the
+// matrix through (trace within the cap) or the eigen-decomposition runs and finds every
+// eigenvalue within the bounds (trace beyond the cap, no eigenvalue beyond it).
+TEST(ClampedCovariance, AnUnclampedBlockLeavesTheCrossCovarianceBitForBit) {
+  for (const Eigen::Vector3d& lambda :
+       {Eigen::Vector3d(0.02, 0.3, 0.5),
+        Eigen::Vector3d(0.02, 3.0, 0.9 * ap::kMaxOrientationVariance)}) {
+    const Matrix6 P = genericJoint(lambda).covariance();
+    const Eigen::Matrix3d P_B =
+        0.5 * (P.topLeftCorner<3, 3>() + P.topLeftCorner<3, 3>().transpose());
+    const Eigen::Matrix3d P_Bb_before = P.topRightCorner<3, 3>();
+    Eigen::Matrix3d P_Bb = P_Bb_before;
+    const Eigen::Matrix3d clamped = ap::clampOrientationCovariance(P_B, P_Bb);
+    EXPECT_EQ(P_Bb, P_Bb_before) << lambda.transpose();
+    EXPECT_EQ(clamped, ap::clampOrientationCovariance(P_B)) << lambda.transpose();
+    if (lambda.sum() <= ap::kMaxOrientationVariance) {
+      EXPECT_EQ(clamped, P_B);
+    }
+  }
+  // Not finite: the attitude unknown, no correlation left.
+  Eigen::Matrix3d P_Bb = Eigen::Matrix3d::Constant(0.1);
+  Eigen::Matrix3d P_B = Eigen::Matrix3d::Identity();
+  P_B(1, 1) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(ap::clampOrientationCovariance(P_B, P_Bb),
+            ap::kMaxOrientationVariance * Eigen::Matrix3d::Identity());
+  EXPECT_EQ(P_Bb, Eigen::Matrix3d::Zero());
+}
+
+// The heading's variance one ulp below the cap, at it, and above it (the tilt's small, so the
+// trace is beyond the cap and the eigen-decomposition runs in all three): below and at, the
+// cross-covariance is left bit for bit; above, the heading's row is scaled by sqrt(cap / v) and
+// the others stay.
+TEST(ClampedCovariance, TheHeadingJustBelowAtAndAboveTheCap) {
+  const double cap = ap::kMaxOrientationVariance;
+  Eigen::Matrix3d P_Bb_before;
+  P_Bb_before << 1e-4, -2e-4, 0.5e-4,  //
+      3e-4, 1e-4, -1e-4,               //
+      -2e-3, 1e-3, 4e-3;
+  const Eigen::Matrix3d P_bb = 1e-4 * Eigen::Matrix3d::Identity();
+  for (const double v : {std::nextafter(cap, 0.0), cap, cap * (1.0 + 1e-6), 4.0 * cap}) {
+    Eigen::Matrix3d P = Eigen::Vector3d(1e-3, 2e-3, v).asDiagonal();
+    Eigen::Matrix3d P_Bb = P_Bb_before;
+    const Eigen::Matrix3d P_B = ap::clampOrientationCovariance(P, P_Bb);
+    EXPECT_EQ(P_B(2, 2), std::min(v, cap)) << v;
+    if (v <= cap) {
+      EXPECT_EQ(P_Bb, P_Bb_before) << v;
+    } else {
+      const double s = std::sqrt(cap / v);
+      EXPECT_LE((P_Bb.row(2) - s * P_Bb_before.row(2)).norm(), 1e-15 * P_Bb_before.row(2).norm())
+          << v;
+      EXPECT_LE((P_Bb.topRows<2>() - P_Bb_before.topRows<2>()).norm(), 1e-18) << v;
+      EXPECT_LT(P_Bb.row(2).norm(), P_Bb_before.row(2).norm()) << v;
+    }
+    EXPECT_GE(smallestEigenvalue(joint(P_B, P_Bb, P_bb)), -1e-15 * cap) << v;
+  }
 }
 
 // ---- the gates, on both sides ----------------------------------------------------------------
@@ -681,6 +838,48 @@ TEST(Bias, GravityMakesTheHorizontalBiasObservableAndNeverTheVertical) {
   EXPECT_NEAR(s.gyro_bias_estimate_B.y(), bias.y(), 0.05 * kDeg);
   EXPECT_LE(std::abs(s.gyro_bias_estimate_B.z()), 1e-4 * bias.z());
   EXPECT_EQ(engine.counters().accel.accepted, 6001u);
+}
+
+// The attitude unknown (its covariance at the cap on every axis) and the gyro alone at rest:
+// each step the bias' uncertainty grows the attitude's (the error dtheta' = dtheta - h db, so
+// p' = p - 2 h c + h^2 (q + r^2), c' = c - h q with c = Cov(dtheta_i, db_i), q = P_bb,ii) past
+// the cap, and the clamp brings p back to it with c scaled by sqrt(cap / p'), the correlation
+// kept: the scalar recurrence below, per axis. Then one level gravity sample: what it learns
+// of the horizontal bias is through c alone, P_bb,ii' = q - c^2 / (cap + R), R = (accel_stddev /
+// g)^2 the direction's noise (the sample exact, no linear acceleration seen). Dropping the
+// correlations at each clamp leaves c = -h q and the bias' stddev at its prior.
+TEST(Bias, TheAttitudesCorrelationWithTheBiasOutlivesTheClampAtTheCap) {
+  ap::EngineConfig c = aidedConfig();
+  c.aiding.align = false;
+  c.initial_orientation_stddev = 4.0;  // beyond the cap: clamped to it
+  c.fixes.estimate_gyro_bias = true;
+  c.fixes.gyro_bias_stddev = 0.01;
+  c.fixes.gyro_bias_random_walk = 0.0;
+  Recorder sink;
+  ap::AttitudeEngine engine(c, sink);
+  const double h = 0.01;
+  const int n = 10000;
+  for (int k = 0; k <= n; ++k) engine.submit(imu(at(k * h), Eigen::Vector3d::Zero()));
+  const double cap = ap::kMaxOrientationVariance;
+  const double q = 0.01 * 0.01;
+  const double r2 = c.rate_stddev * c.rate_stddev;
+  double cov = 0.0;
+  for (int k = 0; k < n; ++k) {
+    const double p = cap - 2.0 * h * cov + h * h * (q + r2);
+    cov = std::sqrt(cap / p) * (cov - h * q);
+  }
+  EXPECT_LT(cov, -0.9 * n * h * q);  // most of the correlation the drift builds is there
+  EXPECT_EQ(engine.state().P_B.diagonal(), Eigen::Vector3d::Constant(cap));
+  EXPECT_NEAR(engine.state().gyro_bias_stddev_B.x(), 0.01, 1e-15);
+  engine.submitAcceleration(at(n * h), {0, 0, g}, Eigen::Matrix3d::Zero());
+  ASSERT_EQ(engine.counters().accel.accepted, 1u);
+  const Eigen::Vector3d stddev = engine.state().gyro_bias_stddev_B;
+  const double R = std::pow(c.aiding.accel_stddev / g, 2);
+  const double expected = std::sqrt(q - cov * cov / (cap + R));
+  EXPECT_NEAR(stddev.x(), expected, 1e-12);
+  EXPECT_NEAR(stddev.y(), expected, 1e-12);
+  EXPECT_NEAR(stddev.z(), 0.01, 1e-12);  // the vertical: not seen by gravity
+  EXPECT_LT(stddev.x(), 0.01 - 1e-4);
 }
 
 // ---- late samples ----------------------------------------------------------------------------

@@ -37,6 +37,15 @@ Eigen::Matrix3d propagateOrientationCovariance(const Eigen::Matrix3d& P, double 
 /// becomes kMaxOrientationVariance I.
 Eigen::Matrix3d clampOrientationCovariance(const Eigen::Matrix3d& P);
 
+/// The same clamp of the attitude block P of a joint covariance [P P_Bb; P_Bb^T P_bb] (P_Bb the
+/// attitude error x bias error), keeping the joint matrix a covariance: where P's eigenvalue
+/// lambda_i is clamped to c_i, P_Bb <- A P_Bb with A = V diag(sqrt(c_i / lambda_i)) V^T (1 on the
+/// directions not clamped, 0 where lambda_i < 0), the congruence diag(A, I) of the joint
+/// matrix. It keeps the joint matrix semi-definite and each eigen-direction's correlation
+/// coefficients with the bias; P_bb needs no change. P_Bb is left exactly as it is when P is not
+/// clamped, and zeroed when P is not finite.
+Eigen::Matrix3d clampOrientationCovariance(const Eigen::Matrix3d& P, Eigen::Matrix3d& P_Bb);
+
 /// What is wrong with a rate noise covariance (rad^2/s^2) taken from a message.
 enum class RateCovarianceCheck {
   Ok,

@@ -67,24 +67,56 @@ bool principalMinorsNonNegative(const Eigen::Matrix3d& S) {
   return S.determinant() >= 0.0;
 }
 
-}  // namespace
-
-Eigen::Matrix3d clampOrientationCovariance(const Eigen::Matrix3d& P) {
+/// The clamp of both public forms. With P_Bb given (the rows of the joint covariance that
+/// belong to P), the clamped eigen-directions scale their correlations with it (below).
+Eigen::Matrix3d clampWithCorrelations(const Eigen::Matrix3d& P, Eigen::Matrix3d* P_Bb) {
   const Eigen::Matrix3d ceiling = kMaxOrientationVariance * Eigen::Matrix3d::Identity();
-  if (!P.allFinite()) return ceiling;
+  if (!P.allFinite()) {
+    if (P_Bb) P_Bb->setZero();  // nothing is known of the attitude, nor of how it goes with b
+    return ceiling;
+  }
   Eigen::Matrix3d S = 0.5 * (P + P.transpose());
   // Semi-definite with trace <= ceiling: every eigenvalue is in [0, ceiling] already.
   if (principalMinorsNonNegative(S) && S.trace() <= kMaxOrientationVariance) return S;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(S);
-  if (eigen.info() != Eigen::Success) return ceiling;
-  const Eigen::Vector3d lambda =
-      eigen.eigenvalues().cwiseMax(0.0).cwiseMin(kMaxOrientationVariance);
+  if (eigen.info() != Eigen::Success) {
+    if (P_Bb) P_Bb->setZero();
+    return ceiling;
+  }
+  const Eigen::Vector3d& lambda = eigen.eigenvalues();
+  const Eigen::Vector3d clamped_lambda = lambda.cwiseMax(0.0).cwiseMin(kMaxOrientationVariance);
   const Eigen::Matrix3d& V = eigen.eigenvectors();
-  const Eigen::Matrix3d clamped = V * lambda.asDiagonal() * V.transpose();
+  if (P_Bb) {
+    // S = V diag(lambda) V^T with lambda_i clamped to c_i: the joint covariance
+    // [S P_Bb; P_Bb^T P_bb] goes through the congruence T = diag(A, I),
+    //   A = V diag(s) V^T,  s_i = sqrt(c_i / lambda_i)  (0 where lambda_i < 0),
+    // so A S A = V diag(c) V^T (the clamped S), P_Bb <- A P_Bb, P_bb unchanged. T P T^T is
+    // semi-definite whenever P is, and the correlation of each eigen-direction v_i with each
+    // bias component, v_i^T P_Bb e_j / sqrt(lambda_i P_bb,jj), is the same after (s_i cancels);
+    // a direction lowered to zero variance has no correlation left. A = I + V diag(s - 1) V^T,
+    // its unclamped directions' s_i - 1 = 0 exactly: only the clamped directions move P_Bb.
+    Eigen::Vector3d s_minus_one = Eigen::Vector3d::Zero();
+    for (int i = 0; i < 3; ++i) {
+      if (clamped_lambda(i) == lambda(i)) continue;
+      s_minus_one(i) = (lambda(i) > 0.0 ? std::sqrt(clamped_lambda(i) / lambda(i)) : 0.0) - 1.0;
+    }
+    *P_Bb += V * s_minus_one.asDiagonal() * (V.transpose() * *P_Bb);
+  }
+  const Eigen::Matrix3d clamped = V * clamped_lambda.asDiagonal() * V.transpose();
   S = 0.5 * (clamped + clamped.transpose());
   // The reconstruction rounds: keep the diagonal inside the range exactly.
   S.diagonal() = S.diagonal().cwiseMax(0.0).cwiseMin(kMaxOrientationVariance);
   return S;
+}
+
+}  // namespace
+
+Eigen::Matrix3d clampOrientationCovariance(const Eigen::Matrix3d& P) {
+  return clampWithCorrelations(P, nullptr);
+}
+
+Eigen::Matrix3d clampOrientationCovariance(const Eigen::Matrix3d& P, Eigen::Matrix3d& P_Bb) {
+  return clampWithCorrelations(P, &P_Bb);
 }
 
 RateCovarianceCheck checkRateCovariance(const Eigen::Matrix3d& R) {
