@@ -56,7 +56,7 @@ constexpr double kMaxRateVariance = kMaxRateStddev * kMaxRateStddev;
 /// Largest `gyro_bias_stddev` (rad/s), and the ceiling of the bias estimate's standard deviation
 /// per axis (a random walk grows it no further). A step of h adds about h^2 sigma_b^2 to the
 /// attitude's variance: at 10 rad/s a step up to 0.3 s stays below its ceiling pi^2, where the
-/// covariance would be capped and the attitude-bias correlation, which moves the estimate, lost.
+/// covariance would be capped (and its correlations with the bias scaled down with it).
 /// A MEMS gyro's bias is below 0.1 rad/s.
 constexpr double kMaxGyroBiasStddev = 10.0;
 

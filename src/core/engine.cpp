@@ -528,8 +528,9 @@ void AttitudeEngine::propagateCovariance(double h, const Eigen::Vector3d& w_step
   const double q = config_.fixes.gyro_bias_random_walk;
   e.P_bb += q * q * h * Eigen::Matrix3d::Identity();
   capBiasCovariance(e);
-  // Clamped (the heading at its cap after an alignment without the field, every step), the
-  // correlations with the bias are scaled with it, not dropped (orientation_covariance.h).
+  // Clamped (an attitude variance at its cap, as the heading's after an alignment without the
+  // field), the correlations with the bias are scaled with it, not dropped
+  // (orientation_covariance.h).
   e.P_B = clampOrientationCovariance(P_B, e.P_Bb);
 }
 
