@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -17,6 +18,7 @@
 #include "attitude_propagator/numerics/quaternion.h"
 #include "attitude_propagator/time/average_stamp.h"
 #include "attitude_propagator/time/stamp_filter.h"
+#include "attitude_propagator/time/time_policy.h"
 #include "engine_fixtures.h"
 #include "rotation_matchers.h"
 #include "sampling.h"
@@ -61,6 +63,24 @@ Verdict verdictOnTheKthStamp(const ap::SensorClockFilter::Options& options, int 
 }
 
 }  // namespace
+
+// time_policy.h: a stamp at or before the newest one taken is stale, by any amount (one ulp
+// before, equal, a year before); one ulp after is not. classifyStamp applies the same rule and,
+// past it, tells a gap beyond max_dt (exactly max_dt is still a step forward).
+TEST(TimePolicy, AStampAtOrBeforeTheNewestIsStaleByAnyAmount) {
+  const double newest = 1500000000.25;
+  for (double t : {std::nextafter(newest, 0.0), newest, newest - 3.15e7}) {
+    EXPECT_TRUE(ap::isStale(newest, t)) << t - newest;
+    EXPECT_EQ(ap::classifyStamp(newest, t, ap::TimePolicy{}), ap::StampClass::Stale);
+  }
+  const double after = std::nextafter(newest, 2.0 * newest);
+  EXPECT_FALSE(ap::isStale(newest, after));
+  ap::TimePolicy policy;
+  policy.max_dt = 0.5;
+  EXPECT_EQ(ap::classifyStamp(newest, after, policy), ap::StampClass::Forward);
+  EXPECT_EQ(ap::classifyStamp(1.0, 1.5, policy), ap::StampClass::Forward);
+  EXPECT_EQ(ap::classifyStamp(1.0, std::nextafter(1.5, 2.0), policy), ap::StampClass::Gap);
+}
 
 // docs/numerics.md §3: stamps are rejected only after a warm-up of warm_up draws (10 by
 // default), a draw being a stamp received on its own. An outlier as the warm_up-th stamp joins
