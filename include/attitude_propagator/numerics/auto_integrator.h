@@ -102,6 +102,10 @@ class KinematicAutoRule {
   std::array<Eigen::Vector3d, 5> recent_{};
   std::uint64_t real_run_ = 0;
   Eigen::Quaterniond frame_ = Eigen::Quaterniond::Identity();  // the means integrated (exp)
+  // ... at the start of the intervals of the three newest means, recent_[2..4], oldest first.
+  std::array<Eigen::Quaterniond, 3> starts_{Eigen::Quaterniond::Identity(),
+                                            Eigen::Quaterniond::Identity(),
+                                            Eigen::Quaterniond::Identity()};
   bool filled_before_ = false;
   Eigen::Vector3d fill_drift_ = Eigen::Vector3d::Zero();  // a lone fill's error, world frame
   Eigen::Vector3d cf4_drift_ = Eigen::Vector3d::Zero();   // a step's error: cf4 ...
