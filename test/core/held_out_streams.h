@@ -1,7 +1,8 @@
 // The held-out streams of `integrator: auto` (test_auto_held_out.cpp,
-// test_auto_held_out_second.cpp): motions with a closed-form attitude, the streams a driver
-// delivers from them, and the judgement of `auto` against the best fixed kinematic method on the
-// same samples (docs/real_streams.md, "How the `auto` rule was validated").
+// test_auto_held_out_second.cpp, test_auto_held_out_third.cpp): motions with a closed-form
+// attitude, the streams a driver delivers from them, and the judgement of `auto` against the best
+// fixed kinematic method on the same samples (docs/real_streams.md, "How the `auto` rule was
+// validated").
 #pragma once
 
 #include <gtest/gtest.h>
@@ -106,7 +107,9 @@ struct StreamSpec {
   AverageStamp stamped = AverageStamp::End;  // ... stamped at the interval's end, mid or start
   double jitter = 0.0;                       // s, receipt jitter (standard deviation)
   double latency = 0.0;  // s: received after a latency >= 0, half-normal latency |N(0, 1)|
-  double drop = 0.0;     // probability a sample is lost
+  double drop = 0.0;     // probability a sample is lost ...
+  int burst = 1;         // ... and with it up to burst - 1 after it (uniformly 0 .. burst - 1)
+  int drop_every = 0;    // > 0: every sample whose index is a multiple of it is lost
   bool mems = false;     // angle random walk and 16-bit quantisation
   Filter lowpass = Filter::None;
   int fifo_batch = 0;  // > 0: FIFO reads of this many samples
@@ -209,6 +212,7 @@ inline std::vector<Sample> makeStream(const Motion& motion, const StreamSpec& sp
     butterworth.erase(butterworth.begin(), butterworth.begin() + preroll);
   }
   std::vector<Sample> samples;
+  int burst_left = 0;  // samples still to lose in a burst
   for (std::size_t k = 0; k < times.size(); ++k) {
     const double t = times[k];
     const double period = k > 0 ? t - times[k - 1] : h;
@@ -228,7 +232,16 @@ inline std::vector<Sample> makeStream(const Motion& motion, const StreamSpec& sp
       }
       if (spec.jitter > 0.0) stamp += spec.jitter * normalRandom(state);
       if (spec.latency > 0.0) stamp += spec.latency * std::abs(normalRandom(state));
-      if (k > 3 && spec.drop > 0.0 && uniformRandom(state) < spec.drop) continue;
+      if (k > 3 && burst_left > 0) {
+        --burst_left;
+        continue;
+      }
+      if (k > 3 && spec.drop_every > 0 && k % static_cast<std::size_t>(spec.drop_every) == 0)
+        continue;
+      if (k > 3 && spec.drop > 0.0 && uniformRandom(state) < spec.drop) {
+        if (spec.burst > 1) burst_left = static_cast<int>(uniformRandom(state) * spec.burst);
+        continue;
+      }
     }
     samples.push_back({stamp - spec.rate_delay, w});
   }

@@ -34,10 +34,12 @@ double KinematicAutoRule::jitterMeasure() const {
 
 void KinematicAutoRule::predictErrors(double interval, const Eigen::Vector3d& w_B, bool filled,
                                       bool regular, double weight) {
-  frame_ = (frame_ * expMap(interval * w_B)).normalized();
   real_run_ = regular && !filled ? real_run_ + 1 : 0;
   for (std::size_t j = 0; j + 1 < recent_.size(); ++j) recent_[j] = recent_[j + 1];
   recent_.back() = w_B;
+  for (std::size_t j = 0; j + 1 < starts_.size(); ++j) starts_[j] = starts_[j + 1];
+  starts_.back() = frame_;
+  frame_ = (frame_ * expMap(interval * w_B)).normalized();
   if (real_run_ >= recent_.size()) estimateErrors(weight);
   // From the first fill on, each step adds the errors per step estimated last (the world-frame
   // means, so that a drift adds up and an oscillation averages out), a filled step its fill's.
@@ -53,8 +55,11 @@ void KinematicAutoRule::predictErrors(double interval, const Eigen::Vector3d& w_
 void KinematicAutoRule::estimateErrors(double weight) {
   const std::array<Eigen::Vector3d, 5>& m = recent_;
   const double h = mean_interval_;
-  // The errors of the middle interval of the five newest means, m[2], rotated into the frame_.
-  // Its rotation beyond h m (Bortz): h^3/12 m x (the rate's slope). The
+  // The errors of the middle interval of the five newest means, m[2], in the world frame: the
+  // frame of the means integrated at that interval's middle (between its start and its end,
+  // the next one's start), not the newest frame, which has turned by about 2 h |w| since (a
+  // fast spin would turn a circling error onto the spin axis). Its rotation beyond h m
+  // (Bortz): h^3/12 m x (the rate's slope). The
   // slope exact to fourth order: the derivative at the middle of the quartic whose means over
   // the five intervals are the samples. cf4 took it from the quadratic through the middle
   // mean and the two before (one-sided), exp2 from the difference of the last two means (half
@@ -63,12 +68,16 @@ void KinematicAutoRule::estimateErrors(double weight) {
   const Eigen::Vector3d cf4_slope = (1.5 * m[2] - 2.0 * m[1] + 0.5 * m[0]) / h;
   const Eigen::Vector3d exp2_slope = (m[2] - m[1]) / h;
   const double bortz = h * h * h / 12.0;
-  blend(cf4_drift_, frame_ * (bortz * m[2].cross(cf4_slope - slope)), weight);
-  blend(exp2_drift_, frame_ * (bortz * m[2].cross(exp2_slope - slope)), weight);
+  const Eigen::Quaterniond middle(starts_[0].coeffs() + starts_[1].coeffs());
+  const Eigen::Matrix3d to_world = middle.normalized().toRotationMatrix();
+  blend(cf4_drift_, to_world * (bortz * m[2].cross(cf4_slope - slope)), weight);
+  blend(exp2_drift_, to_world * (bortz * m[2].cross(exp2_slope - slope)), weight);
   // A fill's error: the mean the fill would put for m[3] from the three before and the one
-  // after (the cubic of fillMeans) less the sample, h/4 times the fourth difference.
+  // after (the cubic of fillMeans) less the sample, h/4 times the fourth difference, in the
+  // frame at the middle of m[3]'s interval.
   const Eigen::Vector3d fourth = m[0] - 4.0 * m[1] + 6.0 * m[2] - 4.0 * m[3] + m[4];
-  blend(fill_drift_, frame_ * (0.25 * h * fourth), weight);
+  const Eigen::Quaterniond fill_middle(starts_[1].coeffs() + starts_[2].coeffs());
+  blend(fill_drift_, fill_middle.normalized() * (0.25 * h * fourth), weight);
 }
 
 Integrator KinematicAutoRule::step(double interval, const Eigen::Vector3d& w_B, bool filled) {
