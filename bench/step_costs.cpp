@@ -17,10 +17,19 @@
 //                            one clock tick publishing a grid stamp (dynamic: rk4, a torque
 //                            held) through AttitudeEngine, without fixes and with the fix
 //                            history kept (one fix at the start): the per-sample cost of the
-//                            history, as a ratio of the two in the same run
+//                            history, as a ratio of the two in the same run. The kinematic
+//                            one with a tactical gyro's bias prior (2.4e-5 rad/s), so that the
+//                            attitude covariance stays below its cap over the whole run
+//   engineSample/kinematic_cf4_at_cap   the same with a MEMS prior (0.01 rad/s, the default):
+//                            over the run's thousands of seconds without a fix the attitude
+//                            variance reaches its cap pi^2, and every step then clamps it (an
+//                            eigendecomposition, orientation_covariance.h)
 //   fixReplay/<model>        one late fix 1 s behind the newest state: kinematic, 200 Hz rates
 //                            (200 inputs replayed); dynamic, a 100 Hz grid with torques and
-//                            rates (the steps of 1 s replayed)
+//                            rates (the steps of 1 s replayed). Between two, outside the timing,
+//                            the rates move on by a second, so that each replay falls in a
+//                            second of stamp time of its own and the replay budget
+//                            (replay_budget.h) never refuses one: the replay is measured
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -187,12 +196,13 @@ ap::Input torqueInput(double t) {
   return in;
 }
 
-ap::EngineConfig kinematicFixConfig() {
+ap::EngineConfig kinematicFixConfig(double gyro_bias_stddev = 2.424e-5) {
   ap::EngineConfig c;
   c.model = ap::Model::Kinematic;
   c.kinematic.integrator = Integrator::Cf4;
   c.rate_stddev = 1e-3;
   c.fixes.estimate_gyro_bias = true;
+  c.fixes.gyro_bias_stddev = gyro_bias_stddev;
   c.fixes.history = 1.5;
   return c;
 }
@@ -227,9 +237,10 @@ void feed(ap::AttitudeEngine& engine, bool dynamic, long k) {
   engine.clockTick(stampOf(t));
 }
 
-void engineSampleCost(benchmark::State& state, bool dynamic, bool history) {
+void engineSampleCost(benchmark::State& state, bool dynamic, bool history, bool at_cap = false) {
   NullSink sink;
-  ap::AttitudeEngine engine(dynamic ? dynamicFixConfig() : kinematicFixConfig(), sink);
+  ap::AttitudeEngine engine(
+      dynamic ? dynamicFixConfig() : kinematicFixConfig(at_cap ? 0.01 : 2.424e-5), sink);
   long k = 0;
   feed(engine, dynamic, k++);
   if (history) engine.submitFix(stampOf(0.0), engine.state().q_WB, kFixCovariance);
@@ -244,29 +255,49 @@ void fixReplayCost(benchmark::State& state, bool dynamic) {
   NullSink sink;
   ap::AttitudeEngine engine(dynamic ? dynamicFixConfig() : kinematicFixConfig(), sink);
   const long per_second = dynamic ? 100 : 200;
+  const double step = 1.0 / static_cast<double>(per_second);
   feed(engine, dynamic, 0);
   engine.submitFix(stampOf(0.0), engine.state().q_WB, kFixCovariance);
+  long k = 0;
   Eigen::Quaterniond q = engine.state().q_WB;
-  for (long k = 1; k <= 3 * per_second / 2; ++k) {  // newest at 1.5 s
-    feed(engine, dynamic, k);
-    if (k == per_second / 2) q = engine.state().q_WB;  // the estimate at 0.5 s: inside the gate
-  }
+  // The rates a second on (the first time 1.5 s), keeping the estimate a second before the
+  // newest state: a fix there is inside the gate.
+  auto moveOn = [&](long samples) {
+    const long fix_at = k + samples - per_second;
+    if (k == fix_at) q = engine.state().q_WB;
+    while (k < fix_at + per_second) {
+      feed(engine, dynamic, ++k);
+      if (k == fix_at) q = engine.state().q_WB;
+    }
+  };
+  moveOn(3 * per_second / 2);
   for (auto _ : state) {
-    // 1 s behind the newest state; near the estimate, so the gate lets it through.
-    const ap::FixOutcome outcome = engine.submitFix(stampOf(0.5), q, kFixCovariance);
+    const ap::FixOutcome outcome =
+        engine.submitFix(stampOf(static_cast<double>(k - per_second) * step), q, kFixCovariance);
     benchmark::DoNotOptimize(outcome);
+    state.PauseTiming();
+    moveOn(per_second);
+    state.ResumeTiming();
   }
   state.counters["replayed"] = static_cast<double>(per_second);
-  state.counters["accepted"] = static_cast<double>(engine.counters().fixes_accepted);
+  const ap::EngineCounters& c = engine.counters();
+  state.counters["accepted"] = static_cast<double>(c.fixes_accepted);
+  state.counters["gated"] = static_cast<double>(c.fixes_rejected_gate);
+  state.counters["over_budget"] = static_cast<double>(c.fixes_over_budget);
+  state.counters["too_old"] = static_cast<double>(c.fixes_too_old);
 }
 
 void registerFixes() {
   for (bool dynamic : {false, true}) {
     const std::string model = dynamic ? "dynamic_rk4" : "kinematic_cf4";
     benchmark::RegisterBenchmark(("engineSample/" + model).c_str(), engineSampleCost, dynamic,
-                                 false);
+                                 false, false);
     benchmark::RegisterBenchmark(("engineSample/" + model + "_fix_history").c_str(),
-                                 engineSampleCost, dynamic, true);
+                                 engineSampleCost, dynamic, true, false);
+    if (!dynamic) {
+      benchmark::RegisterBenchmark("engineSample/kinematic_cf4_at_cap", engineSampleCost, false,
+                                   false, true);
+    }
     benchmark::RegisterBenchmark(("fixReplay/" + model).c_str(), fixReplayCost, dynamic)
         ->Unit(benchmark::kMicrosecond);
   }
