@@ -125,6 +125,22 @@ struct StreamSpec {
   bool random() const { return jitter > 0.0 || drop > 0.0 || mems || fifo_batch > 0; }
 };
 
+/// Appends a stream named `name` at `hz` to `specs` (point samples, every other field its
+/// default) and returns it to be set further.
+inline StreamSpec& addStream(std::vector<StreamSpec>& specs, const std::string& name, double hz) {
+  specs.emplace_back();
+  specs.back().name = name;
+  specs.back().rate_hz = hz;
+  return specs.back();
+}
+
+/// The stream as interval means, taken as such (rate_samples: interval_average).
+inline StreamSpec& asMeans(StreamSpec& s) {
+  s.averaged = true;
+  s.setting = RateSamples::IntervalAverage;
+  return s;
+}
+
 constexpr double kDuration = 10.0;  // s
 // The on-chip filters: a 2nd-order Butterworth at ODR/5 (bilinear) and a sinc^2 decimator by 5.
 const gyro_streams::Butterworth2 kButterworth(0.2);

@@ -70,22 +70,15 @@ Motion sines() {
 std::vector<StreamSpec> streamSpecs(const std::string& motion) {
   std::vector<StreamSpec> specs;
   auto add = [&specs](const std::string& name, double hz) -> StreamSpec& {
-    specs.emplace_back();
-    specs.back().name = name;
-    specs.back().rate_hz = hz;
-    return specs.back();
+    return addStream(specs, name, hz);
   };
   for (double hz : {73.0, 120.0, 333.0, 750.0}) {
     add("point", hz);
-    StreamSpec& means = add("means_end", hz);
-    means.averaged = true;
-    means.setting = RateSamples::IntervalAverage;
+    asMeans(add("means_end", hz));
   }
   for (AverageStamp at : {AverageStamp::Mid, AverageStamp::Start}) {
-    StreamSpec& s = add("means_" + ap::averageStampName(at), 120.0);
-    s.averaged = true;
+    StreamSpec& s = asMeans(add("means_" + ap::averageStampName(at), 120.0));
     s.stamped = at;
-    s.setting = RateSamples::IntervalAverage;
     s.average_stamp = at;
   }
   add("means_read_as_point", 120.0).averaged = true;

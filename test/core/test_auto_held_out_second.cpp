@@ -54,33 +54,25 @@ Motion wideCone() { return coning("cone_w", 0.9, 0.6); }
 std::vector<StreamSpec> streamSpecs() {
   std::vector<StreamSpec> specs;
   auto add = [&specs](const std::string& name, double hz) -> StreamSpec& {
-    specs.emplace_back();
-    specs.back().name = name;
-    specs.back().rate_hz = hz;
-    return specs.back();
-  };
-  auto means = [](StreamSpec& s) -> StreamSpec& {
-    s.averaged = true;
-    s.setting = RateSamples::IntervalAverage;
-    return s;
+    return addStream(specs, name, hz);
   };
   // The kind the rule was changed for: means with lost samples, filled (max_gap_fill 4).
-  means(add("means_1pct_lost", 90.0)).drop = 0.01;
-  means(add("means_6pct_lost", 180.0)).drop = 0.06;
-  means(add("means_15pct_lost", 480.0)).drop = 0.15;
-  StreamSpec& mid = means(add("means_mid_6pct_lost", 240.0));
+  asMeans(add("means_1pct_lost", 90.0)).drop = 0.01;
+  asMeans(add("means_6pct_lost", 180.0)).drop = 0.06;
+  asMeans(add("means_15pct_lost", 480.0)).drop = 0.15;
+  StreamSpec& mid = asMeans(add("means_mid_6pct_lost", 240.0));
   mid.drop = 0.06;
   mid.stamped = AverageStamp::Mid;
   mid.average_stamp = AverageStamp::Mid;
   // Controls.
   for (double hz : {90.0, 180.0, 480.0}) {
     add("point", hz);
-    means(add("means_end", hz));
+    asMeans(add("means_end", hz));
   }
   add("point_6pct_lost", 180.0).drop = 0.06;
-  means(add("means_jitter_0.1ms", 480.0)).jitter = 1e-4;
+  asMeans(add("means_jitter_0.1ms", 480.0)).jitter = 1e-4;
   add("jitter_0.3ms", 480.0).jitter = 3e-4;
-  means(add("means_mems", 180.0)).mems = true;
+  asMeans(add("means_mems", 180.0)).mems = true;
   add("rate_change_90_480Hz", 90.0).rate_after_hz = 480.0;
   return specs;
 }

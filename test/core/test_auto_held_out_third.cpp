@@ -68,38 +68,30 @@ Motion fastBody() {
 std::vector<StreamSpec> streamSpecs() {
   std::vector<StreamSpec> specs;
   auto add = [&specs](const std::string& name, double hz) -> StreamSpec& {
-    specs.emplace_back();
-    specs.back().name = name;
-    specs.back().rate_hz = hz;
-    return specs.back();
-  };
-  auto means = [](StreamSpec& s) -> StreamSpec& {
-    s.averaged = true;
-    s.setting = RateSamples::IntervalAverage;
-    return s;
+    return addStream(specs, name, hz);
   };
   // The kind the rule was extended for: means with lost samples, filled (max_gap_fill 4).
-  means(add("means_4pct_lost", 64.0)).drop = 0.04;
-  means(add("means_8pct_lost", 300.0)).drop = 0.08;
-  means(add("means_20pct_lost", 900.0)).drop = 0.20;
-  StreamSpec& bursts = means(add("means_bursts_2pct", 210.0));
+  asMeans(add("means_4pct_lost", 64.0)).drop = 0.04;
+  asMeans(add("means_8pct_lost", 300.0)).drop = 0.08;
+  asMeans(add("means_20pct_lost", 900.0)).drop = 0.20;
+  StreamSpec& bursts = asMeans(add("means_bursts_2pct", 210.0));
   bursts.drop = 0.02;
   bursts.burst = 4;
-  means(add("means_every_11th_lost", 560.0)).drop_every = 11;
-  StreamSpec& start = means(add("means_start_7pct_lost", 140.0));
+  asMeans(add("means_every_11th_lost", 560.0)).drop_every = 11;
+  StreamSpec& start = asMeans(add("means_start_7pct_lost", 140.0));
   start.drop = 0.07;
   start.stamped = AverageStamp::Start;
   start.average_stamp = AverageStamp::Start;
   // Controls.
   for (double hz : {64.0, 300.0, 900.0}) {
     add("point", hz);
-    means(add("means_end", hz));
+    asMeans(add("means_end", hz));
   }
   StreamSpec& point_bursts = add("point_bursts_2pct", 210.0);
   point_bursts.drop = 0.02;
   point_bursts.burst = 4;
   add("jitter_0.2ms", 560.0).jitter = 2e-4;
-  means(add("means_jitter_0.15ms", 300.0)).jitter = 1.5e-4;
+  asMeans(add("means_jitter_0.15ms", 300.0)).jitter = 1.5e-4;
   add("rate_change_140_560Hz", 140.0).rate_after_hz = 560.0;
   return specs;
 }
