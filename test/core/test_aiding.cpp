@@ -882,6 +882,52 @@ TEST(Bias, TheAttitudesCorrelationWithTheBiasOutlivesTheClampAtTheCap) {
   EXPECT_LT(stddev.x(), 0.01 - 1e-4);
 }
 
+// The update of the attitude and the bias together, with the heading's gain kept to the vertical
+// (a gain that is not the optimal one): the attitude block after it can rise above the cap in a
+// direction between the heading and the tilt, where it is clamped; the bias' cross-covariance
+// is scaled with it, so the joint covariance stays semi-definite and no correlation passes one.
+TEST(ClampedCovariance, AnUpdateThatClampsTheAttitudeScalesItsCorrelationsWithTheBias) {
+  const double cap = ap::kMaxOrientationVariance;
+  const JointTruth before = genericJoint({cap, 0.999 * cap, 0.998 * cap});
+  const Matrix6 P = before.covariance();
+  ap::ErrorState e;
+  e.P_B = P.topLeftCorner<3, 3>();
+  e.P_Bb = P.topRightCorner<3, 3>();
+  e.P_bb = P.bottomRightCorner<3, 3>();
+  // A steep field (dip 1.2 rad): the heading's H reaches the tilt by tan(dip), the gain does not.
+  const Eigen::Vector3d m_W = simulated_imu::earthField(50e-6, 1.2, 0.0);
+  const Eigen::Quaterniond truth = rpy(0.05, -0.02, 0.3) * kGeneric;
+  const ap::MagneticHeading m(truth.conjugate() * m_W, 1e-14 * Eigen::Matrix3d::Identity(), 0.0,
+                              1e9);
+  Eigen::Quaterniond q = kGeneric;
+  ASSERT_TRUE(ap::fuseMeasurement(m, q, e).accepted);
+  // The update without the clamp (Joseph form, the documented gain) rises above the cap: the
+  // case is one where the clamp acts.
+  const ap::Linearized lin = m.linearize(kGeneric);
+  Eigen::Matrix<double, 1, 6> H = Eigen::Matrix<double, 1, 6>::Zero();
+  H.leftCols<3>() = lin.H;
+  const double S = (H * P * H.transpose())(0, 0) + lin.R(0, 0);
+  Eigen::Matrix<double, 6, 1> K = P * H.transpose() / S;
+  K.head<3>() = m.correctionAxes(kGeneric) * K.head<3>();
+  const Matrix6 I_KH = Matrix6::Identity() - K * H;
+  const Matrix6 raw = I_KH * P * I_KH.transpose() + K * lin.R(0, 0) * K.transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(raw.topLeftCorner<3, 3>());
+  ASSERT_GT(eig.eigenvalues().maxCoeff(), cap * (1.0 + 1e-6));
+  EXPECT_LE(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(e.P_B).eigenvalues().maxCoeff(),
+            cap * (1.0 + 1e-12));
+  EXPECT_GE(smallestEigenvalue(joint(e.P_B, e.P_Bb, e.P_bb)), -1e-12 * cap);
+  // Each of the raw block's directions keeps its correlation coefficients with the bias.
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d v = eig.eigenvectors().col(i);
+    for (int j = 0; j < 3; ++j) {
+      const double rho_raw = v.dot(raw.topRightCorner<3, 3>().col(j)) /
+                             std::sqrt(eig.eigenvalues()(i) * raw(3 + j, 3 + j));
+      const double rho = v.dot(e.P_Bb.col(j)) / std::sqrt(v.dot(e.P_B * v) * e.P_bb(j, j));
+      EXPECT_NEAR(rho, rho_raw, 1e-9) << i << " " << j;
+    }
+  }
+}
+
 // ---- late samples ----------------------------------------------------------------------------
 
 // A tumbling body sampled at 100 Hz with gravity and field samples: handed in on time, or each

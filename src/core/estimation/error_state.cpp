@@ -75,8 +75,10 @@ UpdateResult fuseRows(const Measurement& measurement, const Linearized& m, Eigen
   const Matrix6 I_KH = Matrix6::Identity() - K * H;
   P = I_KH * P * I_KH.transpose() + K * R * K.transpose();
   P = 0.5 * (P + P.transpose());
-  e.P_B = clampOrientationCovariance(P.topLeftCorner<3, 3>());
+  // A gain that is not the optimal one (correctionAxes) can raise the attitude block above the
+  // cap; its correlations with the bias are scaled with the clamp, not left as they were.
   e.P_Bb = P.topRightCorner<3, 3>();
+  e.P_B = clampOrientationCovariance(P.topLeftCorner<3, 3>(), e.P_Bb);
   e.P_bb = P.bottomRightCorner<3, 3>();
   result.accepted = true;
   return result;
