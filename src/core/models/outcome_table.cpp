@@ -97,22 +97,29 @@ std::uint64_t EngineCounters::*rejectionCounter(Rejection why) {
   return &C::rejected_type;  // unreachable: every Rejection is above
 }
 
-const std::vector<NoteRow>& noteTable() {
-  static const std::vector<NoteRow> table = {
-      {Note::Gap, &C::gaps},
-      {Note::StampsJumpedBack, &C::jumps_back},
-      {Note::Future, &C::rejected_future},
-      {Note::ClockJumpedBack, &C::resets},
-      {Note::ClockTwoTimelines, &C::clock_conflicts},
-      {Note::Stale, &C::dropped_stale},
-      {Note::NonFinite, &C::rejected_non_finite},
-      {Note::OutOfRange, &C::rejected_out_of_range},
-      {Note::FailedStep, &C::failed_steps},
-      {Note::PendingFull, &C::pending_overflow},
-      {Note::Deferred, &C::deferred_ticks},
-      {Note::HeldAhead, &C::held_ahead},
-      {Note::StampFilterMisfit, nullptr},
+namespace {
+
+// The notes a stamp outcome gives report that outcome's counter (its event's, else its input's),
+// read from stampOutcomeTable(); the rest report the engine's own counter for what they say.
+std::vector<NoteRow> buildNoteTable() {
+  std::vector<NoteRow> table = {
+      {Note::StampsJumpedBack, &C::jumps_back},  {Note::Future, &C::rejected_future},
+      {Note::ClockJumpedBack, &C::resets},       {Note::ClockTwoTimelines, &C::clock_conflicts},
+      {Note::PendingFull, &C::pending_overflow}, {Note::Deferred, &C::deferred_ticks},
+      {Note::HeldAhead, &C::held_ahead},         {Note::StampFilterMisfit, nullptr},
   };
+  for (const StampOutcomeRow& row : stampOutcomeTable()) {
+    if (row.note) table.push_back({*row.note, row.event ? row.event : row.input});
+  }
+  std::sort(table.begin(), table.end(),
+            [](const NoteRow& a, const NoteRow& b) { return a.kind < b.kind; });
+  return table;
+}
+
+}  // namespace
+
+const std::vector<NoteRow>& noteTable() {
+  static const std::vector<NoteRow> table = buildNoteTable();
   return table;
 }
 
