@@ -33,6 +33,7 @@
 #include "attitude_propagator/models/propagator.h"
 #include "attitude_propagator/numerics/integrator.h"
 #include "attitude_propagator/time/source_timeline.h"
+#include "attitude_propagator/time/stamp_queue.h"
 
 namespace attitude_propagator {
 
@@ -349,7 +350,7 @@ class AttitudeEngine {
   Eigen::Matrix3d default_R_B_;
   ErrorState error_;  // P_B, and the bias estimate with its covariances
   Eigen::Vector3d gyro_bias_B_ = Eigen::Vector3d::Zero();
-  std::vector<std::pair<Stamp, Eigen::Vector3d>> pending_gyro_bias_;  // sorted by stamp, bounded
+  StampQueue<Eigen::Vector3d> pending_gyro_bias_{kMaxPendingBias};  // stamped ahead of the rates
 
   std::optional<Stamp> last_published_;      // one state per stamp, increasing
   std::optional<Stamp> clock_;               // the ROS time followed (clock_line_)

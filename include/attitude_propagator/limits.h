@@ -110,6 +110,10 @@ constexpr double kMaxFixHistory = 10.0;
 /// the heap (1168 bytes more, test_dynamic_fixes.cpp): 12.1 MB at most. Nothing is kept until
 /// the first fix is submitted.
 constexpr std::size_t kMaxFixHistorySamples = 4096;
+/// Gyro bias samples stamped ahead of the rates wait for them, at most this many; past it the one
+/// stamped furthest ahead is dropped (bias_queue_full). A bias stream should be slow (a
+/// calibration): this many ahead means its stamps are wrong.
+constexpr std::size_t kMaxPendingBias = 64;
 /// Fixes stamped ahead of the newest rate wait for the rates to reach them, at most this many;
 /// past it the one stamped furthest ahead is dropped (fixes_queue_full).
 constexpr std::size_t kMaxPendingFixes = 8;

@@ -406,35 +406,20 @@ std::optional<double> AttitudeEngine::inputLag(Source source) const {
 }
 
 bool AttitudeEngine::submitBias(Stamp stamp, const Eigen::Vector3d& gyro_bias_B) {
-  // A bias sample stream should be slow (a calibration): more than this many ahead of the
-  // rates means the stamps are wrong; the one stamped furthest ahead is then dropped, so no
-  // sample ever takes effect before its stamp.
-  constexpr std::size_t kMaxPendingBias = 64;
   if (!gyro_bias_B.allFinite() || !(gyro_bias_B.norm() <= kMaxBodyRate) || tooFarAhead(stamp)) {
     ++counters_.rejected_bias;  // like an input: more than max_future ahead is refused
     return false;
   }
-  const auto at = std::upper_bound(
-      pending_gyro_bias_.begin(), pending_gyro_bias_.end(), stamp,
-      [](Stamp s, const std::pair<Stamp, Eigen::Vector3d>& other) { return s < other.first; });
-  if (pending_gyro_bias_.size() >= kMaxPendingBias) {
-    ++counters_.bias_queue_full;
-    if (at == pending_gyro_bias_.end()) return false;  // the newcomer is the furthest ahead
-    pending_gyro_bias_.pop_back();
-  }
-  const auto where = std::upper_bound(
-      pending_gyro_bias_.begin(), pending_gyro_bias_.end(), stamp,
-      [](Stamp s, const std::pair<Stamp, Eigen::Vector3d>& other) { return s < other.first; });
-  pending_gyro_bias_.insert(where, {stamp, gyro_bias_B});
-  return true;
+  const auto pushed = pending_gyro_bias_.push(stamp, gyro_bias_B);
+  if (!pushed.kept || pushed.dropped) ++counters_.bias_queue_full;
+  return pushed.kept;
 }
 
 const Eigen::Vector3d& AttitudeEngine::biasAt(Stamp stamp) {
-  std::size_t n = 0;
-  while (n < pending_gyro_bias_.size() && pending_gyro_bias_[n].first <= stamp)
-    gyro_bias_B_ = pending_gyro_bias_[n++].second;
-  counters_.bias_applied += n;
-  pending_gyro_bias_.erase(pending_gyro_bias_.begin(), pending_gyro_bias_.begin() + n);
+  while (pending_gyro_bias_.due(stamp)) {
+    gyro_bias_B_ = pending_gyro_bias_.pop();
+    ++counters_.bias_applied;
+  }
   return gyro_bias_B_;
 }
 
