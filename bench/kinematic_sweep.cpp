@@ -459,6 +459,7 @@ struct StreamError {
   // was taken, once settled (the least latency it keeps; a phase error of that times |w|).
   double filter_later = NAN;
   double filter_offset = NAN;
+  double filter_fallbacks = NAN;  // times it fell back to the receipt stamps (misfit)
 };
 
 // The stamp the propagator anchors at: the first sample's, or, for a start- or mid-stamped
@@ -505,6 +506,7 @@ StreamError streamError(const KinematicScene& scene, const StreamModel& model, I
   if (propagator.autoRule() != nullptr) error.jitter = propagator.autoRule()->jitterMeasure();
   if (const ap::SensorClockFilter* filter = propagator.stampFilter()) {
     error.filter_later = filter->largestLater();
+    error.filter_fallbacks = static_cast<double>(filter->fallbacks());
     if (!offsets.empty()) {
       std::sort(offsets.begin(), offsets.end());
       error.filter_offset = offsets[offsets.size() / 2];
@@ -535,9 +537,9 @@ void runStreamSweep(const std::vector<KinematicScene>& scenes, std::FILE* out) {
       std::vector<std::vector<double>> taken(seeds);
       for (int s = 1; s <= seeds; ++s)
         streams.push_back(makeStream(scene, model, s, &taken[s - 1]));
-      double filter_later = 0.0;           // over every method and seed
-      std::vector<double> filter_offsets;  // auto's, per seed
-      std::set<Integrator> chosen;         // what auto integrated with, on any seed
+      double filter_later = 0.0;                             // over every method and seed
+      std::vector<double> filter_offsets, filter_fallbacks;  // auto's, per seed
+      std::set<Integrator> chosen;  // what auto integrated with, on any seed
       std::vector<std::pair<std::string, std::string>> rows;  // either side of the auto column
       for (Integrator method : methods) {
         std::vector<double> errors, settled, jitters;
@@ -546,6 +548,7 @@ void runStreamSweep(const std::vector<KinematicScene>& scenes, std::FILE* out) {
           if (std::isfinite(e.filter_later)) filter_later = std::max(filter_later, e.filter_later);
           if (method == Integrator::Auto && std::isfinite(e.filter_offset)) {
             filter_offsets.push_back(e.filter_offset);
+            filter_fallbacks.push_back(e.filter_fallbacks);
           }
           errors.push_back(e.worst);
           settled.push_back(e.worst_settled);
@@ -569,9 +572,10 @@ void runStreamSweep(const std::vector<KinematicScene>& scenes, std::FILE* out) {
       if (model.filter != ap::StampFilter::None && !filter_offsets.empty()) {
         std::fprintf(stderr,
                      "bench: %s %s: filtered stamps at most %.3g ms later than received; "
-                     "settled, %.3g ms after the sample was taken (auto, median over seeds)\n",
+                     "settled, %.3g ms after the sample was taken; %g fallbacks to the receipt "
+                     "stamps (auto, median over seeds)\n",
                      scene.name.c_str(), model.name.c_str(), 1e3 * filter_later,
-                     1e3 * median(filter_offsets));
+                     1e3 * median(filter_offsets), median(filter_fallbacks));
       }
       // A method row is marked when auto integrated a step with it (on any seed).
       for (std::size_t i = 0; i < methods.size(); ++i) {
