@@ -42,17 +42,28 @@ struct Noise {
     const double u1 = 1.0 - uniform(), u2 = uniform();
     return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
   }
+  // Exponential, mean and standard deviation 1: never negative.
+  double exponential() { return -std::log(1.0 - uniform()); }
 };
 
-// Point samples k dt; with jitter > 0 each stamp after the anchor is late or early by a normal
-// receipt delay of that RMS (the rate is still the one at k dt).
+// A receipt stamp is the sample's time plus a latency that is never negative: no driver
+// receives a sample before it is taken. The latency is drawn exponential with mean and standard
+// deviation `jitter` (the wait in a queue: memoryless, most draws short, its floor 0 where its
+// density is highest), as the tests' streams draw it (test/core/sampling.h, latencyRandom). So
+// the figure named jitter is the latency's spread, as a normal jitter's RMS was, and the stamps
+// are also late by that much on average. No constant part is added: a transport delay every
+// sample shares only shifts every stamp, which `rate_delay` removes.
+double receiptLatency(Noise& noise, double jitter) { return jitter * noise.exponential(); }
+
+// Point samples k dt; with jitter > 0 each stamp after the anchor is received late by an
+// exponential latency of mean and standard deviation `jitter` (the rate is still the one at k dt).
 std::vector<RateSample> sampleScene(const KinematicScene& scene, double dt, long steps,
                                     double jitter = 0.0) {
   Noise noise{1};
   std::vector<RateSample> samples(steps + 1);
   for (long k = 0; k <= steps; ++k) {
     const double t = k * dt;
-    samples[k] = {t + (k > 0 && jitter > 0.0 ? jitter * noise.normal() : 0.0), scene.rate(t)};
+    samples[k] = {t + (k > 0 && jitter > 0.0 ? receiptLatency(noise, jitter) : 0.0), scene.rate(t)};
   }
   return samples;
 }
@@ -211,7 +222,7 @@ struct StreamModel {
   bool averaged = false;  // the gyro delivers interval means
   // ... stamped at the interval's end, midpoint or start (what the data are)
   ap::AverageStamp stamped = ap::AverageStamp::End;
-  double jitter = 0.0;            // s, receipt jitter (standard deviation)
+  double jitter = 0.0;            // s, receipt latency (exponential: mean and std deviation)
   double drop = 0.0;              // probability a sample is lost
   bool mems = false;              // angle random walk and 16-bit quantization
   Filter lowpass = Filter::None;  // an on-chip filter before the stamp
@@ -346,9 +357,10 @@ std::vector<double> sampleTimes(const KinematicScene& scene, const StreamModel& 
 }
 
 // Sample k is taken at times[k]. The anchor keeps its exact stamp and rate so every method
-// starts from the truth (a filtered stream's anchor carries the filter's output).
+// starts from the truth (a filtered stream's anchor carries the filter's output). `taken`, if
+// given, receives the instant each delivered sample was taken at.
 std::vector<RateSample> makeStream(const KinematicScene& scene, const StreamModel& model,
-                                   std::uint64_t seed) {
+                                   std::uint64_t seed, std::vector<double>* taken = nullptr) {
   Noise noise{seed};
   const double h = 1.0 / model.rate_hz;
   std::vector<double> times = sampleTimes(scene, model);
@@ -386,29 +398,49 @@ std::vector<RateSample> makeStream(const KinematicScene& scene, const StreamMode
           w[i] = std::clamp(kLsb * std::round(noisy / kLsb), -kDeg2000, kDeg2000);
         }
       }
-      stamp += model.jitter * noise.normal();
+      if (model.jitter > 0.0) {
+        stamp += receiptLatency(noise, model.jitter);
+      } else {
+        noise.normal();  // the draw a symmetric jitter took: the other streams stay as they were
+      }
       if (k > 3 && noise.uniform() < model.drop) continue;
     }
     samples.push_back({stamp - model.rate_delay, w});
+    if (taken != nullptr) taken->push_back(t - offset);
   }
   return samples;
 }
 
-// Error the stream's noise alone leaves after the scene's duration T (1 sigma), rad:
-// MEMS: angle random walk and quantization, sqrt(ARW^2 T + (LSB^2/12) h T);
-// jitter: each stamp error e moves the rate by dw/dt e, sigma |dw/dt|_rms sqrt(h T).
+// Error the stream's noise alone leaves (1 sigma), rad, for a scene of duration T read at h:
+// MEMS: angle random walk and quantization after T, sqrt(ARW^2 T + (LSB^2/12) h T).
+// Receipt latency, unfiltered: sample k (taken at t_k) is stamped s_k = t_k + e_k, e_0 = 0.
+// Integrating its rate over the stamped intervals turns the world by sum (s_{k+1} - s_k) w_k;
+// summed by parts that is the truth's turn to t_N plus e_N w_N (which the truth at the reported
+// stamp s_N has too) minus sum e_k h dw_W/dt(t_k). So the error is -sum e_k h dw_W/dt, with
+// |dw_W/dt| = |dw_B/dt| (w_W = R w_B, R' = R [w_B]x). The exponential latency splits into its
+// mean mu = sigma, the same for every sample, and a zero-mean part of standard deviation sigma:
+//   the zero-mean part adds up as a random walk: sigma |dw/dt|_rms sqrt(h T) after T;
+//   the mean sums to mu (w_W(t) - w_W(0)): every stamp but the anchor's is late by mu, so the
+//   first interval carries mu w_W(0) too much and each state is compared with the truth mu
+//   later; taken as the largest along the path, mu max_t |w_W(t) - w_W(0)|, as err_rad is.
+// The two are independent and added in quadrature. With the stamp filter no floor is given:
+// the filter estimates the sample's time plus the least latency (near 0 for an exponential),
+// removing most of both.
 double noiseFloor(const KinematicScene& scene, const StreamModel& model) {
   const double h = 1.0 / model.rate_hz, T = scene.duration;
   double floor2 = 0.0;
   if (model.mems) floor2 += kArw * kArw * T + kLsb * kLsb / 12.0 * h * T;
   if (model.jitter > 0.0 && model.filter == ap::StampFilter::None) {
-    double sum = 0.0;
+    const double sigma = model.jitter, mu = model.jitter;  // exponential: mean = deviation
+    const Eigen::Vector3d w0_W = scene.attitude(0.0) * scene.rate(0.0);
+    double sum = 0.0, drift = 0.0;
     const int n = 1000;
     for (int i = 0; i < n; ++i) {
       const double t = T * i / n, dt = 1e-5;
       sum += ((scene.rate(t + dt) - scene.rate(t - dt)) / (2 * dt)).squaredNorm();
+      drift = std::max(drift, (scene.attitude(t) * scene.rate(t) - w0_W).norm());
     }
-    floor2 += model.jitter * model.jitter * (sum / n) * h * T;
+    floor2 += sigma * sigma * (sum / n) * h * T + mu * mu * drift * drift;
   }
   return floor2 > 0.0 ? std::sqrt(floor2) : NAN;
 }
@@ -422,6 +454,12 @@ struct StreamError {
   double worst_settled = 0.0;  // ... after kSettledShare of the run
   std::set<Integrator> used;   // the methods that integrated a step (`auto`: its choices)
   double jitter = NAN;         // `auto`: its rule's jitter measure at the end
+  // With the stamp filter: the most a filtered stamp was later than its receipt stamp (the
+  // filter's causality: 0), and the median of the filtered stamp less the instant the sample
+  // was taken, once settled (the least latency it keeps; a phase error of that times |w|).
+  double filter_later = NAN;
+  double filter_offset = NAN;
+  double filter_fallbacks = NAN;  // times it fell back to the receipt stamps (misfit)
 };
 
 // The stamp the propagator anchors at: the first sample's, or, for a start- or mid-stamped
@@ -441,7 +479,7 @@ double anchorStamp(const StreamModel& model, const std::vector<RateSample>& samp
 }
 
 StreamError streamError(const KinematicScene& scene, const StreamModel& model, Integrator method,
-                        const std::vector<RateSample>& samples) {
+                        const std::vector<RateSample>& samples, const std::vector<double>& taken) {
   ap::KinematicConfig config;
   config.integrator = method;
   config.initial_q_WB = scene.attitude(anchorStamp(model, samples));
@@ -452,9 +490,13 @@ StreamError streamError(const KinematicScene& scene, const StreamModel& model, I
   ap::KinematicPropagator propagator(config);
   StreamError error;
   const double settled = samples.front().t + kSettledShare * scene.duration;
+  std::vector<double> offsets;
   for (std::size_t k = 0; k < samples.size(); ++k) {
     if (propagator.addSample(samples[k].t, samples[k].w_B) == ap::StampOutcome::Advanced) {
       error.used.insert(propagator.integrator());
+      if (model.filter != ap::StampFilter::None && propagator.time() >= settled) {
+        offsets.push_back(propagator.time() - taken[k]);
+      }
     }
     if (static_cast<long>(k) < kStartUpSamples || !propagator.anchored()) continue;
     const double e = ap::rotationAngle(propagator.orientation(), scene.attitude(propagator.time()));
@@ -462,6 +504,14 @@ StreamError streamError(const KinematicScene& scene, const StreamModel& model, I
     if (propagator.time() >= settled) error.worst_settled = std::max(error.worst_settled, e);
   }
   if (propagator.autoRule() != nullptr) error.jitter = propagator.autoRule()->jitterMeasure();
+  if (const ap::SensorClockFilter* filter = propagator.stampFilter()) {
+    error.filter_later = filter->largestLater();
+    error.filter_fallbacks = static_cast<double>(filter->fallbacks());
+    if (!offsets.empty()) {
+      std::sort(offsets.begin(), offsets.end());
+      error.filter_offset = offsets[offsets.size() / 2];
+    }
+  }
   return error;
 }
 
@@ -484,13 +534,22 @@ void runStreamSweep(const std::vector<KinematicScene>& scenes, std::FILE* out) {
     for (const StreamModel& model : streamModels()) {
       const int seeds = isRandom(model) ? kSeeds : 1;
       std::vector<std::vector<RateSample>> streams;
-      for (int s = 1; s <= seeds; ++s) streams.push_back(makeStream(scene, model, s));
+      std::vector<std::vector<double>> taken(seeds);
+      for (int s = 1; s <= seeds; ++s)
+        streams.push_back(makeStream(scene, model, s, &taken[s - 1]));
+      double filter_later = 0.0;                             // over every method and seed
+      std::vector<double> filter_offsets, filter_fallbacks;  // auto's, per seed
       std::set<Integrator> chosen;  // what auto integrated with, on any seed
       std::vector<std::pair<std::string, std::string>> rows;  // either side of the auto column
       for (Integrator method : methods) {
         std::vector<double> errors, settled, jitters;
-        for (const auto& samples : streams) {
-          const StreamError e = streamError(scene, model, method, samples);
+        for (std::size_t i = 0; i < streams.size(); ++i) {
+          const StreamError e = streamError(scene, model, method, streams[i], taken[i]);
+          if (std::isfinite(e.filter_later)) filter_later = std::max(filter_later, e.filter_later);
+          if (method == Integrator::Auto && std::isfinite(e.filter_offset)) {
+            filter_offsets.push_back(e.filter_offset);
+            filter_fallbacks.push_back(e.filter_fallbacks);
+          }
           errors.push_back(e.worst);
           settled.push_back(e.worst_settled);
           jitters.push_back(e.jitter);
@@ -509,6 +568,14 @@ void runStreamSweep(const std::vector<KinematicScene>& scenes, std::FILE* out) {
                       field(median(settled)).c_str(), choice.c_str(),
                       field(median(jitters)).c_str());
         rows.emplace_back(scene.name + "," + model.name + "," + ap::integratorName(method), row);
+      }
+      if (model.filter != ap::StampFilter::None && !filter_offsets.empty()) {
+        std::fprintf(stderr,
+                     "bench: %s %s: filtered stamps at most %.3g ms later than received; "
+                     "settled, %.3g ms after the sample was taken; %g fallbacks to the receipt "
+                     "stamps (auto, median over seeds)\n",
+                     scene.name.c_str(), model.name.c_str(), 1e3 * filter_later,
+                     1e3 * median(filter_offsets), median(filter_fallbacks));
       }
       // A method row is marked when auto integrated a step with it (on any seed).
       for (std::size_t i = 0; i < methods.size(); ++i) {

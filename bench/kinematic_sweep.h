@@ -15,11 +15,12 @@ void runKinematicSweep(const std::vector<KinematicScene>& scenes, const TimingOp
                        std::FILE* out);
 
 /// Error after a fixed time against |w| dt, log-spaced from 1e-3 to 10, on exact stamps and on
-/// stamps with 0.1 ms and 1 ms RMS receipt jitter (column jitter_s).
+/// stamps received after an exponential latency of 0.1 ms and 1 ms mean and standard deviation
+/// (column jitter_s: the standard deviation).
 void runKinematicStability(const KinematicScene& scene, double duration, std::FILE* out);
 
 /// Every kinematic method and `auto` on the streams real gyros deliver (point and averaged rates
-/// at 100-1000 Hz, mid- and start-stamped means, receipt jitter, lost samples, a noisy MEMS gyro,
+/// at 100-1000 Hz, mid- and start-stamped means, receipt latency, lost samples, a noisy MEMS gyro,
 /// on-chip filters with and without rate_delay, FIFO reads, a rate change), one CSV row each:
 /// scene, stream, method, settings, largest error along the path against the truth at the
 /// reported stamp, the error floor the stream's noise alone sets (empty if none), the largest

@@ -341,13 +341,15 @@ def running_max(values):
 
 
 def jitter_of(row):
-    """Receipt jitter of a stability row (s); rows written before the column existed had none."""
+    """Receipt latency's spread of a stability row (s: the exponential latency's mean and standard
+    deviation); rows written before the column existed had none."""
     value = num(row, "jitter_s")
     return 0.0 if math.isnan(value) else value
 
 
 def jitter_label(jitter):
-    return "exact stamps" if jitter == 0.0 else f"stamps with {jitter * 1e3:g} ms RMS jitter"
+    return ("exact stamps" if jitter == 0.0 else
+            f"stamps late by an exponential latency of {jitter * 1e3:g} ms")
 
 
 def stability_panel(ax, group_rows, title):
@@ -949,8 +951,9 @@ SETTINGS_ROWS = [
     ("rates through a 2nd-order Butterworth at ODR/4", "butterworth2_odr4_rate_delay",
      "butterworth2_odr4"),
     ("rates through a sinc³ decimator by 8", "sinc3_r8_rate_delay", "sinc3_r8"),
-    ("receipt stamps, 0.1 ms RMS jitter", "jitter_0.1ms_sensor_clock", "jitter_0.1ms"),
-    ("receipt stamps, 1 ms RMS jitter (400 Hz)", "jitter_1ms_400Hz",
+    ("receipt stamps, latency 0.1 ms (exponential: mean and sd)", "jitter_0.1ms_sensor_clock",
+     "jitter_0.1ms"),
+    ("receipt stamps, latency 1 ms (exponential: mean and sd; 400 Hz)", "jitter_1ms_400Hz",
      "jitter_1ms_400Hz_sensor_clock"),
     ("FIFO reads of 10, every sample with the read's receipt stamp",
      "fifo10_repeated_sensor_clock", "fifo10_repeated"),
@@ -1200,7 +1203,7 @@ STREAM_FAMILIES = [
     (("point",), "point samples"),
     (("averaged",), "interval means"),
     (("butterworth", "sinc"), "filtered rates"),
-    (("jitter",), "receipt stamps, jitter"),
+    (("jitter",), "receipt stamps, latency"),
     (("fifo",), "FIFO reads"),
     (("rate_change",), "rate change"),
     (("drops",), "lost means"),

@@ -7,9 +7,9 @@
 //                   attitude error and its standard deviation against time, with and without
 //                   the gyro bias estimate, and the bias estimate's error (every 0.5 s)
 //   real_streams.csv  every kinematic method and `auto` on real gyro streams (point and
-//                     averaged at 100-1000 Hz, mid- and start-stamped means, jittered, lost
-//                     samples, noisy MEMS, on-chip filters, FIFO reads, a rate change) on the
-//                     coning, tumbling, fast tumbling and vibration scenes
+//                     averaged at 100-1000 Hz, mid- and start-stamped means, receipt stamps
+//                     late by a latency, lost samples, noisy MEMS, on-chip filters, FIFO reads,
+//                     a rate change) on the coning, tumbling, fast tumbling and vibration scenes
 // Usage: bench_sweep [out_dir] [--quick] [--streams | --stability | --fixes]   (--quick: fewer
 // repetitions, for a smoke test; --streams: only real_streams.csv; --stability: only
 // stability.csv; --fixes: only fixes.csv)
