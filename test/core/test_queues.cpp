@@ -188,6 +188,7 @@ TEST(Queues, BiasQueueOf64NoneTakesEffectBeforeItsStamp) {
   Recorder sink;
   ap::AttitudeEngine engine(engine_fixtures::kinematicConfig(), sink);
   engine.submit(rateAt(at(1.0)));
+  static_assert(ap::kMaxPendingBias == 64, "the stamps below count 64 waiting");
   for (int k = 1; k <= 64; ++k) {
     ASSERT_TRUE(engine.submitBias(at(10.0 + k), Eigen::Vector3d(1e-3 * k, 0.0, 0.0)));
   }

@@ -75,3 +75,28 @@ TEST(StampQueue, ClearedItHoldsNothingAndKeepsItsCapacity) {
   EXPECT_TRUE(q.push(6, 6).kept);
   EXPECT_FALSE(q.push(7, 7).kept);
 }
+
+// The rules on the stamps alone, as StampQueue asks them: placeInQueue's QueuePlace for a queue of
+// capacity 3 holding 2 (n - 1), 3 (n) and, once more, after one dropped; dueBy at or before.
+TEST(StampQueue, ThePlaceOfANewcomerAndWhenOneIsDueAreRulesOnTheStampsAlone) {
+  const std::vector<ap::Stamp> two{10, 20}, three{10, 20, 20};
+  const ap::QueuePlace fits = ap::placeInQueue(two, 20, 3);
+  EXPECT_TRUE(fits.kept);
+  EXPECT_FALSE(fits.drop);
+  EXPECT_EQ(fits.at, 2u);  // after its equal
+  const ap::QueuePlace nearer = ap::placeInQueue(three, 15, 3);
+  EXPECT_TRUE(nearer.kept);
+  ASSERT_TRUE(nearer.drop);
+  EXPECT_EQ(*nearer.drop, 2u);  // the furthest ahead, the later of the two at 20
+  EXPECT_EQ(nearer.at, 1u);
+  for (ap::Stamp stamp : {ap::Stamp{20}, ap::Stamp{25}}) {
+    const ap::QueuePlace furthest = ap::placeInQueue(three, stamp, 3);
+    EXPECT_FALSE(furthest.kept) << stamp;
+    EXPECT_FALSE(furthest.drop) << stamp;
+  }
+  EXPECT_TRUE(ap::placeInQueue({}, 5, 1).kept);
+  EXPECT_FALSE(ap::placeInQueue({}, 5, 0).kept);  // a queue that holds nothing takes nothing
+  EXPECT_TRUE(ap::dueBy(10, 10));
+  EXPECT_TRUE(ap::dueBy(10, 11));
+  EXPECT_FALSE(ap::dueBy(10, 9));
+}
