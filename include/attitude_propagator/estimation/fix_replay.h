@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <memory>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -55,9 +56,9 @@ class FixReplay {
   std::size_t size() const { return history_.size(); }
   /// Whether the newest entry is at or after `stamp`: a correction stamped there acts now;
   /// one stamped later waits for the rates.
-  bool reaches(Stamp stamp) const { return !history_.empty() && stamp <= history_.newest().stamp; }
+  bool reaches(Stamp stamp) const;
   /// Whether the newest entry is at `stamp` (a measurement there needs no replay).
-  bool atNewest(Stamp stamp) const { return !history_.empty() && history_.newest().stamp == stamp; }
+  bool atNewest(Stamp stamp) const;
   /// Whether the bias estimate is subtracted from this input (a rate, with estimate_gyro_bias),
   /// live and in a replay alike.
   bool takesBiasEstimate(const Input& input) const {
@@ -74,9 +75,28 @@ class FixReplay {
   /// that are stamped after it, in stamp order: the order they would have had on time.
   FixOutcome applyInStampOrder(const LateFix& fix);
 
-  // A late gravity or field sample: place(), then the engine decides at q and e (fuse, align,
-  // recover or reject), then applyPlaced() or dropPlaced(). A sample at the newest entry is
-  // applied there by the engine and kept with keepAtNewest().
+  /// Whether a correction at `stamp`, its replay and the re-applications after it fit in the
+  /// replay budget of the newest state's second (replay_budget.h).
+  bool replayAffordable(Stamp stamp);
+
+  // A late gravity or field sample: place(), then the engine decides at Placed::q and ::e
+  // (fuse, align, recover or reject), then applyPlaced() or dropPlaced(). A sample at the newest
+  // entry is applied there by the engine and kept with keepAtNewest().
+  class Placed;
+  /// The model set back to where a measurement stamped at or before the newest entry acts,
+  /// the applied fixes after it taken out; empty (nothing touched) when it is too old.
+  std::optional<Placed> place(Stamp stamp);
+  /// The decision refused it: the newest state and the fixes set aside back.
+  void dropPlaced(Placed&& placed);
+  /// Applies `m` as decided (placed.q, placed.e; `reset`: applied as a reset), keeps it as an
+  /// entry of its own after the one it acts at, replays the steps since and applies the fixes
+  /// set aside again.
+  void applyPlaced(Placed&& placed, std::shared_ptr<const Measurement> m, Stamp measured,
+                   bool reset);
+  /// Keeps a measurement the engine applied to the newest state as an entry of its own.
+  void keepAtNewest(std::shared_ptr<const Measurement> m, Stamp measured, bool reset);
+
+ private:
   /// Where a correction stamped at or before the newest entry acts: the last entry k at or
   /// before its stamp, and the motion D from it to the stamp.
   struct Located {
@@ -97,29 +117,23 @@ class FixReplay {
     std::vector<AppliedFix> fixes;
     std::vector<FixHistoryEntry> replaced;
   };
+
+ public:
   /// A measurement placed: the attitude q and error state e at its stamp, for the engine to
-  /// decide on; where it acts and the fixes set aside are this class's.
-  struct Placed {
+  /// decide on; where it acts and the fixes set aside are the FixReplay's.
+  class Placed {
+   public:
     Eigen::Quaterniond q;
     ErrorState e;
+
+   private:
+    friend class FixReplay;
+    Placed(const Eigen::Quaterniond& q_at, const ErrorState& e_at, const Located& at_,
+           TakenFixes&& again_)
+        : q(q_at), e(e_at), at(at_), again(std::move(again_)) {}
     Located at;
     TakenFixes again;
   };
-  /// Whether a correction at `stamp`, its replay and the re-applications after it fit in the
-  /// replay budget of the newest state's second (replay_budget.h).
-  bool replayAffordable(Stamp stamp);
-  /// The model set back to where a measurement stamped at or before the newest entry acts,
-  /// the applied fixes after it taken out; empty (nothing touched) when it is too old.
-  std::optional<Placed> place(Stamp stamp);
-  /// The decision refused it: the newest state and the fixes set aside back.
-  void dropPlaced(Placed&& placed);
-  /// Applies `m` as decided (placed.q, placed.e; `reset`: applied as a reset), keeps it as an
-  /// entry of its own after the one it acts at, replays the steps since and applies the fixes
-  /// set aside again.
-  void applyPlaced(Placed&& placed, std::shared_ptr<const Measurement> m, Stamp measured,
-                   bool reset);
-  /// Keeps a measurement the engine applied to the newest state as an entry of its own.
-  void keepAtNewest(std::shared_ptr<const Measurement> m, Stamp measured, bool reset);
 
  private:
   double coreTime(Stamp stamp) const { return time_.coreTime(stamp); }

@@ -17,6 +17,14 @@ FixReplay::FixReplay(const FixConfig& config, const TimeBase& time, Propagator& 
 
 Stamp FixReplay::span() const { return static_cast<Stamp>(std::llround(config_.history * 1e9)); }
 
+bool FixReplay::reaches(Stamp stamp) const {
+  return !history_.empty() && stamp <= history_.newest().stamp;
+}
+
+bool FixReplay::atNewest(Stamp stamp) const {
+  return !history_.empty() && history_.newest().stamp == stamp;
+}
+
 void FixReplay::clear() {
   history_.clear();
   applied_fixes_.clear();
@@ -159,8 +167,8 @@ std::optional<FixReplay::Placed> FixReplay::place(Stamp stamp) {
     putBack(std::move(again));
     return std::nullopt;
   }
-  return Placed{at->q_k * at->D, moveErrorState(history_[at->k].error, at->D), *at,
-                std::move(again)};
+  return Placed(at->q_k * at->D, moveErrorState(history_[at->k].error, at->D), *at,
+                std::move(again));
 }
 
 void FixReplay::dropPlaced(Placed&& placed) {
