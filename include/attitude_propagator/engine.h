@@ -22,12 +22,11 @@
 
 #include "attitude_propagator/estimation/aiding.h"
 #include "attitude_propagator/estimation/error_state.h"
+#include "attitude_propagator/estimation/fix_replay.h"
 #include "attitude_propagator/estimation/magnetic_heading.h"
 #include "attitude_propagator/estimation/measurement.h"
-#include "attitude_propagator/estimation/replay_budget.h"
 #include "attitude_propagator/models/dynamic_propagator.h"
 #include "attitude_propagator/models/engine_config.h"
-#include "attitude_propagator/models/fix_history.h"
 #include "attitude_propagator/models/kinematic_propagator.h"
 #include "attitude_propagator/models/outcome_table.h"
 #include "attitude_propagator/models/propagator.h"
@@ -54,7 +53,7 @@ class EngineSink {
 /// transport that queues.
 constexpr double kInputLagWarning = 0.5;
 
-class AttitudeEngine {
+class AttitudeEngine : private StepCovariance {
  public:
   /// Throws std::invalid_argument (from the propagators) for an invalid configuration.
   AttitudeEngine(const EngineConfig& config, EngineSink& sink);
@@ -118,7 +117,7 @@ class AttitudeEngine {
   /// Fixes waiting for the rates to reach their stamps.
   std::size_t pendingFixes() const { return pending_fixes_.size(); }
   /// Rate inputs kept for late fixes (0 before the first fix).
-  std::size_t fixHistorySize() const { return history_.size(); }
+  std::size_t fixHistorySize() const { return replay_.size(); }
   /// estimate_gyro_bias: the estimated bias (rad/s, body frame), subtracted on top of
   /// gyroBias(), and its standard deviation per axis; zero otherwise.
   const Eigen::Vector3d& gyroBiasEstimate() const { return error_.bias_B; }
@@ -203,8 +202,9 @@ class AttitudeEngine {
   /// Hands an applied input on with the state at `stamp`, or `at` (an input placed before the
   /// model's time: the state at its own stamp, not the model's newest).
   void handOn(const Input& input, Stamp stamp, const std::optional<DynamicState>& at);
-  /// The orientation covariance as the result says: over its step, or back to the initial one.
-  void followCovariance(const ModelResult& result);
+  /// The orientation covariance as the result says: over its step, or back to the initial one
+  /// (live, and in a replay: StepCovariance).
+  void followCovariance(const ModelResult& result) override;
   /// Propagated over a step of length h with the step's rate w_step and the input's rate
   /// covariance (zero: the configured one).
   void propagateCovariance(double h, const Eigen::Vector3d& w_step,
@@ -243,76 +243,12 @@ class AttitudeEngine {
   /// The bias in force at `stamp` (bias samples up to it take effect).
   const Eigen::Vector3d& biasAt(Stamp stamp);
 
-  // Fixes (docs/design.md §6.9).
-  struct PendingFix {
-    Stamp stamp;
-    Eigen::Quaterniond q_WB;
-    Eigen::Matrix3d R_B;
-  };
-  /// An applied fix, and the entry it changed in place (the one it acted at) as it was before
-  /// it; the entries after it are rewritten by every replay.
-  struct AppliedFix {
-    PendingFix fix;
-    FixHistoryEntry before;
-  };
-  /// Applied fixes taken out to be applied again after an earlier fix or measurement, the
-  /// entries they had changed set back, and those entries as they were, should nothing be
-  /// applied after all.
-  struct TakenFixes {
-    std::vector<AppliedFix> fixes;
-    std::vector<FixHistoryEntry> replaced;
-  };
   /// Hands a rate input to the model, the bias estimate subtracted.
   void submitToModel(const Input& input);
-  /// Appends the model's state after `step` to the history, drops what is too old.
-  void recordHistory(const ModelStep& step, bool base = false);
-  /// Repeats a saved step, the current bias estimate subtracted from a rate.
-  void replayStep(const ModelStep& step);
-  /// Whether the bias estimate is subtracted from this input.
-  bool takesBiasEstimate(const Input& input) const {
-    return config_.fixes.estimate_gyro_bias && input.source != Source::Torque;
-  }
-  void clearHistory();
-  /// Applies a fix stamped at or before the newest entry, then again the fixes applied earlier
-  /// that are stamped after it, in stamp order: the order they would have had on time.
-  FixOutcome applyInStampOrder(const PendingFix& fix);
-  /// Applies a fix stamped at or before the newest entry; when applied, `before` receives the
-  /// entry it changed in place (the one it acted at), as it was.
-  FixOutcome applyFix(const PendingFix& fix, FixHistoryEntry& before);
-  /// The first applied fix stamped after `stamp` (fixes of equal stamps keep their order).
-  std::vector<AppliedFix>::iterator firstAppliedAfter(Stamp stamp);
-  /// The applied fixes stamped after `stamp`, taken out of those kept, in stamp order, and the
-  /// entries they changed set back to what they were before them (the latest first), so that
-  /// a fix or measurement stamped before them acts without them, and none counts twice.
-  TakenFixes takeAppliedAfter(Stamp stamp);
-  /// Undoes takeAppliedAfter: the entries as they were, the fixes kept again.
-  void putBack(TakenFixes&& taken);
-  /// Applies fixes again after an earlier fix or measurement, keeping those applied.
-  void applyAgain(const std::vector<AppliedFix>& fixes);
-  /// Keeps an applied fix (stamped at or after those kept) to be applied again.
-  void keepApplied(AppliedFix&& applied);
-  /// Saves the model's state after a replayed step into its entry.
-  void saveReplayed(FixHistoryEntry& entry);
-  /// Whether a fix or measurement at `stamp`, its replay and the re-applications after it fit
-  /// in the replay budget of the newest state's second (replay_budget.h).
-  bool replayAffordable(Stamp stamp);
+  /// Starts the fix history at the newest state, unless it is kept already.
+  void keepHistory();
   /// Applies the waiting fixes (and gravity and field samples) the rates have reached.
   void applyDueFixes();
-  /// Where a fix or a measurement stamped at or before the newest entry acts: the last entry k
-  /// at or before its stamp, restored into the model (the newest state saved in live_), and
-  /// the motion D from it to the stamp. Empty (nothing touched) when it is too old.
-  struct Located {
-    std::size_t k;
-    Eigen::Quaterniond q_k;
-    Eigen::Quaterniond D;
-  };
-  std::optional<Located> locate(Stamp stamp);
-  /// The state the step to entry j gives from entry k (the one before it, but for measurements
-  /// stamped later): the interval's own motion, without corrections made in it after the stamp.
-  Eigen::Quaterniond stepFrom(std::size_t k, std::size_t j);
-  /// Repeats the entries from `first` on from the model's state: the steps, and the
-  /// measurements as they were applied.
-  void replayFrom(std::size_t first);
   /// A gravity or field sample on its way: the measurement and the value it was made from.
   struct PendingMeasurement {
     Stamp stamp;
@@ -333,10 +269,6 @@ class AttitudeEngine {
   AidingCounters& aidingCounters(MeasurementKind kind) {
     return kind == MeasurementKind::Gravity ? counters_.accel : counters_.mag;
   }
-  /// Applies again, as it was applied, the measurement of `entry` to the model's state.
-  void reapplyMeasurement(const FixHistoryEntry& entry);
-  /// Fills `slot` with the model's state now.
-  void fillEntry(FixHistoryEntry& slot);
   void countFix(FixOutcome outcome);
   /// The bias prior: estimate zero, covariance gyro_bias_stddev^2 I, no cross terms.
   void resetBiasState();
@@ -362,17 +294,12 @@ class AttitudeEngine {
   std::array<std::vector<ReceivedInput>, 3> held_runs_;
   EngineCounters counters_;
 
-  // Fixes: the history (a ring, allocated as it grows, kept from the first fix on), the fixes
-  // waiting for the rates, the gate's run of rejections, and whether a replay is running (the
-  // model's calls back then neither count nor publish).
+  // Fixes: whether the history is kept (from the first fix or late sample on), the history
+  // with the replay of late corrections (FixReplay: after the model and the error state it
+  // drives), and the fixes waiting for the rates.
   bool keep_history_ = false;
-  FixHistory history_;
-  std::vector<PendingFix> pending_fixes_;  // sorted by stamp, at most kMaxPendingFixes
-  std::vector<AppliedFix> applied_fixes_;  // the newest applied, by stamp, kMaxFixesReapplied
-  ReplayBudget replay_budget_;             // states replayed per second of stamp time
-  std::optional<Stamp> forgotten_fix_;     // the newest applied fix's stamp no longer kept
-  int rejected_in_a_row_ = 0;
-  ModelSnapshot live_;  // the newest state while a fix is worked out
+  FixReplay replay_;
+  std::vector<LateFix> pending_fixes_;  // sorted by stamp, at most kMaxPendingFixes
 
   // Gravity and the magnetic field (docs/design.md §6.10).
   std::vector<PendingMeasurement> pending_measurements_;  // by stamp, kMaxPendingMeasurements

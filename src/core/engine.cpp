@@ -7,7 +7,6 @@
 
 #include <Eigen/Cholesky>
 
-#include "attitude_propagator/estimation/attitude_fix.h"
 #include "attitude_propagator/estimation/orientation_covariance.h"
 #include "attitude_propagator/limits.h"
 #include "attitude_propagator/models/sample_door.h"
@@ -106,7 +105,10 @@ AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink)
 
 AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink,
                                const PropagatorFactory& make)
-    : config_(config), sink_(sink), propagator_(make(config_, time_)) {
+    : config_(config),
+      sink_(sink),
+      propagator_(make(config_, time_)),
+      replay_(config_.fixes, time_, *propagator_, error_, *this) {
   if (!(config_.publish_rate > 0.0) || !std::isfinite(config_.publish_rate)) {
     throw std::invalid_argument("publish_rate: must be positive and finite");
   }
@@ -170,7 +172,7 @@ void AttitudeEngine::rebaseIfFar(Stamp stamp) {
   // precise after a jump far ahead (a driver stamping in the year 2100).
   if (!time_.isFar(stamp)) return;
   const EngineState held = state();
-  clearHistory();  // its stamps are in core time from the old origin
+  replay_.clear();  // its stamps are in core time from the old origin
   time_.rebase(stamp);
   const double t = coreTime(stamp);
   try {
@@ -298,7 +300,7 @@ void AttitudeEngine::use(const ReceivedInput& received) {
 }
 
 void AttitudeEngine::submitToModel(const Input& input) {
-  if (!takesBiasEstimate(input)) {
+  if (!replay_.takesBiasEstimate(input)) {
     act(propagator_->submit(input, clock_), &input);
     return;
   }
@@ -323,24 +325,12 @@ void AttitudeEngine::act(const ModelResult& result, const Input* received) {
 void AttitudeEngine::keepStep(const ModelResult& result, const Input* received) {
   if (!keep_history_) return;
   if (received != nullptr || result.input != nullptr) {
-    recordHistory(ModelStep{received != nullptr ? *received : *result.input, false});
+    replay_.record(ModelStep{received != nullptr ? *received : *result.input, false});
     return;
   }
   Input grid;  // the advance to a grid stamp
   grid.stamp = result.stamp;
-  recordHistory(ModelStep{grid, true});
-}
-
-void AttitudeEngine::replayStep(const ModelStep& step) {
-  const ModelStep* given = &step;
-  ModelStep corrected;
-  if (!step.advance && takesBiasEstimate(step.input)) {
-    corrected = step;
-    corrected.input.value -= error_.bias_B;  // the estimate as it is now, after the fix
-    given = &corrected;
-  }
-  // Of the result only the covariance: what was counted, noted, kept and published stays.
-  followCovariance(propagator_->replay(*given));
+  replay_.record(ModelStep{grid, true});
 }
 
 bool AttitudeEngine::inOrder(const ReceivedInput& received,
@@ -537,7 +527,7 @@ void AttitudeEngine::resetState(bool forget_time) {
   counters_.dropped_on_reset += propagator_->reset();  // queued inputs dropped, counted
   error_.P_B = initialCovariance();
   error_.P_Bb.setZero();  // the bias estimate stays: it belongs to the gyro, not to the timeline
-  clearHistory();
+  replay_.clear();
   // Waiting fixes are stamped before the new anchor now: too old (docs/design.md §6.9), not
   // inputs dropped at the reset.
   counters_.fixes_too_old += pending_fixes_.size();
@@ -579,7 +569,7 @@ std::string AttitudeEngine::reconfigure(const EngineConfig& next) {
   const bool estimate_changed = next.fixes.estimate_gyro_bias != config_.fixes.estimate_gyro_bias;
   config_ = next;
   // The saved states belong to the old propagator (its integrator, its policy): not replayed.
-  clearHistory();
+  replay_.clear();
   if (estimate_changed) resetBiasState();
   config_.gyro_bias_B = bias_B;
   rate_delay_ns_ = rate_delay_ns;
@@ -610,8 +600,8 @@ std::string AttitudeEngine::setState(Stamp stamp, const Eigen::Quaterniond& q_WB
   error_.P_B.setZero();  // pinned: the state is what the caller says it is
   error_.P_Bb.setZero();
   tilt_known_ = true;
-  clearHistory();  // a fix stamped before the pin is too old
-  if (keep_history_) recordHistory(ModelStep{}, true);
+  replay_.clear();  // a fix stamped before the pin is too old
+  if (keep_history_) replay_.record(ModelStep{}, true);
   emitState(stamp);
   return {};
 }
@@ -640,24 +630,19 @@ FixOutcome AttitudeEngine::submitFix(Stamp stamp, const Eigen::Quaterniond& q_WB
     return outcome;
   }
   const double s = config_.fixes.stddev;
-  PendingFix fix{stamp, q_WB.normalized(),
-                 covariance_B.isZero(0.0)
-                     ? Eigen::Matrix3d(s * s * Eigen::Matrix3d::Identity())
-                     : Eigen::Matrix3d(0.5 * (covariance_B + covariance_B.transpose()))};
-  if (!keep_history_) {
-    // Nothing is kept until fixes arrive: the history starts at the newest state.
-    keep_history_ = true;
-    recordHistory(ModelStep{}, true);
-  }
-  if (!history_.empty() && stamp <= history_.newest().stamp) {
-    outcome = applyInStampOrder(fix);
+  LateFix fix{stamp, q_WB.normalized(),
+              covariance_B.isZero(0.0)
+                  ? Eigen::Matrix3d(s * s * Eigen::Matrix3d::Identity())
+                  : Eigen::Matrix3d(0.5 * (covariance_B + covariance_B.transpose()))};
+  keepHistory();
+  if (replay_.reaches(stamp)) {
+    outcome = replay_.applyInStampOrder(fix);
     countFix(outcome);
     return outcome;
   }
   // Ahead of the newest rate (or before the first): it waits for the rates to reach it.
-  const auto at =
-      std::upper_bound(pending_fixes_.begin(), pending_fixes_.end(), stamp,
-                       [](Stamp t, const PendingFix& other) { return t < other.stamp; });
+  const auto at = std::upper_bound(pending_fixes_.begin(), pending_fixes_.end(), stamp,
+                                   [](Stamp t, const LateFix& other) { return t < other.stamp; });
   if (pending_fixes_.size() >= kMaxPendingFixes) {
     countFix(FixOutcome::QueueFull);
     if (at == pending_fixes_.end()) return FixOutcome::QueueFull;  // the furthest ahead
@@ -665,230 +650,26 @@ FixOutcome AttitudeEngine::submitFix(Stamp stamp, const Eigen::Quaterniond& q_WB
   }
   const auto where =
       std::upper_bound(pending_fixes_.begin(), pending_fixes_.end(), stamp,
-                       [](Stamp t, const PendingFix& other) { return t < other.stamp; });
+                       [](Stamp t, const LateFix& other) { return t < other.stamp; });
   pending_fixes_.insert(where, fix);
   return FixOutcome::Waiting;
 }
 
+void AttitudeEngine::keepHistory() {
+  if (keep_history_) return;
+  // Nothing is kept until a fix or a late sample needs it: the history starts at the newest
+  // state.
+  keep_history_ = true;
+  replay_.record(ModelStep{}, true);
+}
+
 void AttitudeEngine::applyDueFixes() {
-  while (!pending_fixes_.empty() && !history_.empty() &&
-         pending_fixes_.front().stamp <= history_.newest().stamp) {
-    const PendingFix fix = pending_fixes_.front();
+  while (!pending_fixes_.empty() && replay_.reaches(pending_fixes_.front().stamp)) {
+    const LateFix fix = pending_fixes_.front();
     pending_fixes_.erase(pending_fixes_.begin());
-    countFix(applyInStampOrder(fix));
+    countFix(replay_.applyInStampOrder(fix));
   }
   applyDueMeasurements();
-}
-
-void AttitudeEngine::clearHistory() {
-  history_.clear();
-  applied_fixes_.clear();
-  forgotten_fix_.reset();
-  replay_budget_.clear();
-}
-
-void AttitudeEngine::recordHistory(const ModelStep& step, bool base) {
-  const std::optional<double> t = propagator_->savedTime();
-  if (!t) return;
-  const std::optional<Stamp> stamp = stampAt(*t);
-  if (!stamp) return;
-  replay_budget_.recorded(*stamp);
-  FixHistoryEntry* slot = &history_.append();
-  slot->step = step;
-  slot->step.input.payload.reset();  // the message is not kept
-  slot->measurement.reset();
-  fillEntry(*slot);
-  slot->stamp = *stamp;
-  slot->base = base;
-  history_.keepSpan(*stamp, static_cast<Stamp>(std::llround(config_.fixes.history * 1e9)));
-}
-
-// A fix stamped before fixes already applied (an earlier fix that arrived later) is applied at
-// its stamp, and the later ones again after it, each with its replay, so that the newest state
-// is the one all of them on time would have given (docs/design.md §6.9). Fixes of equal stamps
-// keep their order of arrival. The re-applications are not counted again; one the gate now
-// rejects is dropped, and the gate's run of rejections is the arrivals'.
-FixOutcome AttitudeEngine::applyInStampOrder(const PendingFix& fix) {
-  if (forgotten_fix_ && fix.stamp < *forgotten_fix_) return FixOutcome::TooOld;
-  if (!replayAffordable(fix.stamp)) return FixOutcome::OverBudget;
-  TakenFixes again = takeAppliedAfter(fix.stamp);
-  FixHistoryEntry before;
-  const FixOutcome outcome = applyFix(fix, before);
-  if (outcome != FixOutcome::Accepted && outcome != FixOutcome::Reset) {
-    putBack(std::move(again));  // untouched
-    return outcome;
-  }
-  keepApplied({fix, std::move(before)});
-  applyAgain(again.fixes);
-  return outcome;
-}
-
-std::vector<AttitudeEngine::AppliedFix>::iterator AttitudeEngine::firstAppliedAfter(Stamp stamp) {
-  return std::upper_bound(applied_fixes_.begin(), applied_fixes_.end(), stamp,
-                          [](Stamp t, const AppliedFix& other) { return t < other.fix.stamp; });
-}
-
-// A fix corrects the entry it acts at in place (and the replay rewrites the ones after it). A
-// fix or measurement stamped before it that acts at the same entry must find that entry as it
-// was without it, or the later fix, applied again after it, would count twice.
-AttitudeEngine::TakenFixes AttitudeEngine::takeAppliedAfter(Stamp stamp) {
-  const auto later = firstAppliedAfter(stamp);
-  TakenFixes taken;
-  taken.fixes.assign(std::make_move_iterator(later), std::make_move_iterator(applied_fixes_.end()));
-  applied_fixes_.erase(later, applied_fixes_.end());
-  for (auto g = taken.fixes.rbegin(); g != taken.fixes.rend(); ++g) {
-    const FixHistoryEntry& was = g->before;
-    if (const std::optional<std::size_t> i = history_.find(was.id)) {
-      taken.replaced.push_back(history_[*i]);
-      history_[*i] = was;
-    }
-  }
-  return taken;
-}
-
-void AttitudeEngine::putBack(TakenFixes&& taken) {
-  for (auto e = taken.replaced.rbegin(); e != taken.replaced.rend(); ++e) {
-    if (const std::optional<std::size_t> i = history_.find(e->id)) history_[*i] = *e;
-  }
-  applied_fixes_.insert(applied_fixes_.end(), std::make_move_iterator(taken.fixes.begin()),
-                        std::make_move_iterator(taken.fixes.end()));
-}
-
-void AttitudeEngine::applyAgain(const std::vector<AppliedFix>& fixes) {
-  // Not counted again; one the gate now rejects is dropped; the gate's run of rejections is the
-  // arrivals'.
-  const int rejected_in_a_row = rejected_in_a_row_;
-  for (const AppliedFix& g : fixes) {
-    FixHistoryEntry before;
-    const FixOutcome o = applyFix(g.fix, before);
-    if (o == FixOutcome::Accepted || o == FixOutcome::Reset)
-      keepApplied({g.fix, std::move(before)});
-  }
-  rejected_in_a_row_ = rejected_in_a_row;
-}
-
-void AttitudeEngine::keepApplied(AppliedFix&& applied) {
-  applied_fixes_.push_back(std::move(applied));
-  if (applied_fixes_.size() > kMaxFixesReapplied) {
-    forgotten_fix_ = applied_fixes_.front().fix.stamp;
-    applied_fixes_.erase(applied_fixes_.begin());
-  }
-}
-
-// The fix is applied at the last saved state at or before its stamp, k (docs/design.md §6.9),
-// but before the measurements applied in the same interval and stamped after it (they are
-// applied again in the replay). A model that can move on from k to the fix's stamp (dynamic: the
-// knot advanced to t_f) is corrected there. Otherwise the estimate at the fix's stamp is
-// interpolated along the geodesic to the next state, q_f = q_k (x) D, D = Exp(a Log(q_k^-1
-// q_k+1)), a = (t_f - t_k) / (t_k+1 - t_k), q_k+1 the step taken again from k (what it gives
-// without the corrections in the interval after t_f); an error at t_f is the error at t_k seen
-// through D (dtheta_k = C(D) dtheta_f), so the error state is carried to t_f (moveErrorState),
-// the update made there, and the result carried back to t_k.
-std::optional<AttitudeEngine::Located> AttitudeEngine::locate(Stamp stamp) {
-  const std::size_t n = history_.size();
-  if (n == 0) return std::nullopt;
-  const Stamp newest = history_[n - 1].stamp;
-  const Stamp span = static_cast<Stamp>(std::llround(config_.fixes.history * 1e9));
-  if (newest - stamp > span) return std::nullopt;
-  std::size_t k = n;
-  while (k > 0 && history_[k - 1].stamp > stamp) --k;
-  while (k > 0 && history_[k - 1].measurement && history_[k - 1].measured > stamp) --k;
-  if (k == 0) return std::nullopt;  // before the oldest state kept (or the anchor)
-  --k;
-  const FixHistoryEntry& base = history_[k];
-  propagator_->save(live_);  // the newest state, kept should the measurement not be applied
-  propagator_->restore(base.model);
-  Located at{k, base.q_WB, Eigen::Quaterniond::Identity()};
-  std::size_t next = k + 1;
-  while (next < n && history_[next].stamp <= base.stamp) ++next;
-  if (base.stamp < stamp && next < n) {
-    if (propagator_->advanceForFix(coreTime(stamp))) {
-      at.q_k = propagator_->state().q_WB;  // the model's own state at the stamp
-    } else {
-      const double a = static_cast<double>(stamp - base.stamp) /
-                       static_cast<double>(history_[next].stamp - base.stamp);
-      at.D = expMap(a * logMap(at.q_k.conjugate() * stepFrom(k, next)));
-    }
-  }
-  return at;
-}
-
-Eigen::Quaterniond AttitudeEngine::stepFrom(std::size_t k, std::size_t j) {
-  const FixHistoryEntry& next = history_[j];
-  if (next.base || next.measurement) return next.q_WB;  // not reached by a step: as kept
-  const ErrorState kept = error_;
-  error_ = history_[k].error;  // the bias estimate the step is taken with
-  replayStep(next.step);
-  const Eigen::Quaterniond q = propagator_->state().q_WB;
-  error_ = kept;
-  propagator_->restore(history_[k].model);
-  return q;
-}
-
-FixOutcome AttitudeEngine::applyFix(const PendingFix& fix, FixHistoryEntry& before) {
-  const std::optional<Located> at = locate(fix.stamp);
-  if (!at) return FixOutcome::TooOld;
-  const AttitudeFix measurement(fix.q_WB, fix.R_B, config_.fixes.gate);
-  Eigen::Quaterniond q = at->q_k * at->D;  // at the fix's stamp
-  ErrorState e = moveErrorState(history_[at->k].error, at->D);
-  bool reset = config_.fixes.mode == FixMode::Reset;
-  if (!reset && !fuseMeasurement(measurement, q, e).accepted) {
-    if (rejected_in_a_row_ < kFixRejectionRun) {
-      ++rejected_in_a_row_;
-      propagator_->restore(live_);
-      return FixOutcome::RejectedGate;
-    }
-    reset = true;  // a run of rejections: the estimate is what is wrong
-  }
-  if (reset) measurement.reset(q, e);
-  rejected_in_a_row_ = 0;
-
-  // The corrected state replaces the saved one (moved to the fix's stamp when the model moved
-  // there), and the steps since are repeated from it. The entry as it was is kept with the fix,
-  // for a fix or measurement stamped before it that arrives later (takeAppliedAfter); the ones
-  // after it are rewritten by every replay.
-  before = history_[at->k];
-  propagator_->correctOrientation(q * at->D.conjugate());
-  error_ = moveErrorState(e, at->D.conjugate());
-  saveReplayed(history_[at->k]);
-  replayFrom(at->k + 1);
-  return reset ? FixOutcome::Reset : FixOutcome::Accepted;
-}
-
-bool AttitudeEngine::replayAffordable(Stamp stamp) {
-  if (history_.empty()) return true;
-  // The states after the stamp are replayed once, and once more for each applied fix after it
-  // (applied again): an upper bound of the work, known before anything changes.
-  std::size_t after = 0;
-  for (std::size_t i = history_.size(); i > 0 && history_[i - 1].stamp > stamp; --i) ++after;
-  const auto again = static_cast<std::size_t>(applied_fixes_.end() - firstAppliedAfter(stamp));
-  return replay_budget_.affords(history_.newest().stamp, after * (1 + again));
-}
-
-void AttitudeEngine::replayFrom(std::size_t first) {
-  if (first < history_.size()) {
-    replay_budget_.charge(history_.newest().stamp, history_.size() - first);
-  }
-  for (std::size_t i = first; i < history_.size(); ++i) {
-    FixHistoryEntry& entry = history_[i];
-    if (entry.measurement) {
-      reapplyMeasurement(entry);
-    } else if (!entry.base) {
-      replayStep(entry.step);
-    }
-    saveReplayed(entry);
-  }
-}
-
-void AttitudeEngine::fillEntry(FixHistoryEntry& slot) {
-  propagator_->save(slot.model);
-  slot.q_WB = propagator_->state().q_WB;
-  slot.error = error_;
-}
-
-void AttitudeEngine::saveReplayed(FixHistoryEntry& entry) {
-  fillEntry(entry);
-  if (const std::optional<double> t = propagator_->savedTime()) entry.stamp = *stampAt(*t);
 }
 
 }  // namespace attitude_propagator

@@ -1,9 +1,11 @@
 // The engine's side of gravity and the magnetic field as measurements (docs/design.md §6.10):
-// where in time a sample acts (at its stamp, through the fix history), whether it is used, and
-// what is counted. What a sample does to the state is the estimation room's (estimation/).
+// whether a sample is used, and what is counted; it acts at its stamp, placed and replayed by
+// FixReplay. What a sample does to the state is the estimation room's (estimation/).
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
+#include <utility>
 
 #include "attitude_propagator/engine.h"
 #include "attitude_propagator/estimation/gravity_direction.h"
@@ -98,13 +100,8 @@ AidingOutcome AttitudeEngine::placeMeasurement(PendingMeasurement pm) {
     counters.count(AidingOutcome::Future);  // it would wait for rates that may never come
     return AidingOutcome::Future;
   }
-  if (!keep_history_) {
-    // Nothing is kept until a sample needs it (as for fixes): the history starts at the newest
-    // state.
-    keep_history_ = true;
-    recordHistory(ModelStep{}, true);
-  }
-  if (!history_.empty() && pm.stamp <= history_.newest().stamp) {
+  keepHistory();
+  if (replay_.reaches(pm.stamp)) {
     const AidingOutcome outcome = applyMeasurement(pm);
     counters.count(outcome);
     return outcome;
@@ -129,8 +126,7 @@ AidingOutcome AttitudeEngine::placeMeasurement(PendingMeasurement pm) {
 }
 
 void AttitudeEngine::applyDueMeasurements() {
-  while (!pending_measurements_.empty() && !history_.empty() &&
-         pending_measurements_.front().stamp <= history_.newest().stamp) {
+  while (!pending_measurements_.empty() && replay_.reaches(pending_measurements_.front().stamp)) {
     const PendingMeasurement pm = std::move(pending_measurements_.front());
     pending_measurements_.erase(pending_measurements_.begin());
     aidingCounters(pm.measurement->kind()).count(applyMeasurement(pm));
@@ -173,72 +169,28 @@ AidingOutcome AttitudeEngine::applyAtNewest(const Measurement& m, Stamp stamp,
   if (outcome == AidingOutcome::RejectedGate) return outcome;
   propagator_->correctOrientation(q);
   error_ = e;
-  if (!keep_history_ || history_.empty()) return outcome;
-  const Stamp state_stamp = history_.newest().stamp;
-  FixHistoryEntry& entry = history_.append();
-  entry.step = ModelStep{};
-  entry.measurement = std::move(kept);
-  entry.D = Eigen::Quaterniond::Identity();
-  entry.measurement_reset = reset;
-  entry.measured = stamp;
-  entry.base = false;
-  fillEntry(entry);
-  entry.stamp = state_stamp;
+  if (keep_history_) replay_.keepAtNewest(std::move(kept), stamp, reset);
   return outcome;
 }
 
 AidingOutcome AttitudeEngine::applyMeasurement(const PendingMeasurement& pm) {
-  const std::size_t n = history_.size();
-  if (n > 0 && history_[n - 1].stamp == pm.stamp) {
+  if (replay_.atNewest(pm.stamp)) {
     // At the newest state: applied to it, nothing replayed.
     return applyAtNewest(*pm.measurement, pm.stamp, pm.value, pm.measurement);
   }
-  // Late: applied where it belongs, the steps since repeated, and the fixes applied after its
-  // stamp applied again after it (as a late fix does), when its second can afford the replay.
-  if (!replayAffordable(pm.stamp)) return AidingOutcome::OverBudget;
-  TakenFixes again = takeAppliedAfter(pm.stamp);
-  const std::optional<Located> at = locate(pm.stamp);
-  if (!at) {
-    putBack(std::move(again));
-    return AidingOutcome::TooOld;
-  }
-  Eigen::Quaterniond q = at->q_k * at->D;
-  ErrorState e = moveErrorState(history_[at->k].error, at->D);
+  // Late: applied where it belongs (FixReplay), when its second can afford the replay.
+  if (!replay_.replayAffordable(pm.stamp)) return AidingOutcome::OverBudget;
+  std::optional<FixReplay::Placed> placed = replay_.place(pm.stamp);
+  if (!placed) return AidingOutcome::TooOld;
   bool reset = false;
-  const AidingOutcome outcome = decideMeasurement(*pm.measurement, pm.stamp, pm.value, q, e, reset);
+  const AidingOutcome outcome =
+      decideMeasurement(*pm.measurement, pm.stamp, pm.value, placed->q, placed->e, reset);
   if (outcome == AidingOutcome::RejectedGate) {
-    propagator_->restore(live_);
-    putBack(std::move(again));
+    replay_.dropPlaced(std::move(*placed));
     return outcome;
   }
-  const Stamp base_stamp = history_[at->k].stamp;
-  propagator_->correctOrientation(q * at->D.conjugate());
-  error_ = moveErrorState(e, at->D.conjugate());
-  std::size_t pos = at->k + 1;
-  FixHistoryEntry& entry = history_.insert(pos);
-  entry.step = ModelStep{};
-  entry.measurement = pm.measurement;
-  entry.D = at->D;
-  entry.measurement_reset = reset;
-  entry.measured = pm.stamp;
-  entry.base = false;
-  fillEntry(entry);
-  entry.stamp = base_stamp;
-  replayFrom(pos + 1);
-  applyAgain(again.fixes);
+  replay_.applyPlaced(std::move(*placed), pm.measurement, pm.stamp, reset);
   return outcome;
-}
-
-void AttitudeEngine::reapplyMeasurement(const FixHistoryEntry& entry) {
-  Eigen::Quaterniond q = propagator_->state().q_WB * entry.D;
-  ErrorState e = moveErrorState(error_, entry.D);
-  if (entry.measurement_reset) {
-    entry.measurement->reset(q, e);
-  } else {
-    fuseMeasurement(*entry.measurement, q, e, true);
-  }
-  propagator_->correctOrientation(q * entry.D.conjugate());
-  error_ = moveErrorState(e, entry.D.conjugate());
 }
 
 }  // namespace attitude_propagator

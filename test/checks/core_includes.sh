@@ -23,6 +23,11 @@ valarray variant vector "
 # room, and two building blocks every room may use (limits.h, quoted_text.h).
 rooms=(numerics time estimation models)
 base_headers=" limits.h quoted_text.h "
+# Files (header and source, by path in their room) that may include one room after their own,
+# as file:room. The replay of late corrections (estimation/fix_replay) is the estimation room's
+# rule of where a correction acts, but it acts in the model's history and replays the model's
+# steps: it takes the models room's interface (Propagator, FixHistory, FixOutcome).
+above_allowed=" estimation/fix_replay:models "
 
 # room_of PATH: the room a file or header path lies in; "engine" at the top level, "config"
 # for the node parameters (src/config, attitude_propagator/config), which may include any room.
@@ -68,7 +73,10 @@ own_header_allowed() {
     [ "$from" = engine ] || [ "$from" = config ]
     return
   fi
-  [ "$(rank "$to")" -le "$(rank "$from")" ]
+  [ "$(rank "$to")" -le "$(rank "$from")" ] && return 0
+  local stem=${file#include/attitude_propagator/}
+  stem=${stem#src/core/}
+  [[ "$above_allowed" == *" ${stem%.*}:$to "* ]]
 }
 
 allowed() {
