@@ -299,10 +299,10 @@ class AttitudeEngine : private StepCovariance {
   // drives), and the fixes waiting for the rates.
   bool keep_history_ = false;
   FixReplay replay_;
-  std::vector<LateFix> pending_fixes_;  // sorted by stamp, at most kMaxPendingFixes
+  StampQueue<LateFix> pending_fixes_{kMaxPendingFixes};  // stamped ahead of the rates
 
   // Gravity and the magnetic field (docs/design.md §6.10).
-  std::vector<PendingMeasurement> pending_measurements_;  // by stamp, kMaxPendingMeasurements
+  StampQueue<PendingMeasurement> pending_measurements_{kMaxPendingMeasurements};
   bool tilt_known_ = true;                  // false with align until the first gravity sample
   LinearAcceleration linear_acceleration_;  // seen lately in the gravity samples
   double linear_variance_ = 0.0;            // its variance per axis (m^2/s^4), the newest

@@ -532,9 +532,8 @@ void AttitudeEngine::resetState(bool forget_time) {
   // inputs dropped at the reset.
   counters_.fixes_too_old += pending_fixes_.size();
   pending_fixes_.clear();
-  for (const PendingMeasurement& pm : pending_measurements_)
-    ++aidingCounters(pm.measurement->kind()).too_old;
-  pending_measurements_.clear();
+  while (!pending_measurements_.empty())
+    ++aidingCounters(pending_measurements_.pop().measurement->kind()).too_old;
   tilt_known_ = !config_.aiding.align;  // the initial state again
   last_imu_stamp_.reset();
   linear_acceleration_.reset();
@@ -641,18 +640,9 @@ FixOutcome AttitudeEngine::submitFix(Stamp stamp, const Eigen::Quaterniond& q_WB
     return outcome;
   }
   // Ahead of the newest rate (or before the first): it waits for the rates to reach it.
-  const auto at = std::upper_bound(pending_fixes_.begin(), pending_fixes_.end(), stamp,
-                                   [](Stamp t, const LateFix& other) { return t < other.stamp; });
-  if (pending_fixes_.size() >= kMaxPendingFixes) {
-    countFix(FixOutcome::QueueFull);
-    if (at == pending_fixes_.end()) return FixOutcome::QueueFull;  // the furthest ahead
-    pending_fixes_.pop_back();
-  }
-  const auto where =
-      std::upper_bound(pending_fixes_.begin(), pending_fixes_.end(), stamp,
-                       [](Stamp t, const LateFix& other) { return t < other.stamp; });
-  pending_fixes_.insert(where, fix);
-  return FixOutcome::Waiting;
+  const auto pushed = pending_fixes_.push(stamp, fix);
+  if (!pushed.kept || pushed.dropped) countFix(FixOutcome::QueueFull);
+  return pushed.kept ? FixOutcome::Waiting : FixOutcome::QueueFull;
 }
 
 void AttitudeEngine::keepHistory() {
@@ -664,10 +654,8 @@ void AttitudeEngine::keepHistory() {
 }
 
 void AttitudeEngine::applyDueFixes() {
-  while (!pending_fixes_.empty() && replay_.reaches(pending_fixes_.front().stamp)) {
-    const LateFix fix = pending_fixes_.front();
-    pending_fixes_.erase(pending_fixes_.begin());
-    countFix(replay_.applyInStampOrder(fix));
+  while (!pending_fixes_.empty() && replay_.reaches(pending_fixes_.frontStamp())) {
+    countFix(replay_.applyInStampOrder(pending_fixes_.pop()));
   }
   applyDueMeasurements();
 }

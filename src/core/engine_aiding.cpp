@@ -107,28 +107,18 @@ AidingOutcome AttitudeEngine::placeMeasurement(PendingMeasurement pm) {
     return outcome;
   }
   // Ahead of the newest rate (or before the first): it waits for the rates to reach it.
-  auto later = [](Stamp t, const PendingMeasurement& other) { return t < other.stamp; };
-  auto at =
-      std::upper_bound(pending_measurements_.begin(), pending_measurements_.end(), pm.stamp, later);
-  if (pending_measurements_.size() >= kMaxPendingMeasurements) {
-    if (at == pending_measurements_.end()) {
-      counters.count(AidingOutcome::QueueFull);  // the furthest ahead
-      return AidingOutcome::QueueFull;
-    }
-    aidingCounters(pending_measurements_.back().measurement->kind())
-        .count(AidingOutcome::QueueFull);
-    pending_measurements_.pop_back();
-    at = std::upper_bound(pending_measurements_.begin(), pending_measurements_.end(), pm.stamp,
-                          later);
+  const Stamp stamp = pm.stamp;
+  const auto pushed = pending_measurements_.push(stamp, std::move(pm));
+  if (pushed.dropped) {
+    aidingCounters(pushed.dropped->measurement->kind()).count(AidingOutcome::QueueFull);
   }
-  pending_measurements_.insert(at, std::move(pm));
-  return AidingOutcome::Waiting;
+  if (!pushed.kept) counters.count(AidingOutcome::QueueFull);  // the furthest ahead
+  return pushed.kept ? AidingOutcome::Waiting : AidingOutcome::QueueFull;
 }
 
 void AttitudeEngine::applyDueMeasurements() {
-  while (!pending_measurements_.empty() && replay_.reaches(pending_measurements_.front().stamp)) {
-    const PendingMeasurement pm = std::move(pending_measurements_.front());
-    pending_measurements_.erase(pending_measurements_.begin());
+  while (!pending_measurements_.empty() && replay_.reaches(pending_measurements_.frontStamp())) {
+    const PendingMeasurement pm = pending_measurements_.pop();
     aidingCounters(pm.measurement->kind()).count(applyMeasurement(pm));
   }
 }

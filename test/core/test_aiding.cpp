@@ -1103,6 +1103,29 @@ TEST(Pending, AtMostKMaxPendingMeasurementsWaitTheFurthestAheadDropped) {
   EXPECT_EQ(engine.counters().accel.accepted, static_cast<std::uint64_t>(n));
 }
 
+// Gravity and field samples wait in one queue: a gravity sample nearer than the field samples
+// filling it pushes the furthest field sample out, which is counted as the field's, not gravity's.
+TEST(Pending, ASampleDroppedFromTheFullQueueIsCountedUnderItsOwnKind) {
+  ap::EngineConfig c = aidedConfig();
+  c.aiding.use_mag = true;
+  Recorder sink;
+  ap::AttitudeEngine engine(c, sink);
+  const Eigen::Vector3d f(0.0, 0.0, ap::kStandardGravity);
+  const Eigen::Vector3d m = simulated_imu::earthField(50e-6, 1.2, 0.0);
+  const Eigen::Matrix3d none = Eigen::Matrix3d::Zero();
+  engine.submit(imu(at(0.0), Eigen::Vector3d::Zero()));
+  ASSERT_EQ(engine.submitAcceleration(at(0.0), f, none), ap::AidingOutcome::Aligned);
+  const int n = static_cast<int>(ap::kMaxPendingMeasurements);
+  for (int k = 1; k <= n; ++k) {
+    ASSERT_EQ(engine.submitMagneticField(at(0.01 * k + 0.001), m, none), ap::AidingOutcome::Waiting)
+        << k;
+  }
+  EXPECT_EQ(engine.submitAcceleration(at(0.0055), f, none), ap::AidingOutcome::Waiting);
+  EXPECT_EQ(engine.counters().mag.queue_full, 1u);
+  EXPECT_EQ(engine.counters().accel.queue_full, 0u);
+  EXPECT_EQ(engine.pendingMeasurements(), static_cast<std::size_t>(n));
+}
+
 // ---- late samples and fixes in one interval ---------------------------------------------------
 
 // Samples 0..n of the tumble at 100 Hz with fixes between samples k and k + 1 (k = 10, 30, ...)
