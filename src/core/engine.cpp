@@ -18,79 +18,6 @@ namespace attitude_propagator {
 
 namespace {
 
-void checkMaxFuture(double max_future) {
-  if (!(max_future > 0.0 && max_future <= kMaxFuture)) {
-    throw std::invalid_argument("max_future: accepted: more than 0 and at most " +
-                                std::to_string(kMaxFuture) + " s, got " +
-                                std::to_string(max_future));
-  }
-}
-
-/// rate_delay in nanoseconds, or std::invalid_argument: a delay longer than the longest gap
-/// integrated across would put every sample behind the one before a gap.
-Stamp checkedRateDelay(const EngineConfig& c) {
-  const double max_dt = timePolicyOf(c).max_dt;
-  if (!(c.rate_delay >= 0.0 && c.rate_delay <= max_dt)) {
-    throw std::invalid_argument("rate_delay: accepted: 0 to max_dt = " + std::to_string(max_dt) +
-                                " s, got " + std::to_string(c.rate_delay));
-  }
-  return static_cast<Stamp>(std::llround(c.rate_delay * 1e9));
-}
-
-void checkFixConfig(const FixConfig& f) {
-  auto require = [](bool ok, const std::string& what) {
-    if (!ok) throw std::invalid_argument(what);
-  };
-  require(std::isfinite(f.history) && f.history > 0.0 && f.history <= kMaxFixHistory,
-          "fix_history: accepted: more than 0 and at most " + std::to_string(kMaxFixHistory) +
-              " s, got " + std::to_string(f.history));
-  require(std::isfinite(f.gate) && f.gate > 0.0,
-          "fix_gate: accepted: a finite number > 0, got " + std::to_string(f.gate));
-  require(std::isfinite(f.stddev) && f.stddev > 0.0 && f.stddev <= M_PI,
-          "fix_stddev: accepted: more than 0 and at most pi rad, got " + std::to_string(f.stddev));
-  require(std::isfinite(f.gyro_bias_random_walk) && f.gyro_bias_random_walk >= 0.0 &&
-              f.gyro_bias_random_walk <= kMaxRateStddev,
-          "gyro_bias_random_walk: accepted: 0 to 1000 rad/s/sqrt(s), got " +
-              std::to_string(f.gyro_bias_random_walk));
-  require(std::isfinite(f.gyro_bias_stddev) && f.gyro_bias_stddev >= 0.0 &&
-              f.gyro_bias_stddev <= kMaxGyroBiasStddev,
-          "gyro_bias_stddev: accepted: 0 to 10 rad/s, got " + std::to_string(f.gyro_bias_stddev));
-}
-
-void checkAidingConfig(const EngineConfig& c) {
-  const AidingConfig& a = c.aiding;
-  auto require = [](bool ok, const std::string& what) {
-    if (!ok) throw std::invalid_argument(what);
-  };
-  if (a.any()) {
-    require(c.model == Model::Kinematic, std::string(a.use_accel ? "use_accel" : "use_mag") +
-                                             ": accepted: true with the kinematic model only");
-  }
-  require(std::isfinite(a.accel_stddev) && a.accel_stddev > 0.0 && a.accel_stddev <= 100.0,
-          "accel_stddev: accepted: more than 0 and at most 100 m/s^2, got " +
-              std::to_string(a.accel_stddev));
-  require(
-      std::isfinite(a.mag_stddev) && a.mag_stddev > 0.0 && a.mag_stddev <= 1e-2,
-      "mag_stddev: accepted: more than 0 and at most 0.01 T, got " + std::to_string(a.mag_stddev));
-  require(std::isfinite(a.declination) && std::abs(a.declination) <= M_PI,
-          "declination: accepted: -pi to pi rad (east of north positive), got " +
-              std::to_string(a.declination));
-  require(std::isfinite(a.linear_window) && a.linear_window >= 0.0 && a.linear_window <= 3600.0,
-          "linear_window: accepted: 0 (none) to 3600 s, got " + std::to_string(a.linear_window));
-  require(std::isfinite(a.accel_gate) && a.accel_gate > 0.0 && std::isfinite(a.mag_gate) &&
-              a.mag_gate > 0.0 && std::isfinite(a.accel_recovery) && a.accel_recovery > 0.0 &&
-              std::isfinite(a.mag_recovery) && a.mag_recovery > 0.0,
-          "accel_gate, mag_gate, accel_recovery, mag_recovery: accepted: finite numbers > 0");
-}
-
-/// The rate noise per sample in force for inputs without a covariance: rate_stddev, or with
-/// gravity or field measurements and no rate_stddev, kAidedRateStddev (else the covariance
-/// would never grow between measurements and the gates would refuse every one).
-Eigen::Matrix3d defaultRateCovariance(const EngineConfig& c) {
-  const double s = c.aiding.any() && c.rate_stddev == 0.0 ? kAidedRateStddev : c.rate_stddev;
-  return s * s * Eigen::Matrix3d::Identity();
-}
-
 /// A fix's covariance: like a rate covariance from a message (finite, symmetric, variances at
 /// least 0, correlations at most one), with variances at most pi^2 (an orientation's ceiling).
 bool validFixCovariance(const Eigen::Matrix3d& R) {
@@ -109,29 +36,16 @@ AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink,
       sink_(sink),
       propagator_(make(config_, time_)),
       replay_(config_.fixes, time_, *propagator_, error_, *this) {
-  if (!(config_.publish_rate > 0.0) || !std::isfinite(config_.publish_rate)) {
-    throw std::invalid_argument("publish_rate: must be positive and finite");
-  }
-  checkMaxFuture(config_.max_future);
-  rate_delay_ns_ = checkedRateDelay(config_);
-  if (!config_.gyro_bias_B.allFinite() || config_.gyro_bias_B.norm() > kMaxBodyRate) {
-    throw std::invalid_argument(
-        "gyro_bias: must be finite, each magnitude at most the largest "
-        "accepted body rate");
-  }
+  checkEngineConfig(config_);
+  rate_delay_ns_ = rateDelayNs(config_);
   gyro_bias_B_ = config_.gyro_bias_B;
   // A FIFO read stamps its samples alike; the sensor-clock filter gives each its own stamp.
   const bool fifo_reads = propagator_->takesRepeatedRateStamps();
   for (Source s : {Source::Imu, Source::Twist}) timeline(s).allowRepeatedStamps(fifo_reads);
   default_R_B_ = defaultRateCovariance(config_);
-  checkFixConfig(config_.fixes);
-  checkAidingConfig(config_);
   // The field comes on a topic of its own, stamped between the rates: applied at its stamp.
   keep_history_ = config_.aiding.use_mag;
   tilt_known_ = !config_.aiding.align;
-  if (config_.fixes.estimate_gyro_bias && config_.model != Model::Kinematic) {
-    throw std::invalid_argument("estimate_gyro_bias: accepted: true with the kinematic model only");
-  }
   error_.P_B = initialCovariance();
   resetBiasState();
 }
@@ -551,15 +465,8 @@ void AttitudeEngine::resetState(bool forget_time) {
 
 std::string AttitudeEngine::reconfigure(const EngineConfig& next) {
   if (next.model != config_.model) return "model: cannot change while running";
-  Stamp rate_delay_ns = 0;
   try {
-    checkMaxFuture(next.max_future);
-    rate_delay_ns = checkedRateDelay(next);
-    checkFixConfig(next.fixes);
-    checkAidingConfig(next);
-    if (next.fixes.estimate_gyro_bias && next.model != Model::Kinematic) {
-      return "estimate_gyro_bias: accepted: true with the kinematic model only";
-    }
+    checkEngineSettings(next);
     propagator_->reconfigure(next);
   } catch (const std::exception& e) {
     return e.what();
@@ -571,7 +478,7 @@ std::string AttitudeEngine::reconfigure(const EngineConfig& next) {
   replay_.clear();
   if (estimate_changed) resetBiasState();
   config_.gyro_bias_B = bias_B;
-  rate_delay_ns_ = rate_delay_ns;
+  rate_delay_ns_ = rateDelayNs(config_);
   default_R_B_ = defaultRateCovariance(config_);
   keep_history_ = keep_history_ || config_.aiding.use_mag;
   return {};  // P_B carries on: the new propagator starts from the current state

@@ -14,6 +14,7 @@
 #include "attitude_propagator/models/dynamic_propagator.h"
 #include "attitude_propagator/models/kinematic_propagator.h"
 #include "attitude_propagator/numerics/integrator.h"
+#include "attitude_propagator/time/source_timeline.h"  // Stamp
 
 namespace attitude_propagator {
 
@@ -48,5 +49,19 @@ struct EngineConfig {
   /// Gravity and the magnetic field as measurements (kinematic model).
   AidingConfig aiding;
 };
+
+/// The settings the engine checks itself, at start and on reconfigure (the propagators check
+/// their own): max_future, rate_delay (0 to max_dt), the fixes', the aiding's, and
+/// estimate_gyro_bias with the kinematic model only. Throws std::invalid_argument naming the
+/// setting and what it accepts.
+void checkEngineSettings(const EngineConfig& c);
+/// checkEngineSettings, and first the settings fixed at start: publish_rate and gyro_bias.
+void checkEngineConfig(const EngineConfig& c);
+/// rate_delay in nanoseconds.
+Stamp rateDelayNs(const EngineConfig& c);
+/// The rate noise per sample in force for inputs without a covariance: rate_stddev, or with
+/// gravity or field measurements and no rate_stddev, kAidedRateStddev (else the covariance
+/// would never grow between measurements and the gates would refuse every one).
+Eigen::Matrix3d defaultRateCovariance(const EngineConfig& c);
 
 }  // namespace attitude_propagator
