@@ -272,8 +272,6 @@ class AttitudeEngine : private StepCovariance {
   void countFix(FixOutcome outcome);
   /// The bias prior: estimate zero, covariance gyro_bias_stddev^2 I, no cross terms.
   void resetBiasState();
-  /// Caps each axis' bias variance at kMaxGyroBiasStddev^2, its correlations scaled alike.
-  static void capBiasCovariance(ErrorState& e);
 
   EngineConfig config_;
   EngineSink& sink_;

@@ -397,44 +397,8 @@ void AttitudeEngine::followCovariance(const ModelResult& result) {
 void AttitudeEngine::propagateCovariance(double h, const Eigen::Vector3d& w_step,
                                          const Eigen::Matrix3d& rate_covariance_B) {
   const Eigen::Matrix3d& R_B = rate_covariance_B.isZero(0.0) ? default_R_B_ : rate_covariance_B;
-  if (!config_.fixes.estimate_gyro_bias) {
-    error_.P_B = propagateOrientationCovariance(error_.P_B, h, w_step, R_B);
-    return;
-  }
-  // The error state (dtheta_B, db), numerics.md §7.1: the rate used is the measured one less
-  // the estimate, so an error db of the estimate turns the attitude by -h J_r db:
-  //   F = [Phi, -G; 0, I], G = h J_r(h w), Q = diag(G R G^T, sigma_rw^2 h I).
-  const Eigen::Vector3d phi = h * w_step;
-  const Eigen::Matrix3d Phi = expMap(phi).toRotationMatrix().transpose();
-  const Eigen::Matrix3d G = h * rightJacobian(phi);
-  ErrorState& e = error_;
-  const Eigen::Matrix3d PhiP_Bb = Phi * e.P_Bb;
-  const Eigen::Matrix3d GP_bb = G * e.P_bb;
-  const Eigen::Matrix3d cross = PhiP_Bb * G.transpose();
-  const Eigen::Matrix3d P_B = Phi * e.P_B * Phi.transpose() - cross - cross.transpose() +
-                              GP_bb * G.transpose() + G * R_B * G.transpose();
-  e.P_Bb = PhiP_Bb - GP_bb;
-  const double q = config_.fixes.gyro_bias_random_walk;
-  e.P_bb += q * q * h * Eigen::Matrix3d::Identity();
-  capBiasCovariance(e);
-  // Clamped (an attitude variance at its cap, as the heading's after an alignment without the
-  // field), the correlations with the bias are scaled with it, not dropped
-  // (orientation_covariance.h).
-  e.P_B = clampOrientationCovariance(P_B, e.P_Bb);
-}
-
-void AttitudeEngine::capBiasCovariance(ErrorState& e) {
-  // Each axis' bias variance at most kMaxGyroBiasStddev^2: P_bb -> D P_bb D, P_Bb -> P_Bb D with
-  // D = diag(min(1, sigma_max / sigma_i)), a congruence that keeps the joint covariance
-  // semi-definite and the correlations that move the estimate.
-  const double ceiling = kMaxGyroBiasStddev * kMaxGyroBiasStddev;
-  if (!(e.P_bb.diagonal().maxCoeff() > ceiling)) return;
-  Eigen::Vector3d d;
-  for (int i = 0; i < 3; ++i)
-    d(i) = e.P_bb(i, i) > ceiling ? std::sqrt(ceiling / e.P_bb(i, i)) : 1.0;
-  e.P_bb = d.asDiagonal() * e.P_bb * d.asDiagonal();
-  e.P_bb.diagonal() = e.P_bb.diagonal().cwiseMin(ceiling);  // exactly, past the rounding
-  e.P_Bb = e.P_Bb * d.asDiagonal();
+  propagateErrorState(error_, h, w_step, R_B, config_.fixes.estimate_gyro_bias,
+                      config_.fixes.gyro_bias_random_walk);
 }
 
 void AttitudeEngine::resetState(bool forget_time) {

@@ -882,6 +882,31 @@ TEST(Bias, TheAttitudesCorrelationWithTheBiasOutlivesTheClampAtTheCap) {
   EXPECT_LT(stddev.x(), 0.01 - 1e-4);
 }
 
+// Each axis' bias variance is capped at kMaxGyroBiasStddev^2 by a congruence: the capped axes
+// end exactly at the cap, the others and the attitude block stay as they were, and every
+// correlation coefficient, attitude-bias and bias-bias, is kept (the joint matrix stays one).
+TEST(ClampedCovariance, TheBiasCapKeepsEveryCorrelationCoefficient) {
+  const double ceiling = ap::kMaxGyroBiasStddev * ap::kMaxGyroBiasStddev;
+  JointTruth truth = genericJoint({0.02, 0.3, 0.5});
+  truth.sigma_b = Eigen::Vector3d(2.0 * ap::kMaxGyroBiasStddev, 0.02, 1.5 * ap::kMaxGyroBiasStddev);
+  const Matrix6 P = truth.covariance();
+  ap::ErrorState e;
+  e.P_B = P.topLeftCorner<3, 3>();
+  e.P_Bb = P.topRightCorner<3, 3>();
+  e.P_bb = P.bottomRightCorner<3, 3>();
+  ap::capBiasCovariance(e);
+  EXPECT_EQ(e.P_bb(0, 0), ceiling);
+  EXPECT_EQ(e.P_bb(2, 2), ceiling);
+  EXPECT_EQ(e.P_bb(1, 1), P(4, 4));
+  EXPECT_EQ(e.P_B, Eigen::Matrix3d(P.topLeftCorner<3, 3>()));
+  JointTruth capped = truth;
+  capped.sigma_b = Eigen::Vector3d(ap::kMaxGyroBiasStddev, 0.02, ap::kMaxGyroBiasStddev);
+  const Matrix6 expected = capped.covariance();
+  EXPECT_LE((e.P_Bb - expected.topRightCorner<3, 3>()).norm(), 1e-12);
+  EXPECT_LE((e.P_bb - expected.bottomRightCorner<3, 3>()).norm(), 1e-12 * ceiling);
+  EXPECT_GE(smallestEigenvalue(joint(e.P_B, e.P_Bb, e.P_bb)), -1e-12 * ceiling);
+}
+
 // The update of the attitude and the bias together, with the heading's gain kept to the vertical
 // (a gain that is not the optimal one): the attitude block after it can rise above the cap in a
 // direction between the heading and the tilt, where it is clamped; the bias' cross-covariance

@@ -26,6 +26,17 @@ struct ErrorState {
 /// same. moveErrorState(e, D) gives the covariances at t_f from those at t_k; with D^-1 back.
 ErrorState moveErrorState(const ErrorState& e, const Eigen::Quaterniond& D);
 
+/// The error state over one rate step of length h with the step's rate w_step and the rate
+/// noise R_B per sample (rad^2/s^2), numerics.md §7.1. Without a bias estimate P_B alone
+/// (propagateOrientationCovariance); with it P <- F P F^T + Q, F = [Phi, -G; 0, I],
+/// G = h J_r(h w), Q = diag(G R_B G^T, random_walk^2 h I), each axis' bias variance capped
+/// (capBiasCovariance) and the attitude block clamped with its correlations
+/// (clampOrientationCovariance).
+void propagateErrorState(ErrorState& e, double h, const Eigen::Vector3d& w_step,
+                         const Eigen::Matrix3d& R_B, bool estimate_bias, double random_walk);
+/// Caps each axis' bias variance at kMaxGyroBiasStddev^2, its correlations scaled alike.
+void capBiasCovariance(ErrorState& e);
+
 /// What one update did.
 struct UpdateResult {
   bool accepted = false;  ///< within the gate (or forced), and applied
