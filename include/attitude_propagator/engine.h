@@ -9,7 +9,6 @@
 // its sink. See docs/design.md for the data flow.
 #pragma once
 
-#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -31,6 +30,7 @@
 #include "attitude_propagator/models/outcome_table.h"
 #include "attitude_propagator/models/propagator.h"
 #include "attitude_propagator/numerics/integrator.h"
+#include "attitude_propagator/time/input_order.h"
 #include "attitude_propagator/time/source_timeline.h"
 #include "attitude_propagator/time/stamp_queue.h"
 
@@ -226,16 +226,19 @@ class AttitudeEngine : private StepCovariance {
     Input input;
     Stamp received_stamp;
   };
-  /// Judges an input against its source's timeline; false when it is not used now (dropped, or
-  /// held in a run from an earlier time). When it completes a backward jump, `confirming` gets
-  /// the inputs of the run before it, in order: they are used before it (docs/design.md §6.5).
+  /// Judges an input against its source's order (InputOrder); false when it is not used now
+  /// (dropped, or held in a run from an earlier time). When it completes a backward jump,
+  /// `confirming` gets the inputs of the run before it, in order: they are used before it
+  /// (docs/design.md §6.5).
   bool inOrder(const ReceivedInput& input, std::vector<ReceivedInput>& confirming);
-  /// Counts and notes the inputs held in `source`'s run as stale: the run broke.
-  void dropHeldRun(Source source);
+  /// Counts and notes an input dropped as stale (a straggler, or held in a run that broke).
+  void countStale(const ReceivedInput& dropped);
   void restartTimeline(Source source, Stamp stamp);
   /// Hands an input in order to the model: the bias in force subtracted, due fixes applied.
   void use(const ReceivedInput& received);
-  SourceTimeline& timeline(Source source) { return timelines_[static_cast<std::size_t>(source)]; }
+  SourceTimeline& timeline(Source source) {
+    return order_rule_.timeline(static_cast<std::size_t>(source));
+  }
   void resetState(bool forget_time);
   Eigen::Matrix3d initialCovariance() const;
   EngineState stateAt(Stamp stamp) const;
@@ -286,10 +289,7 @@ class AttitudeEngine : private StepCovariance {
   std::optional<Stamp> clock_;               // the ROS time followed (clock_line_)
   ClockTimeline clock_line_;                 // ROS time's own timeline(s)
   Stamp rate_delay_ns_ = 0;                  // config_.rate_delay
-  std::array<SourceTimeline, 3> timelines_;  // per Source: Imu, Twist, Torque
-  // Per source: the inputs of a run from an earlier time, held until it is a jump (then used
-  // from the new anchor) or breaks (then dropped as stale); fewer than kJumpConfirmation.
-  std::array<std::vector<ReceivedInput>, 3> held_runs_;
+  InputOrder<ReceivedInput> order_rule_{3};  // per Source (Imu, Twist, Torque), its runs held
   EngineCounters counters_;
 
   // Fixes: whether the history is kept (from the first fix or late sample on), the history

@@ -247,48 +247,43 @@ void AttitudeEngine::keepStep(const ModelResult& result, const Input* received) 
   replay_.record(ModelStep{grid, true});
 }
 
+namespace {
+/// The index of a source in the input order (InputOrder numbers its sources from 0).
+std::size_t sourceIndex(Source source) { return static_cast<std::size_t>(source); }
+}  // namespace
+
 bool AttitudeEngine::inOrder(const ReceivedInput& received,
                              std::vector<ReceivedInput>& confirming) {
   const Source source = received.input.source;
   const Stamp stamp = received.input.stamp;
-  SourceTimeline& line = timeline(source);
-  if (clock_ && line.heldAhead(*clock_, stamp, timePolicyOf(config_))) {
-    // One forward glitch: taken, it would make the on-time inputs after it a jump back.
-    ++counters_.held_ahead;
-    sink_.note({EngineNote::HeldAhead, source, stamp});
-    return false;
+  InputOrder<ReceivedInput>::Judged judged =
+      order_rule_.judge(sourceIndex(source), stamp, received, clock_, timePolicyOf(config_));
+  for (const ReceivedInput& held : judged.released) countStale(held);  // before this one's
+  switch (judged.verdict) {
+    case OrderVerdict::Use:
+      return true;
+    case OrderVerdict::Stale:
+      countStale(received);
+      return false;
+    case OrderVerdict::HeldAhead:
+      // One forward glitch: taken, it would make the on-time inputs after it a jump back.
+      ++counters_.held_ahead;
+      sink_.note({EngineNote::HeldAhead, source, stamp});
+      return false;
+    case OrderVerdict::HeldInRun:
+      return false;  // counted when the run is a jump or breaks
+    case OrderVerdict::JumpedBack:
+      confirming = std::move(judged.confirming);
+      restartTimeline(source, stamp);
+      order_rule_.observeLag(sourceIndex(source), clock_, stamp);  // after a restart forgot it
+      return true;
   }
-  std::vector<ReceivedInput>& run = held_runs_[static_cast<std::size_t>(source)];
-  const SourceTimeline::Verdict verdict = line.judge(stamp, timePolicyOf(config_));
-  if (verdict == SourceTimeline::Verdict::JumpedBack) {
-    confirming = std::move(run);
-    run.clear();
-    restartTimeline(source, stamp);
-    if (clock_) timeline(source).observeLag(*clock_, stamp);
-    return true;
-  }
-  // The run held so far is over unless this input goes on with it.
-  if (line.run() <= 1) dropHeldRun(source);
-  if (verdict == SourceTimeline::Verdict::Straggler) {
-    if (line.run() >= 1) {
-      run.push_back(received);  // counted when the run is a jump or breaks
-    } else {
-      ++counters_.dropped_stale;
-      sink_.note({EngineNote::Stale, source, stamp});
-    }
-    return false;
-  }
-  if (clock_) timeline(source).observeLag(*clock_, stamp);
-  return true;
+  return false;
 }
 
-void AttitudeEngine::dropHeldRun(Source source) {
-  std::vector<ReceivedInput>& run = held_runs_[static_cast<std::size_t>(source)];
-  for (const ReceivedInput& held : run) {
-    ++counters_.dropped_stale;
-    sink_.note({EngineNote::Stale, source, held.input.stamp});
-  }
-  run.clear();
+void AttitudeEngine::countStale(const ReceivedInput& dropped) {
+  ++counters_.dropped_stale;
+  sink_.note({EngineNote::Stale, dropped.input.source, dropped.input.stamp});
 }
 
 void AttitudeEngine::restartTimeline(Source source, Stamp stamp) {
@@ -301,12 +296,12 @@ void AttitudeEngine::restartTimeline(Source source, Stamp stamp) {
     // state, and the outputs' stamps start again too.
     ++counters_.resets;
     resetState(true);
-    timeline(source).judge(stamp, timePolicyOf(config_));  // forgotten with the rest: the first
+    order_rule_.startAgainAt(sourceIndex(source), stamp, timePolicyOf(config_));
   }
 }
 
 std::optional<double> AttitudeEngine::inputLag(Source source) const {
-  return timelines_[static_cast<std::size_t>(source)].lag();
+  return order_rule_.lag(sourceIndex(source));
 }
 
 bool AttitudeEngine::submitBias(Stamp stamp, const Eigen::Vector3d& gyro_bias_B) {
@@ -421,9 +416,8 @@ void AttitudeEngine::resetState(bool forget_time) {
   if (forget_time) {
     time_.forget();
     last_published_.reset();
-    for (SourceTimeline& line : timelines_) line.forget();
     // Runs from an earlier time of the timelines forgotten: never a jump now.
-    for (Source source : {Source::Imu, Source::Twist, Source::Torque}) dropHeldRun(source);
+    for (const ReceivedInput& held : order_rule_.forget()) countStale(held);
   }
 }
 
