@@ -236,9 +236,6 @@ class AttitudeEngine : private StepCovariance {
   void restartTimeline(Source source, Stamp stamp);
   /// Hands an input in order to the model: the bias in force subtracted, due fixes applied.
   void use(const ReceivedInput& received);
-  SourceTimeline& timeline(Source source) {
-    return order_rule_.timeline(static_cast<std::size_t>(source));
-  }
   void resetState(bool forget_time);
   Eigen::Matrix3d initialCovariance() const;
   EngineState stateAt(Stamp stamp) const;

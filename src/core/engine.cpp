@@ -41,7 +41,9 @@ AttitudeEngine::AttitudeEngine(const EngineConfig& config, EngineSink& sink,
   gyro_bias_B_ = config_.gyro_bias_B;
   // A FIFO read stamps its samples alike; the sensor-clock filter gives each its own stamp.
   const bool fifo_reads = propagator_->takesRepeatedRateStamps();
-  for (Source s : {Source::Imu, Source::Twist}) timeline(s).allowRepeatedStamps(fifo_reads);
+  for (Source s : {Source::Imu, Source::Twist}) {
+    order_rule_.timeline(static_cast<std::size_t>(s)).allowRepeatedStamps(fifo_reads);
+  }
   default_R_B_ = defaultRateCovariance(config_);
   // The field comes on a topic of its own, stamped between the rates: applied at its stamp.
   keep_history_ = config_.aiding.use_mag;
