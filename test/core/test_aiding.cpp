@@ -882,6 +882,33 @@ TEST(Bias, TheAttitudesCorrelationWithTheBiasOutlivesTheClampAtTheCap) {
   EXPECT_LT(stddev.x(), 0.01 - 1e-4);
 }
 
+// One step of the error state at rest (w = 0: Phi = I, G = h I), the closed form of
+// P <- F P F^T + Q: P_B - h (P_Bb + P_Bb^T) + h^2 (P_bb + R), P_Bb - h P_bb, P_bb + q^2 h I; and
+// without the bias estimate the attitude block's own step, the bias blocks left as they were.
+TEST(ErrorState, OneStepAtRestIsTheClosedFormOfFPFTransposedPlusQ) {
+  const JointTruth truth = genericJoint({0.02, 0.3, 0.5});
+  const Matrix6 P = truth.covariance();
+  ap::ErrorState e;
+  e.P_B = P.topLeftCorner<3, 3>();
+  e.P_Bb = P.topRightCorner<3, 3>();
+  e.P_bb = P.bottomRightCorner<3, 3>();
+  const double h = 0.01, q = 0.003;
+  Eigen::Matrix3d R;
+  R << 4e-6, 1e-6, 0.0, 1e-6, 9e-6, -2e-6, 0.0, -2e-6, 1e-6;  // anisotropic, correlated
+  ap::ErrorState with = e;
+  ap::propagateErrorState(with, h, Eigen::Vector3d::Zero(), R, true, q);
+  const Eigen::Matrix3d P_B = e.P_B - h * (e.P_Bb + e.P_Bb.transpose()) + h * h * (e.P_bb + R);
+  EXPECT_LE((with.P_B - P_B).norm(), 1e-15);
+  EXPECT_LE((with.P_Bb - (e.P_Bb - h * e.P_bb)).norm(), 1e-15);
+  EXPECT_LE((with.P_bb - (e.P_bb + q * q * h * Eigen::Matrix3d::Identity())).norm(), 1e-15);
+  ap::ErrorState without = e;
+  ap::propagateErrorState(without, h, Eigen::Vector3d(0.3, -0.2, 0.1), R, false, q);
+  EXPECT_EQ(without.P_B,
+            ap::propagateOrientationCovariance(e.P_B, h, Eigen::Vector3d(0.3, -0.2, 0.1), R));
+  EXPECT_EQ(without.P_Bb, e.P_Bb);
+  EXPECT_EQ(without.P_bb, e.P_bb);
+}
+
 // Each axis' bias variance is capped at kMaxGyroBiasStddev^2 by a congruence: the capped axes
 // end exactly at the cap, the others and the attitude block stay as they were, and every
 // correlation coefficient, attitude-bias and bias-bias, is kept (the joint matrix stays one).
