@@ -236,8 +236,8 @@ class Propagator {
   /// Replaces the orientation at the model's time; everything else (the rate, the sample
   /// window, the knots and grid, the held torque) stays.
   virtual void correctOrientation(const Eigen::Quaterniond& q_WB) = 0;
-  /// Repeats a saved step in a replay, and returns what it did as the live call would. The
-  /// engine keeps only the covariance of the result: nothing is counted, noted, kept or
+  /// Repeats a saved step in a replay, and returns what it did as the live call would.
+  /// FixReplay keeps only the covariance of the result: nothing is counted, noted, kept or
   /// published again.
   virtual ModelResult replay(const ModelStep& step) = 0;
 };
