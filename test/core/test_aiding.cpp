@@ -909,6 +909,48 @@ TEST(ErrorState, OneStepAtRestIsTheClosedFormOfFPFTransposedPlusQ) {
   EXPECT_EQ(without.P_bb, e.P_bb);
 }
 
+// The same step at a generic rate, against the nonlinear error it linearises: the estimate turns
+// by Exp(h w) (w the rate less the bias estimate), the truth q (x) Exp(dtheta) by Exp(h (w - db -
+// n)) (n the rate's noise), so the next error is Log(Exp(-h w) Exp(dtheta) Exp(h (w - db - n))).
+// Its Jacobians by central differences give F = [Phi, F_b; 0, I] and the noise's G, and the
+// covariance must be F P F^T + diag(G R G^T, q^2 h I). A turn of 0.6 rad in the step tells Phi
+// from Phi^T and the right Jacobian from the left one.
+TEST(ErrorState, OneStepAtAGenericRateIsTheLinearisedNonlinearError) {
+  const JointTruth truth = genericJoint({0.02, 0.3, 0.5});
+  const Matrix6 P = truth.covariance();
+  ap::ErrorState e;
+  e.P_B = P.topLeftCorner<3, 3>();
+  e.P_Bb = P.topRightCorner<3, 3>();
+  e.P_bb = P.bottomRightCorner<3, 3>();
+  const double h = 0.01, q = 0.003;
+  const Eigen::Vector3d w(36.0, -42.0, 24.0);  // rad/s: |h w| = 0.6 rad
+  Eigen::Matrix3d R;
+  R << 4e-6, 1e-6, 0.0, 1e-6, 9e-6, -2e-6, 0.0, -2e-6, 1e-6;  // anisotropic, correlated
+  auto next = [&](const Eigen::Vector3d& dtheta, const Eigen::Vector3d& db) {
+    return ap::logMap(ap::expMap(-h * w) * ap::expMap(dtheta) * ap::expMap(h * (w - db)));
+  };
+  const double d = 1e-6;
+  Eigen::Matrix3d Phi, F_b;
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d u = d * Eigen::Vector3d::Unit(i);
+    const Eigen::Vector3d z = Eigen::Vector3d::Zero();
+    Phi.col(i) = (next(u, z) - next(-u, z)) / (2 * d);
+    F_b.col(i) = (next(z, u) - next(z, -u)) / (2 * d);
+  }
+  ASSERT_GT((Phi - Phi.transpose()).norm(), 0.5);  // the step's turn is large enough to tell
+  Matrix6 F = Matrix6::Identity();
+  F.topLeftCorner<3, 3>() = Phi;
+  F.topRightCorner<3, 3>() = F_b;
+  Matrix6 Q = Matrix6::Zero();
+  Q.topLeftCorner<3, 3>() = F_b * R * F_b.transpose();  // the noise enters as the bias error does
+  Q.bottomRightCorner<3, 3>() = q * q * h * Eigen::Matrix3d::Identity();
+  const Matrix6 expected = F * P * F.transpose() + Q;
+  ap::propagateErrorState(e, h, w, R, true, q);
+  EXPECT_LE((e.P_B - expected.topLeftCorner<3, 3>()).norm(), 1e-8);
+  EXPECT_LE((e.P_Bb - expected.topRightCorner<3, 3>()).norm(), 1e-8);
+  EXPECT_LE((e.P_bb - expected.bottomRightCorner<3, 3>()).norm(), 1e-15);
+}
+
 // Each axis' bias variance is capped at kMaxGyroBiasStddev^2 by a congruence: the capped axes
 // end exactly at the cap, the others and the attitude block stay as they were, and every
 // correlation coefficient, attitude-bias and bias-bias, is kept (the joint matrix stays one).

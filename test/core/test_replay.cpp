@@ -86,9 +86,13 @@ TEST(Replay, ALateFixRepeatsTheStepsAfterItsEntryAsReceivedAndReportsNothing) {
       EXPECT_EQ(step.input.stamp, at(0.01 * k)) << i;
       // As received, or less the estimate: the fix moved it, so the replay uses the new one.
       const Eigen::Vector3d expected = estimate_bias ? w(k) - engine.gyroBiasEstimate() : w(k);
-      if (i > 0) EXPECT_LE((step.input.value - expected).norm(), 1e-15) << i;
+      if (i > 0) {
+        EXPECT_LE((step.input.value - expected).norm(), 1e-15) << i;
+      }
     }
-    if (estimate_bias) EXPECT_GT((engine.gyroBiasEstimate() - bias_before).norm(), 0.0);
+    if (estimate_bias) {
+      EXPECT_GT((engine.gyroBiasEstimate() - bias_before).norm(), 0.0);
+    }
     EXPECT_EQ(spy->submitted.size(), submitted);
     EXPECT_EQ(sink.states.size(), states);  // the corrected state goes out with the next output
     EXPECT_EQ(sink.applied.size(), applied);

@@ -121,7 +121,9 @@ Verdict verdictOnTheKthRead(bool repeated, int outlier) {
       for (int k = newest - kRead + 1; k <= newest; ++k) {
         const double receipt = t0 + kFilterPeriod * (repeated ? newest : k) + latency;
         const ap::SensorClockFilter::Result r = filter.filter(receipt);
-        if (after_restart && read == 1 && k == 0) EXPECT_EQ(r.verdict, Verdict::Restarted);
+        if (after_restart && read == 1 && k == 0) {
+          EXPECT_EQ(r.verdict, Verdict::Restarted);
+        }
         if (after_restart && read == outlier && k == newest - kRead + 1) verdict = r.verdict;
       }
     }

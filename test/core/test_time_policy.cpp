@@ -317,7 +317,9 @@ TEST_P(TimeJumpThreshold, ParameterDecidesWhatIsAJumpOnEitherSide) {
     EXPECT_EQ(engine.counters().jumps_back, back > 5.0 ? 1u : 0u) << back;
     // (The dynamic model drops the inputs of the old timeline still queued for the grid when
     // a jump is recognised: counted too, so only the kinematic count is the stragglers'.)
-    if (!GetParam()) EXPECT_EQ(engine.counters().dropped_stale, back > 5.0 ? 0u : 100u) << back;
+    if (!GetParam()) {
+      EXPECT_EQ(engine.counters().dropped_stale, back > 5.0 ? 0u : 100u) << back;
+    }
   }
 }
 
