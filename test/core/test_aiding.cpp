@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -107,6 +108,47 @@ TEST(MagneticHeading, TheResidualIsZeroAtTheTruthAndItsJacobianIsTheResidualsSlo
   EXPECT_NEAR((l.H * ap::bodyUp(kGeneric))(0), 1.0, 1e-12);
   EXPECT_NEAR(std::abs((l.H * along)(0)), std::tan(1.1), 1e-12);
   EXPECT_LE(std::abs((l.H * across)(0)), 1e-12);
+}
+
+// rotationBetween, as its comment says: the rotation vector turns `from` onto `to` the shortest
+// way (its axis normal to both, its angle acos(from . to)) for a generic pair, a right angle, a
+// pair 1e-9 rad apart (the axis from a tiny cross product), parallel vectors (zero), and
+// opposite ones, exactly and 1e-13 short of it (half a turn about an axis normal to `from`).
+TEST(GravityDirection, RotationBetweenTurnsFromOntoToTheShortestWay) {
+  const Eigen::Vector3d from = Eigen::Vector3d(0.3, -0.5, 0.8).normalized();
+  const Eigen::Vector3d normal = ap::normalPlane(from).col(0);
+  const std::vector<Eigen::Vector3d> tos = {
+      Eigen::Vector3d(-0.6, 0.2, 0.4).normalized(),
+      normal,
+      ap::expMap(1e-9 * normal) * from,
+      from,
+      -from,
+      (ap::expMap(1e-13 * normal) * -from).normalized(),
+  };
+  for (std::size_t i = 0; i < tos.size(); ++i) {
+    const Eigen::Vector3d& to = tos[i];
+    const Eigen::Vector3d phi = ap::rotationBetween(from, to);
+    EXPECT_LE((ap::expMap(phi) * from - to).norm(), 1e-12) << i;
+    EXPECT_NEAR(phi.norm(), std::acos(std::clamp(from.dot(to), -1.0, 1.0)), 1e-7) << i;
+    EXPECT_LE(std::abs(phi.dot(from)), 1e-12) << i;
+    EXPECT_LE(std::abs(phi.dot(to)), 1e-12) << i;
+  }
+  EXPECT_EQ(ap::rotationBetween(from, from), Eigen::Vector3d::Zero());
+  EXPECT_NEAR(ap::rotationBetween(from, -from).norm(), M_PI, 1e-15);
+}
+
+// normalPlane: two orthonormal columns normal to u with u x e1 = e2, for u along each axis (where
+// the least aligned axis is a tie) and generic.
+TEST(GravityDirection, NormalPlaneIsARightHandedBasisNormalToU) {
+  const std::vector<Eigen::Vector3d> us = {
+      Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), -Eigen::Vector3d::UnitZ(),
+      Eigen::Vector3d(0.3, -0.5, 0.8).normalized(), Eigen::Vector3d(1.0, 1.0, 1.0).normalized()};
+  for (const Eigen::Vector3d& u : us) {
+    const Eigen::Matrix<double, 3, 2> B = ap::normalPlane(u);
+    EXPECT_LE((B.transpose() * B - Eigen::Matrix2d::Identity()).norm(), 1e-15) << u.transpose();
+    EXPECT_LE((B.transpose() * u).norm(), 1e-15) << u.transpose();
+    EXPECT_LE((u.cross(B.col(0)) - B.col(1)).norm(), 1e-15) << u.transpose();
+  }
 }
 
 // An anisotropic force noise at a tilted estimate: the direction's noise is the force's across
