@@ -97,17 +97,17 @@ class AttitudeEngine : private StepCovariance {
   FixOutcome submitFix(Stamp stamp, const Eigen::Quaterniond& q_WB,
                        const Eigen::Matrix3d& covariance_B);
   /// A specific force f_B (m/s^2, body frame, gravity included: REP-145) measured at `stamp`,
-  /// with its covariance (m^2/s^4; all zero: accel_stddev^2 I): a measurement of the gravity
-  /// direction, counted in counters().accel. Stamped as the last IMU rate submitted (the same
-  /// message, submitted after it), it acts where that rate took effect, whatever rate_delay or
-  /// the stamp filter did to its stamp, and nothing is kept for it; otherwise at its stamp
-  /// (moved back by rate_delay) like a fix (the rates since replayed). Off (ignored) without
-  /// use_accel. Never throws. docs/design.md §6.10.
+  /// with its covariance (m^2/s^4; all zero, or use_accel_covariance false: accel_stddev^2 I):
+  /// a measurement of the gravity direction, counted in counters().accel. Stamped as the last
+  /// IMU rate submitted (the same message, submitted after it), it acts where that rate took
+  /// effect, whatever rate_delay or the stamp filter did to its stamp, and nothing is kept for
+  /// it; otherwise at its stamp (moved back by rate_delay) like a fix (the rates since
+  /// replayed). Off (ignored) without use_accel. Never throws. docs/design.md §6.10.
   AidingOutcome submitAcceleration(Stamp stamp, const Eigen::Vector3d& f_B,
                                    const Eigen::Matrix3d& covariance_B);
   /// A magnetic field m_B (tesla, body frame) measured at `stamp`, with its covariance (T^2; all
-  /// zero: mag_stddev^2 I): a measurement of the heading alone, counted in counters().mag.
-  /// Off (ignored) without use_mag. Never throws.
+  /// zero, or use_mag_covariance false: mag_stddev^2 I): a measurement of the heading alone,
+  /// counted in counters().mag. Off (ignored) without use_mag. Never throws.
   AidingOutcome submitMagneticField(Stamp stamp, const Eigen::Vector3d& m_B,
                                     const Eigen::Matrix3d& covariance_B);
   /// Gravity and field samples waiting for the rates to reach their stamps.

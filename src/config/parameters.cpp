@@ -423,8 +423,10 @@ EngineConfig engineConfig(const NodeConfig& node) {
   config.fixes.gyro_bias_stddev = p.gyro_bias_stddev;
   config.aiding.use_accel = p.use_accel;
   config.aiding.accel_stddev = p.accel_stddev;
+  config.aiding.use_accel_covariance = p.use_accel_covariance;
   config.aiding.use_mag = p.use_mag;
   config.aiding.mag_stddev = p.mag_stddev;
+  config.aiding.use_mag_covariance = p.use_mag_covariance;
   config.aiding.declination = p.declination;
   // Without an initial attitude the tilt is the first gravity sample's (the heading unknown).
   config.aiding.align = p.use_accel && p.initial_orientation.empty();

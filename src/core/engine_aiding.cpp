@@ -28,11 +28,19 @@ Eigen::Matrix3d orDefault(const Eigen::Matrix3d& covariance, double stddev) {
   return stddev * stddev * Eigen::Matrix3d::Identity();
 }
 
+/// The covariance a sample is taken to give: its own, or none when the settings say its
+/// driver's is not to be used (then it is not judged either: the setting's stddev stands).
+Eigen::Matrix3d givenCovariance(const Eigen::Matrix3d& covariance, bool use_message_covariance) {
+  return use_message_covariance ? covariance : Eigen::Matrix3d::Zero();
+}
+
 }  // namespace
 
 AidingOutcome AttitudeEngine::submitAcceleration(Stamp stamp, const Eigen::Vector3d& f_B,
-                                                 const Eigen::Matrix3d& covariance_B) {
+                                                 const Eigen::Matrix3d& message_covariance_B) {
   if (!config_.aiding.use_accel) return AidingOutcome::Off;
+  const Eigen::Matrix3d covariance_B =
+      givenCovariance(message_covariance_B, config_.aiding.use_accel_covariance);
   AidingOutcome outcome = AidingOutcome::Waiting;
   if (!f_B.allFinite() || !validSensorCovariance(covariance_B) || !(f_B.norm() > 0.0)) {
     outcome = AidingOutcome::Invalid;
@@ -64,8 +72,10 @@ AidingOutcome AttitudeEngine::submitAcceleration(Stamp stamp, const Eigen::Vecto
 }
 
 AidingOutcome AttitudeEngine::submitMagneticField(Stamp stamp, const Eigen::Vector3d& m_B,
-                                                  const Eigen::Matrix3d& covariance_B) {
+                                                  const Eigen::Matrix3d& message_covariance_B) {
   if (!config_.aiding.use_mag) return AidingOutcome::Off;
+  const Eigen::Matrix3d covariance_B =
+      givenCovariance(message_covariance_B, config_.aiding.use_mag_covariance);
   AidingOutcome outcome = AidingOutcome::Waiting;
   if (!m_B.allFinite() || !validSensorCovariance(covariance_B) || !(m_B.norm() > 0.0)) {
     outcome = AidingOutcome::Invalid;

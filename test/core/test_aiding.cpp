@@ -1132,6 +1132,60 @@ TEST(Late, GravityAndFieldSamplesHandedInLateGiveTheStateTheyGiveOnTime) {
   EXPECT_LE(ap::rotationAngle(adaptive.q_WB, adaptive_late.q_WB), 2e-3);
 }
 
+// use_accel_covariance and use_mag_covariance false: a message's own covariance is ignored and
+// the settings' stddevs stand, as for a message whose covariance is all zero, even where the
+// covariance is not one (a driver's NaN is not refused then). The same stream with the covariance
+// used gives another state, and the NaN is refused as invalid, so the setting is what differs.
+struct CovarianceRun {
+  ap::EngineState state;
+  ap::AidingCounters accel, mag;
+};
+
+CovarianceRun runWithCovariances(bool use_message_covariance, const Eigen::Matrix3d& accel_R,
+                                 const Eigen::Matrix3d& mag_R) {
+  ap::EngineConfig c = aidedConfig();
+  c.aiding.linear_window = 0.0;
+  c.aiding.use_mag = true;
+  c.aiding.mag_stddev = 0.3e-6;
+  c.aiding.use_accel_covariance = use_message_covariance;
+  c.aiding.use_mag_covariance = use_message_covariance;
+  simulated_imu::Sensor sensor;
+  sensor.gyro_noise = 0.002;
+  sensor.accel_noise = 0.05;
+  sensor.mag_noise = 0.3e-6;
+  const auto samples = simulated_imu::simulate(tumble(), sensor, 2.0);
+  Recorder sink;
+  ap::AttitudeEngine engine(c, sink);
+  for (const auto& x : samples) {
+    engine.submit(imu(at(x.t), x.w_B));
+    engine.submitAcceleration(at(x.t), x.f_B, accel_R);
+    engine.submitMagneticField(at(x.t), x.m_B, mag_R);
+  }
+  return {engine.state(), engine.counters().accel, engine.counters().mag};
+}
+
+TEST(MessageCovariance, IgnoredWhenTheSettingsSaySoTheStddevsStand) {
+  const Eigen::Matrix3d none = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d accel_R;  // anisotropic and correlated, far from accel_stddev's
+  accel_R << 4.0, 0.5, 0.0, 0.5, 1.0, -0.3, 0.0, -0.3, 2.0;
+  const Eigen::Matrix3d mag_R = 2.7e-6 * Eigen::Matrix3d::Identity();  // 1.7 mT: another unit
+  const CovarianceRun stddevs = runWithCovariances(true, none, none);
+  const CovarianceRun ignored = runWithCovariances(false, accel_R, mag_R);
+  EXPECT_EQ(ignored.state.q_WB.coeffs(), stddevs.state.q_WB.coeffs());
+  EXPECT_EQ(ignored.state.P_B, stddevs.state.P_B);
+  EXPECT_EQ(ignored.accel.accepted, stddevs.accel.accepted);
+  EXPECT_EQ(ignored.mag.accepted, stddevs.mag.accepted);
+  const CovarianceRun used = runWithCovariances(true, accel_R, mag_R);
+  EXPECT_GT((used.state.P_B - stddevs.state.P_B).norm(), 1e-3 * stddevs.state.P_B.norm());
+  const Eigen::Matrix3d nan = Eigen::Matrix3d::Constant(NAN);
+  const CovarianceRun ignored_nan = runWithCovariances(false, nan, nan);
+  EXPECT_EQ(ignored_nan.state.q_WB.coeffs(), stddevs.state.q_WB.coeffs());
+  EXPECT_EQ(ignored_nan.accel.invalid + ignored_nan.mag.invalid, 0u);
+  const CovarianceRun refused = runWithCovariances(true, nan, nan);
+  EXPECT_EQ(refused.accel.invalid, stddevs.accel.accepted + stddevs.accel.aligned);
+  EXPECT_GT(refused.mag.invalid, 0u);
+}
+
 // With absolute fixes at the same time: a late gravity sample is applied before the fixes
 // stamped after it, which are applied again after it, as on time.
 // The tumble started from its true attitude, with the history from the start and the

@@ -315,6 +315,8 @@ TEST(Parameters, AidingValuesReachTheEngineUnchanged) {
   p.use_mag = true;
   p.mag_stddev = 3e-7;
   p.declination = -0.125;
+  p.use_accel_covariance = false;
+  p.use_mag_covariance = false;
   const ap::Parameters defaults;
   ASSERT_TRUE(defaults.initial_orientation.empty());  // none given by default
   ASSERT_NE(p.accel_stddev, defaults.accel_stddev);
@@ -325,6 +327,8 @@ TEST(Parameters, AidingValuesReachTheEngineUnchanged) {
   EXPECT_TRUE(a.use_mag);
   EXPECT_EQ(a.mag_stddev, 3e-7);
   EXPECT_EQ(a.declination, -0.125);
+  EXPECT_FALSE(a.use_accel_covariance);
+  EXPECT_FALSE(a.use_mag_covariance);
   EXPECT_TRUE(a.align);
   p.initial_orientation = {0.0, 0.0, 0.0, 1.0};  // given: the attitude starts there
   EXPECT_FALSE(ap::engineConfig(ap::validateParameters(p)).aiding.align);
@@ -337,6 +341,8 @@ TEST(Parameters, AidingValuesReachTheEngineUnchanged) {
   EXPECT_EQ(off.accel_stddev, 0.1);
   EXPECT_EQ(off.mag_stddev, 1e-6);
   EXPECT_EQ(off.declination, 0.0);
+  EXPECT_TRUE(off.use_accel_covariance);  // a message's covariance is taken at its word
+  EXPECT_TRUE(off.use_mag_covariance);
 }
 
 // No initial_orientation: the identity, in every world_frame (its axes' own identity).

@@ -78,8 +78,10 @@ struct Parameters {
   double gyro_bias_stddev = 0.01;  // 0.57 deg/s: a MEMS gyro (docs/parameters.md)
   bool use_accel = false;
   double accel_stddev = 0.1;
+  bool use_accel_covariance = true;
   bool use_mag = false;
   double mag_stddev = 1e-6;
+  bool use_mag_covariance = true;
   double declination = 0.0;
 };
 
@@ -201,11 +203,17 @@ void forEachParameter(P& p, F&& f) {
   f("accel_stddev", p.accel_stddev, "m/s²",
     "`use_accel`: accelerometer noise per axis for messages whose covariance is all zero; in "
     "(0, 100]");
+  f("use_accel_covariance", p.use_accel_covariance, "",
+    "`use_accel`: a message's `linear_acceleration_covariance` is used when it gives one; false: "
+    "ignored, `accel_stddev` always (a driver whose covariance is wrong)");
   f("use_mag", p.use_mag, "",
     "kinematic model: `imu/mag` (sensor_msgs/MagneticField) measures the heading; start-up only");
   f("mag_stddev", p.mag_stddev, "T",
     "`use_mag`: magnetometer noise per axis for messages whose covariance is all zero; in "
     "(0, 1e-2]");
+  f("use_mag_covariance", p.use_mag_covariance, "",
+    "`use_mag`: a message's `magnetic_field_covariance` is used when it gives one; false: "
+    "ignored, `mag_stddev` always (a driver whose covariance is wrong, e.g. in another unit)");
   f("declination", p.declination, "rad",
     "`use_mag`: magnetic north east of true north positive; in [-π, π]");
 }

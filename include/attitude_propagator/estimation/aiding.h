@@ -18,9 +18,13 @@ struct AidingConfig {
   /// The IMU's linear_acceleration is a measurement of the gravity direction.
   bool use_accel = false;
   double accel_stddev = 0.1;  ///< m/s^2 per axis, for a sample without a covariance
+  /// A sample's own covariance is used when it gives one; false: ignored (accel_stddev always).
+  bool use_accel_covariance = true;
   /// The magnetometer's field is a measurement of the heading (never of roll and pitch).
   bool use_mag = false;
   double mag_stddev = 1e-6;  ///< tesla per axis, for a sample without a covariance
+  /// A sample's own covariance is used when it gives one; false: ignored (mag_stddev always).
+  bool use_mag_covariance = true;
   double declination = 0.0;  ///< rad, magnetic north east of true north positive
   /// The attitude starts from the first gravity sample (tilt; the heading unknown until a
   /// field sample or a fix): no initial_orientation given.
