@@ -336,6 +336,22 @@ JointTruth genericJoint(const Eigen::Vector3d& lambda) {
   return t;
 }
 
+// The error state whose joint covariance is P (the bias estimate zero).
+ap::ErrorState errorStateOf(const Matrix6& P) {
+  ap::ErrorState e;
+  e.P_B = P.topLeftCorner<3, 3>();
+  e.P_Bb = P.topRightCorner<3, 3>();
+  e.P_bb = P.bottomRightCorner<3, 3>();
+  return e;
+}
+
+// A rate noise per sample (rad^2/s^2) with unequal variances and correlated axes.
+Eigen::Matrix3d anisotropicRateNoise() {
+  Eigen::Matrix3d R;
+  R << 4e-6, 1e-6, 0.0, 1e-6, 9e-6, -2e-6, 0.0, -2e-6, 1e-6;
+  return R;
+}
+
 double smallestEigenvalue(const Matrix6& P) {
   return Eigen::SelfAdjointEigenSolver<Matrix6>(P).eigenvalues().minCoeff();
 }
@@ -930,13 +946,9 @@ TEST(Bias, TheAttitudesCorrelationWithTheBiasOutlivesTheClampAtTheCap) {
 TEST(ErrorState, OneStepAtRestIsTheClosedFormOfFPFTransposedPlusQ) {
   const JointTruth truth = genericJoint({0.02, 0.3, 0.5});
   const Matrix6 P = truth.covariance();
-  ap::ErrorState e;
-  e.P_B = P.topLeftCorner<3, 3>();
-  e.P_Bb = P.topRightCorner<3, 3>();
-  e.P_bb = P.bottomRightCorner<3, 3>();
+  ap::ErrorState e = errorStateOf(P);
   const double h = 0.01, q = 0.003;
-  Eigen::Matrix3d R;
-  R << 4e-6, 1e-6, 0.0, 1e-6, 9e-6, -2e-6, 0.0, -2e-6, 1e-6;  // anisotropic, correlated
+  const Eigen::Matrix3d R = anisotropicRateNoise();
   ap::ErrorState with = e;
   ap::propagateErrorState(with, h, Eigen::Vector3d::Zero(), R, true, q);
   const Eigen::Matrix3d P_B = e.P_B - h * (e.P_Bb + e.P_Bb.transpose()) + h * h * (e.P_bb + R);
@@ -960,14 +972,10 @@ TEST(ErrorState, OneStepAtRestIsTheClosedFormOfFPFTransposedPlusQ) {
 TEST(ErrorState, OneStepAtAGenericRateIsTheLinearisedNonlinearError) {
   const JointTruth truth = genericJoint({0.02, 0.3, 0.5});
   const Matrix6 P = truth.covariance();
-  ap::ErrorState e;
-  e.P_B = P.topLeftCorner<3, 3>();
-  e.P_Bb = P.topRightCorner<3, 3>();
-  e.P_bb = P.bottomRightCorner<3, 3>();
+  ap::ErrorState e = errorStateOf(P);
   const double h = 0.01, q = 0.003;
   const Eigen::Vector3d w(36.0, -42.0, 24.0);  // rad/s: |h w| = 0.6 rad
-  Eigen::Matrix3d R;
-  R << 4e-6, 1e-6, 0.0, 1e-6, 9e-6, -2e-6, 0.0, -2e-6, 1e-6;  // anisotropic, correlated
+  const Eigen::Matrix3d R = anisotropicRateNoise();
   auto next = [&](const Eigen::Vector3d& dtheta, const Eigen::Vector3d& db) {
     return ap::logMap(ap::expMap(-h * w) * ap::expMap(dtheta) * ap::expMap(h * (w - db)));
   };
@@ -1001,10 +1009,7 @@ TEST(ClampedCovariance, TheBiasCapKeepsEveryCorrelationCoefficient) {
   JointTruth truth = genericJoint({0.02, 0.3, 0.5});
   truth.sigma_b = Eigen::Vector3d(2.0 * ap::kMaxGyroBiasStddev, 0.02, 1.5 * ap::kMaxGyroBiasStddev);
   const Matrix6 P = truth.covariance();
-  ap::ErrorState e;
-  e.P_B = P.topLeftCorner<3, 3>();
-  e.P_Bb = P.topRightCorner<3, 3>();
-  e.P_bb = P.bottomRightCorner<3, 3>();
+  ap::ErrorState e = errorStateOf(P);
   ap::capBiasCovariance(e);
   EXPECT_EQ(e.P_bb(0, 0), ceiling);
   EXPECT_EQ(e.P_bb(2, 2), ceiling);
@@ -1026,10 +1031,7 @@ TEST(ClampedCovariance, AnUpdateThatClampsTheAttitudeScalesItsCorrelationsWithTh
   const double cap = ap::kMaxOrientationVariance;
   const JointTruth before = genericJoint({cap, 0.999 * cap, 0.998 * cap});
   const Matrix6 P = before.covariance();
-  ap::ErrorState e;
-  e.P_B = P.topLeftCorner<3, 3>();
-  e.P_Bb = P.topRightCorner<3, 3>();
-  e.P_bb = P.bottomRightCorner<3, 3>();
+  ap::ErrorState e = errorStateOf(P);
   // A steep field (dip 1.2 rad): the heading's H reaches the tilt by tan(dip), the gain does not.
   const Eigen::Vector3d m_W = simulated_imu::earthField(50e-6, 1.2, 0.0);
   const Eigen::Quaterniond truth = rpy(0.05, -0.02, 0.3) * kGeneric;
