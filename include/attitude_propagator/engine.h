@@ -300,7 +300,7 @@ class AttitudeEngine : private StepCovariance {
   StampQueue<PendingMeasurement> pending_measurements_{kMaxPendingMeasurements};
   bool tilt_known_ = true;                  // false with align until the first gravity sample
   LinearAcceleration linear_acceleration_;  // seen lately in the gravity samples
-  double linear_variance_ = 0.0;            // its variance per axis (m^2/s^4), the newest
+  LinearVariance linear_variance_;          // its variances per axis (m^2/s^4), the newest
   std::optional<Stamp> last_imu_stamp_;     // as received, of the last IMU rate the model took
   RejectionRun accel_run_;                  // the gate's rejections in a row, per kind
   RejectionRun mag_run_;

@@ -412,7 +412,7 @@ void AttitudeEngine::resetState(bool forget_time) {
   tilt_known_ = !config_.aiding.align;  // the initial state again
   last_imu_stamp_.reset();
   linear_acceleration_.reset();
-  linear_variance_ = 0.0;
+  linear_variance_ = {};
   accel_run_.clear();
   mag_run_.clear();
   if (forget_time) {

@@ -52,11 +52,11 @@ AidingOutcome AttitudeEngine::submitAcceleration(Stamp stamp, const Eigen::Vecto
     return outcome;
   }
   const Eigen::Matrix3d R = orDefault(covariance_B, config_.aiding.accel_stddev);
-  const double linear_variance = linear_acceleration_.observe(
+  const LinearVariance seen = linear_acceleration_.observe(
       stamp, f_B - kStandardGravity * bodyUp(propagator_->state().q_WB), R.trace(),
       config_.aiding.linear_window, f_B.norm());
-  linear_variance_ = tilt_known_ ? linear_variance : 0.0;
-  const GravityDirection measurement(f_B, R, config_.aiding.accel_gate, linear_variance_);
+  linear_variance_ = tilt_known_ ? seen : LinearVariance{};
+  const GravityDirection measurement(f_B, R, config_.aiding.accel_gate, linear_variance_.direction);
   if (last_imu_stamp_ && stamp == *last_imu_stamp_) {
     // With its own rate (the same message): where that rate took effect. Nothing to keep unless
     // the history is on (fixes, the field, a late sample started it).
@@ -100,7 +100,7 @@ AidingOutcome AttitudeEngine::submitMagneticField(Stamp stamp, const Eigen::Vect
   }
   auto measurement = std::make_shared<const MagneticHeading>(
       m_B, orDefault(covariance_B, config_.aiding.mag_stddev), config_.aiding.declination,
-      config_.aiding.mag_gate, linear_variance_ / (kStandardGravity * kStandardGravity));
+      config_.aiding.mag_gate, linear_variance_.fieldTiltVariance());
   return placeMeasurement({stamp, std::move(measurement), m_B});
 }
 

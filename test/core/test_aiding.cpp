@@ -690,60 +690,91 @@ TEST(Recovery, ARunEndsAfterItsTimeExactlyAndAnAcceptanceStartsItAgain) {
 }
 
 // Linear acceleration that lasts (a turn, a braking) is noise on the gravity direction while it
-// lasts: the average of the unexplained part over the window, less the sensor's noise, per
-// axis; a single sample far off moves the average by its share of the window only.
+// lasts: the average of the unexplained part over the window, less the sensor's noise, spread
+// over the three axes; a single sample far off moves the average by its share of the window only.
 TEST(LinearAcceleration, ALastingAccelerationIsAveragedOverTheWindowASingleOneIsNot) {
   ap::LinearAcceleration seen;
   const Eigen::Vector3d a(3.0, 0.0, 0.0);  // 3 m/s^2 unexplained
-  double v = 0.0;
+  ap::LinearVariance v;
   for (int k = 0; k <= 500; ++k) v = seen.observe(at(0.01 * k), a, 0.0);
-  EXPECT_NEAR(v, 9.0 / 3.0 * (1.0 - std::exp(-5.0 / ap::kLinearAccelerationWindow)), 1e-6);
+  const double lasting = 9.0 / 3.0 * (1.0 - std::exp(-5.0 / ap::kLinearAccelerationWindow));
+  EXPECT_NEAR(v.direction, lasting, 1e-6);
+  EXPECT_NEAR(v.spread, lasting, 1e-6);
   ap::LinearAcceleration once;
   for (int k = 0; k < 100; ++k) once.observe(at(0.01 * k), Eigen::Vector3d::Zero(), 0.0);
-  const double bump = once.observe(at(1.0), Eigen::Vector3d(30.0, 0, 0), 0.0);
-  EXPECT_NEAR(bump, 900.0 / 3.0 * (1.0 - std::exp(-0.01 / ap::kLinearAccelerationWindow)), 1e-9);
+  const ap::LinearVariance bump = once.observe(at(1.0), Eigen::Vector3d(30.0, 0, 0), 0.0);
+  const double share = 900.0 / 3.0 * (1.0 - std::exp(-0.01 / ap::kLinearAccelerationWindow));
+  EXPECT_NEAR(bump.direction, share, 1e-9);
+  EXPECT_NEAR(bump.spread, share, 1e-9);
   // The sensor's own noise is no acceleration.
   ap::LinearAcceleration noise;
   for (int k = 0; k <= 500; ++k) v = noise.observe(at(0.01 * k), Eigen::Vector3d(0.1, 0, 0), 0.03);
-  EXPECT_EQ(v, 0.0);
+  EXPECT_EQ(v.direction, 0.0);
+  EXPECT_EQ(v.spread, 0.0);
 }
 
 // The force's magnitude shows a linear acceleration whatever the estimate explains:
 // |f|^2 - g^2 = |a|^2 + 2 g a_up, so for one at right angles to gravity (a turn) |a|^2, from the
 // first sample on, with a residual of zero (the tilt has followed the force); its size counts,
-// not its sign; the sensor's noise is no acceleration.
+// not its sign; the sensor's noise (its trace, E|n|^2) is no acceleration. The direction's noise
+// takes |a|^2 whole in each axis (a lasting acceleration keeps one direction in the plane), the
+// spread a third of it.
 TEST(LinearAcceleration, TheForcesMagnitudeShowsAHorizontalAccelerationFromTheFirstSample) {
   const Eigen::Vector3d none = Eigen::Vector3d::Zero();
   const double window = ap::kLinearAccelerationWindow;
   ap::LinearAcceleration turn;
   const double f = std::sqrt(g * g + 9.0);  // 3 m/s^2 across gravity
-  EXPECT_NEAR(turn.observe(at(0.0), none, 0.0, window, f), 3.0, 1e-9);
-  double v = 0.0;
+  const ap::LinearVariance first = turn.observe(at(0.0), none, 0.0, window, f);
+  EXPECT_NEAR(first.direction, 9.0, 1e-9);
+  EXPECT_NEAR(first.spread, 3.0, 1e-9);
+  ap::LinearVariance v;
   for (int k = 1; k <= 500; ++k) v = turn.observe(at(0.01 * k), none, 0.0, window, f);
-  EXPECT_NEAR(v, 3.0, 1e-9);
+  EXPECT_NEAR(v.direction, 9.0, 1e-9);
+  EXPECT_NEAR(v.spread, 3.0, 1e-9);
+  // The field's heading allows the tilt the even spread, over g^2 (rad^2 per axis).
+  EXPECT_NEAR(v.fieldTiltVariance(), 3.0 / (g * g), 1e-12);
   ap::LinearAcceleration falling;  // |f| < g: accelerating downward
-  EXPECT_NEAR(falling.observe(at(0.0), none, 0.0, window, std::sqrt(g * g - 9.0)), 3.0, 1e-9);
+  const ap::LinearVariance down =
+      falling.observe(at(0.0), none, 0.0, window, std::sqrt(g * g - 9.0));
+  EXPECT_NEAR(down.direction, 9.0, 1e-9);
+  EXPECT_NEAR(down.spread, 3.0, 1e-9);
+  // The noise's trace, 0.03, is what |f|^2 - g^2 holds on average without acceleration; at 0.06
+  // the rest, 0.03, is the acceleration's.
   ap::LinearAcceleration noise;
-  EXPECT_NEAR(noise.observe(at(0.0), none, 0.03, window, std::sqrt(g * g + 0.03)), 0.0, 1e-12);
+  const ap::LinearVariance still =
+      noise.observe(at(0.0), none, 0.03, window, std::sqrt(g * g + 0.03));
+  EXPECT_NEAR(still.direction, 0.0, 1e-12);
+  EXPECT_NEAR(still.spread, 0.0, 1e-12);
+  ap::LinearAcceleration little;
+  const ap::LinearVariance some =
+      little.observe(at(0.0), none, 0.03, window, std::sqrt(g * g + 0.06));
+  EXPECT_NEAR(some.direction, 0.03, 1e-9);
+  EXPECT_NEAR(some.spread, 0.01, 1e-9);
   // Without the force (0), the unexplained part alone, from zero.
   ap::LinearAcceleration residual_only;
-  EXPECT_EQ(residual_only.observe(at(0.0), Eigen::Vector3d(3.0, 0, 0), 0.0, window, 0.0), 0.0);
+  const ap::LinearVariance alone =
+      residual_only.observe(at(0.0), Eigen::Vector3d(3.0, 0, 0), 0.0, window, 0.0);
+  EXPECT_EQ(alone.direction, 0.0);
+  EXPECT_EQ(alone.spread, 0.0);
   // A vertical oscillation a_up = A sin(w t) is no lasting acceleration: 2 g a_up averages out
   // over the window, to within the exponential average's gain at w, 1 / sqrt(1 + (w W)^2)
   // (and a_up^2 = A^2 / 2 (1 - cos 2 w t) to within its gain at 2 w), 5 % for the sampling.
   const double A = 1.0, w = 2.0 * M_PI / 0.5;
   ap::LinearAcceleration heave;
-  double largest = 0.0;
+  double largest = 0.0, largest_spread = 0.0;
   for (int k = 0; k <= 2000; ++k) {
     const double t = 0.01 * k, up = A * std::sin(w * t);
     v = heave.observe(at(t), none, 0.0, window, std::hypot(0.0, g + up));
-    if (t > 10.0 * window) largest = std::max(largest, v);
+    if (t > 10.0 * window) {
+      largest = std::max(largest, v.direction);
+      largest_spread = std::max(largest_spread, v.spread);
+    }
   }
-  const double bound = (A * A / 2.0 * (1.0 + 1.0 / std::hypot(1.0, 2.0 * w * window)) +
-                        2.0 * g * A / std::hypot(1.0, w * window)) /
-                       3.0;
+  const double bound = A * A / 2.0 * (1.0 + 1.0 / std::hypot(1.0, 2.0 * w * window)) +
+                       2.0 * g * A / std::hypot(1.0, w * window);
   EXPECT_LE(largest, 1.05 * bound);
-  EXPECT_LT(bound, 2.0 * g * A / 3.0 / 5.0);  // a fifth of what one sample says, or less
+  EXPECT_LE(largest_spread, 1.05 * bound / 3.0);
+  EXPECT_LT(bound, 2.0 * g * A / 5.0);  // a fifth of what one sample says, or less
 }
 
 // A level body in a constant turn from its first sample: a centripetal acceleration a at right
@@ -752,7 +783,7 @@ TEST(LinearAcceleration, TheForcesMagnitudeShowsAHorizontalAccelerationFromTheFi
 // next to noiseless, so the tilt is a static state seen through m samples of one noise R each
 // (isotropic in the plane): its estimate moves toward the lean by the closed-form share
 // (m / R) / (1 / s0^2 + m / R) (information form). R holds the acceleration the magnitude shows
-// from the first sample, a^2 / 3 per axis less the sensor's noise; the unexplained part alone
+// from the first sample, a^2 in each axis less the sensor's noise; the unexplained part alone
 // shows nothing at first, the first samples would then count as the sensor's noise, and the
 // tilt would lean with the force within a tenth of a second.
 TEST(LinearAcceleration, AConstantHorizontalAccelerationMovesTheTiltByTheClosedFormShare) {
@@ -772,7 +803,7 @@ TEST(LinearAcceleration, AConstantHorizontalAccelerationMovesTheTiltByTheClosedF
   const double m = static_cast<double>(engine.counters().accel.accepted);
   ASSERT_GE(m, 999.0);
   const double f2 = f.squaredNorm(), off = (std::sqrt(f2) - g) / g;
-  const double R = sigma * sigma / f2 + off * off + (a * a - 3.0 * sigma * sigma) / 3.0 / (g * g);
+  const double R = sigma * sigma / f2 + off * off + (a * a - 3.0 * sigma * sigma) / (g * g);
   const double share = (m / R) / (1.0 / (s0 * s0) + m / R);
   const double lean = std::atan2(a, g);
   const double tilt = simulated_imu::tiltError(engine.state().q_WB, Eigen::Quaterniond::Identity());

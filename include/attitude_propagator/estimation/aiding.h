@@ -104,18 +104,36 @@ void AidingCounters::forEach(F&& f) const {
 ///    angles to gravity, |f| hardly off g) shows in it as |a|^2 for as long as it lasts, while a
 ///    vertical one (a_up, whose mean over a window is the change of a bounded vertical velocity)
 ///    mostly averages out.
-/// A sample is taken to carry the larger of the two, less the sensor's noise, as the variance of
-/// a linear acceleration per axis (GravityDirection): while a vehicle turns or brakes, or a hand
-/// shakes, the gravity direction is trusted less, and as much again once it stops; a single
-/// sample far off (a bump) is left to the gate.
+/// What a sample is taken to carry, less the sensor's noise (LinearVariance): the two sides
+/// spread their power differently. The unexplained part holds all three axes (the vertical's
+/// too: vibration, heave) and is spread evenly over them; the magnitude is, for a horizontal
+/// acceleration, the power of the part that turns the direction, and it is given whole to each
+/// axis: a lasting acceleration keeps its direction in the plane, so one axis carries all of it
+/// while it lasts, and its samples share one error rather than averaging theirs away. While a
+/// vehicle turns or brakes, or a hand shakes, the gravity direction is trusted less, and as much
+/// again once it stops; a single sample far off (a bump) is left to the gate.
+struct LinearVariance {
+  /// m^2/s^4 per axis: each gravity sample's noise from the linear acceleration,
+  /// max((<|f_B - g u|^2> - tr) / 3, |<|f|^2 - g^2>| - tr), tr the sensor's noise (the trace
+  /// both sides' means hold anyway), at least 0 (GravityDirection).
+  double direction = 0.0;
+  /// m^2/s^4 per axis: the larger side spread evenly over three axes, max(<|f_B - g u|^2>,
+  /// |<|f|^2 - g^2>|) less the sensor's noise, over three: how far the filtered tilt may be off
+  /// beyond its covariance (MagneticHeading, over g^2).
+  double spread = 0.0;
+
+  /// rad^2 per axis the field's heading allows the tilt beyond its covariance: spread / g^2.
+  double fieldTiltVariance() const;
+};
+
 class LinearAcceleration {
  public:
-  /// The variance (m^2/s^4 per axis) for the sample at `stamp` whose unexplained part is
-  /// `residual` (m/s^2) and whose force has the size `force` (m/s^2; 0: not given, the
-  /// magnitude's side not used), with the sensor's noise `noise_trace` (m^2/s^4, the
-  /// covariance's trace), averaged over `window` seconds.
-  double observe(Stamp stamp, const Eigen::Vector3d& residual, double noise_trace,
-                 double window = kLinearAccelerationWindow, double force = 0.0);
+  /// The variances for the sample at `stamp` whose unexplained part is `residual` (m/s^2) and
+  /// whose force has the size `force` (m/s^2; 0: not given, the magnitude's side not used),
+  /// with the sensor's noise `noise_trace` (m^2/s^4, the covariance's trace), averaged over
+  /// `window` seconds.
+  LinearVariance observe(Stamp stamp, const Eigen::Vector3d& residual, double noise_trace,
+                         double window = kLinearAccelerationWindow, double force = 0.0);
   void reset() {
     mean_ = 0.0;
     magnitude_ = 0.0;

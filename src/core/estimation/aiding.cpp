@@ -108,9 +108,14 @@ void AidingCounters::count(AidingOutcome outcome) {
   }
 }
 
-double LinearAcceleration::observe(Stamp stamp, const Eigen::Vector3d& residual, double noise_trace,
-                                   double window, double force) {
-  if (!(window > 0.0)) return 0.0;
+double LinearVariance::fieldTiltVariance() const {
+  // The filtered tilt is off by less than one sample's lean: the even spread, not the direction's.
+  return spread / (kStandardGravity * kStandardGravity);
+}
+
+LinearVariance LinearAcceleration::observe(Stamp stamp, const Eigen::Vector3d& residual,
+                                           double noise_trace, double window, double force) {
+  if (!(window > 0.0)) return {};
   // Exponential window over the stamps, a = 1 - exp(-dt / window): a sample far off the average
   // (a bump) is the gate's to judge, a lasting acceleration (a turn) is the average's.
   const double dt = last_ ? std::max(0.0, static_cast<double>(stamp - *last_) * 1e-9) : 0.0;
@@ -123,9 +128,13 @@ double LinearAcceleration::observe(Stamp stamp, const Eigen::Vector3d& residual,
     magnitude_ += (last_ ? a : 1.0) * (sample - magnitude_);
   }
   if (!last_ || stamp > *last_) last_ = stamp;
-  // The three axes' sum, less the noise the sensor has anyway, spread over the three axes.
-  const double seen = std::max(mean_, force > 0.0 ? std::abs(magnitude_) : 0.0);
-  return std::max(0.0, seen - noise_trace) / 3.0;
+  const double horizontal = force > 0.0 ? std::abs(magnitude_) : 0.0;
+  LinearVariance v;
+  // The sensor's noise adds its trace to both sides' means. The unexplained part, three axes'
+  // sum, is spread over them; the magnitude goes whole into each axis.
+  v.direction = std::max(0.0, std::max((mean_ - noise_trace) / 3.0, horizontal - noise_trace));
+  v.spread = std::max(0.0, std::max(mean_, horizontal) - noise_trace) / 3.0;
+  return v;
 }
 
 bool RejectionRun::rejected(Stamp stamp, double seconds) {
