@@ -842,6 +842,39 @@ TEST(Alignment, AfterAResetTheNextGravitySampleAlignsAgain) {
 // A field off the one learned (a magnet near the sensor: 30 % stronger) is a disturbance: not
 // used, counted; once it has lasted kMagRecovery seconds it is the field (a new place) and
 // the reference starts again from it.
+// The field's gate allows the tilt the linear acceleration spread evenly over three axes
+// (LinearVariance::fieldTiltVariance), not the gravity sample's own noise. A level body whose
+// force stays vertical but 3 m/s^2 over g (|f|^2 - g^2 = 9: a 9 m^2/s^4 direction noise per axis,
+// 3 spread) for 5 s, the tilt and heading known to 1 mrad: the field turned by theta about the
+// world's up has S = R_h + (3 - tr/3)/g^2 tan^2(dip) (H P H^T negligible), so 0.6 rad passes
+// the gate (d^2 4.7 < 10.83) and 1.2 rad does not (19.0); with the direction's 9 per axis it
+// would (6.3). Without the acceleration 0.6 rad is refused (S = R_h alone).
+TEST(MagneticHeading, ItsGateAllowsTheTiltTheLinearAccelerationSpreadOverThreeAxes) {
+  const double dip = 1.0;
+  auto outcome = [dip](double over_g, double theta) {
+    ap::EngineConfig c = aidedConfig();
+    c.aiding.align = false;
+    c.aiding.use_mag = true;
+    c.aiding.mag_stddev = 0.3e-6;
+    c.initial_orientation_stddev = 1e-3;
+    Recorder sink;
+    ap::AttitudeEngine engine(c, sink);
+    const Eigen::Vector3d f(0.0, 0.0, std::sqrt(g * g + over_g));
+    int k = 0;
+    for (; k <= 500; ++k) {
+      engine.submit(imu(at(0.01 * k), Eigen::Vector3d::Zero()));
+      engine.submitAcceleration(at(0.01 * k), f, Eigen::Matrix3d::Zero());
+    }
+    const Eigen::Vector3d m = engine_fixtures::aboutAxis({0, 0, 1}, theta).conjugate() *
+                              simulated_imu::earthField(50e-6, dip, 0.0);
+    engine.submit(imu(at(0.01 * k), Eigen::Vector3d::Zero()));
+    return engine.submitMagneticField(at(0.01 * k), m, Eigen::Matrix3d::Zero());
+  };
+  EXPECT_EQ(outcome(9.0, 0.6), ap::AidingOutcome::Accepted);
+  EXPECT_EQ(outcome(9.0, 1.2), ap::AidingOutcome::RejectedGate);
+  EXPECT_EQ(outcome(0.0, 0.6), ap::AidingOutcome::RejectedGate);
+}
+
 TEST(MagneticDisturbance, AFieldOffTheLearnedMagnitudeIsRejectedUntilItLasts) {
   ap::EngineConfig c = aidedConfig();
   c.aiding.align = false;
