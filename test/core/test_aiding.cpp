@@ -512,6 +512,15 @@ ap::EngineConfig aidedConfig() {
   return c;
 }
 
+// The field on (0.3 uT of noise) and the attitude given rather than aligned.
+ap::EngineConfig fieldConfig() {
+  ap::EngineConfig c = aidedConfig();
+  c.aiding.align = false;
+  c.aiding.use_mag = true;
+  c.aiding.mag_stddev = 0.3e-6;
+  return c;
+}
+
 // The published tilt from one static sample (docs/numerics.md §7.3): roll atan2(f_y, f_z),
 // pitch atan2(-f_x, sqrt(f_y^2 + f_z^2)).
 TEST(Alignment, TheFirstGravitySampleSetsRollAndPitchAsThePublishedFormulas) {
@@ -654,11 +663,8 @@ TEST(Configuration, TheDynamicModelAndAbsurdValuesAreRefusedNamingTheSetting) {
 // that was wrong (here: the estimate pinned 40 degrees off, with a tiny covariance) is set
 // right; before that time, nothing is.
 TEST(Recovery, AfterTheRecoveryTimeOfRejectionsTheNextSampleResetsTheHeading) {
-  ap::EngineConfig c = aidedConfig();
-  c.aiding.align = false;
+  ap::EngineConfig c = fieldConfig();
   c.aiding.use_accel = false;
-  c.aiding.use_mag = true;
-  c.aiding.mag_stddev = 0.3e-6;
   c.rate_stddev = 1e-9;
   Recorder sink;
   ap::AttitudeEngine engine(c, sink);
@@ -852,10 +858,7 @@ TEST(Alignment, AfterAResetTheNextGravitySampleAlignsAgain) {
 TEST(MagneticHeading, ItsGateAllowsTheTiltTheLinearAccelerationSpreadOverThreeAxes) {
   const double dip = 1.0;
   auto outcome = [dip](double over_g, double theta) {
-    ap::EngineConfig c = aidedConfig();
-    c.aiding.align = false;
-    c.aiding.use_mag = true;
-    c.aiding.mag_stddev = 0.3e-6;
+    ap::EngineConfig c = fieldConfig();
     c.initial_orientation_stddev = 1e-3;
     Recorder sink;
     ap::AttitudeEngine engine(c, sink);
@@ -876,11 +879,8 @@ TEST(MagneticHeading, ItsGateAllowsTheTiltTheLinearAccelerationSpreadOverThreeAx
 }
 
 TEST(MagneticDisturbance, AFieldOffTheLearnedMagnitudeIsRejectedUntilItLasts) {
-  ap::EngineConfig c = aidedConfig();
-  c.aiding.align = false;
+  ap::EngineConfig c = fieldConfig();
   c.aiding.use_accel = false;
-  c.aiding.use_mag = true;
-  c.aiding.mag_stddev = 0.3e-6;
   Recorder sink;
   ap::AttitudeEngine engine(c, sink);
   const Eigen::Vector3d m = simulated_imu::earthField(50e-6, 1.0, 0.0);
