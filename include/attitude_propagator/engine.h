@@ -105,10 +105,10 @@ class AttitudeEngine : private StepCovariance {
   /// replayed). Off (ignored) without use_accel. Never throws. docs/design.md §6.10.
   AidingOutcome submitAcceleration(Stamp stamp, const Eigen::Vector3d& f_B,
                                    const Eigen::Matrix3d& covariance_B);
-  /// A magnetic field m_B (tesla, body frame) measured at `stamp`, with its covariance (T^2; all
-  /// zero, or use_mag_covariance false: mag_stddev^2 I): a measurement of the heading alone,
-  /// counted in counters().mag. Off (ignored) without use_mag. Never throws.
-  AidingOutcome submitMagneticField(Stamp stamp, const Eigen::Vector3d& m_B,
+  /// A magnetic field read_B (tesla, body frame) measured at `stamp`, with its covariance (T^2;
+  /// all zero, or use_mag_covariance false: mag_stddev^2 I): less mag_bias, a measurement of the
+  /// heading alone, counted in counters().mag. Off (ignored) without use_mag. Never throws.
+  AidingOutcome submitMagneticField(Stamp stamp, const Eigen::Vector3d& read_B,
                                     const Eigen::Matrix3d& covariance_B);
   /// Gravity and field samples waiting for the rates to reach their stamps.
   std::size_t pendingMeasurements() const { return pending_measurements_.size(); }

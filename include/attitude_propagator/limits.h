@@ -144,6 +144,9 @@ constexpr double kAccelMagnitudeTolerance = 0.1;
 /// not used (mag_rejected_magnitude).
 constexpr double kMagMagnitudeTolerance = 0.15;
 constexpr double kMagDipTolerance = 0.1745329251994330;  // 10 degrees
+/// Largest |mag_bias| (T): 10 mT, the bound of mag_stddev too; a magnetometer's own field
+/// (hard iron: a board's magnets and currents) is below a millitesla, the earth's 25-65 uT.
+constexpr double kMaxMagBias = 1e-2;
 /// How fast the learned field follows the accepted samples (fraction per sample).
 constexpr double kMagReferenceFollow = 0.01;
 /// Seconds of gate rejections in a row after which the next gravity sample the gate rejects is

@@ -192,6 +192,11 @@ void checkScalars(const Parameters& p) {
   requireFinite("mag_stddev", p.mag_stddev, 0.0, false, 1e-2, "a number > 0 and at most 0.01 (T)");
   requireFinite("declination", p.declination, -M_PI, true, M_PI,
                 "a number in [-pi, pi] (rad, east of true north positive)");
+  const std::string field_range = "[x, y, z], finite, of size at most 0.01 (T, body frame)";
+  requireVector("mag_bias", p.mag_bias, 3, field_range);
+  if (!(Eigen::Vector3d(p.mag_bias[0], p.mag_bias[1], p.mag_bias[2]).norm() <= kMaxMagBias)) {
+    fail("mag_bias", "invalid value " + formatParameter(p.mag_bias) + "; accepted: " + field_range);
+  }
   const std::string rate_range = "[x, y, z], finite, |w| <= 1e5 (rad/s)";
   const auto& w = p.initial_angular_velocity;
   requireVector("initial_angular_velocity", w, 3, rate_range);
@@ -428,6 +433,7 @@ EngineConfig engineConfig(const NodeConfig& node) {
   config.aiding.mag_stddev = p.mag_stddev;
   config.aiding.use_mag_covariance = p.use_mag_covariance;
   config.aiding.declination = p.declination;
+  config.aiding.mag_bias = Eigen::Vector3d(p.mag_bias[0], p.mag_bias[1], p.mag_bias[2]);
   // Without an initial attitude the tilt is the first gravity sample's (the heading unknown).
   config.aiding.align = p.use_accel && p.initial_orientation.empty();
   return config;

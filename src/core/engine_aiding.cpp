@@ -71,9 +71,11 @@ AidingOutcome AttitudeEngine::submitAcceleration(Stamp stamp, const Eigen::Vecto
       {stamp - rate_delay_ns_, std::make_shared<const GravityDirection>(measurement), f_B});
 }
 
-AidingOutcome AttitudeEngine::submitMagneticField(Stamp stamp, const Eigen::Vector3d& m_B,
+AidingOutcome AttitudeEngine::submitMagneticField(Stamp stamp, const Eigen::Vector3d& read_B,
                                                   const Eigen::Matrix3d& message_covariance_B) {
   if (!config_.aiding.use_mag) return AidingOutcome::Off;
+  // The sensor's own field (hard iron) is no part of the earth's: taken off before anything.
+  const Eigen::Vector3d m_B = read_B - config_.aiding.mag_bias;
   const Eigen::Matrix3d covariance_B =
       givenCovariance(message_covariance_B, config_.aiding.use_mag_covariance);
   AidingOutcome outcome = AidingOutcome::Waiting;

@@ -1252,6 +1252,51 @@ TEST(MessageCovariance, IgnoredWhenTheSettingsSaySoTheStddevsStand) {
   EXPECT_GT(refused.mag.invalid, 0u);
 }
 
+// mag_bias: the magnetometer's own field (hard iron), fixed in the body, is taken off every
+// sample before it is judged or used. A tumble read with such a field added (generic, a third of
+// the earth's, on no axis) and mag_bias set to it ends where the same tumble without it ends; the
+// same field not given (or given with the wrong sign) leaves another heading. A body-fixed field
+// turns with the body in the world, so the reads' magnitude and dip swing as the body tumbles.
+CovarianceRun runWithOwnField(const Eigen::Vector3d& own_B, const Eigen::Vector3d& mag_bias) {
+  ap::EngineConfig c = aidedConfig();
+  c.aiding.use_mag = true;
+  c.aiding.mag_stddev = 0.3e-6;
+  c.aiding.mag_bias = mag_bias;
+  simulated_imu::Sensor sensor;
+  sensor.gyro_noise = 0.002;
+  sensor.accel_noise = 0.05;
+  sensor.mag_noise = 0.3e-6;
+  const auto samples = simulated_imu::simulate(tumble(), sensor, 4.0);
+  Recorder sink;
+  ap::AttitudeEngine engine(c, sink);
+  const Eigen::Matrix3d none = Eigen::Matrix3d::Zero();
+  for (const auto& x : samples) {
+    engine.submit(imu(at(x.t), x.w_B));
+    engine.submitAcceleration(at(x.t), x.f_B, none);
+    engine.submitMagneticField(at(x.t), x.m_B + own_B, none);
+  }
+  return {engine.state(), engine.counters().accel, engine.counters().mag};
+}
+
+TEST(MagBias, TheMagnetometersOwnFieldIsTakenOffEverySample) {
+  const Eigen::Vector3d own_B(7e-6, -11e-6, 13e-6);
+  const Eigen::Vector3d none = Eigen::Vector3d::Zero();
+  const CovarianceRun clean = runWithOwnField(none, none);
+  const CovarianceRun taken_off = runWithOwnField(own_B, own_B);
+  ASSERT_GT(clean.mag.accepted, 100u);
+  EXPECT_EQ(taken_off.mag.accepted, clean.mag.accepted);
+  EXPECT_EQ(taken_off.mag.rejected_magnitude, clean.mag.rejected_magnitude);
+  // (m + b) - b is m to the last bits: the same path.
+  EXPECT_LE(ap::rotationAngle(taken_off.state.q_WB, clean.state.q_WB), 1e-9);
+  EXPECT_LE((taken_off.state.P_B - clean.state.P_B).norm(), 1e-9 * clean.state.P_B.norm());
+  for (const Eigen::Vector3d& wrong : {none, Eigen::Vector3d(-own_B)}) {
+    const CovarianceRun kept = runWithOwnField(own_B, wrong);
+    const bool other_samples = kept.mag.accepted != clean.mag.accepted;
+    EXPECT_TRUE(other_samples || ap::rotationAngle(kept.state.q_WB, clean.state.q_WB) > 1e-3)
+        << wrong.transpose();
+  }
+}
+
 // With absolute fixes at the same time: a late gravity sample is applied before the fixes
 // stamped after it, which are applied again after it, as on time.
 // The tumble started from its true attitude, with the history from the start and the

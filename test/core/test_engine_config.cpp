@@ -47,6 +47,8 @@ TEST(EngineConfig, EachSettingRefusedAtStartIsRefusedOnReconfigureWithTheSameWor
       {"gyro_bias_stddev", [](ap::EngineConfig& c) { c.fixes.gyro_bias_stddev = 11.0; }},
       {"accel_stddev", [](ap::EngineConfig& c) { c.aiding.accel_stddev = 0.0; }},
       {"declination", [](ap::EngineConfig& c) { c.aiding.declination = 4.0; }},
+      {"mag_bias", [](ap::EngineConfig& c) { c.aiding.mag_bias << 0.0, 0.0, 0.0101; }},
+      {"mag_bias", [](ap::EngineConfig& c) { c.aiding.mag_bias << NAN, 0.0, 0.0; }},
   };
   for (const Setting& s : settings) {
     ap::EngineConfig bad = engine_fixtures::kinematicConfig();
@@ -63,6 +65,7 @@ TEST(EngineConfig, EachSettingRefusedAtStartIsRefusedOnReconfigureWithTheSameWor
   ap::EngineConfig edge = engine_fixtures::kinematicConfig();
   edge.rate_delay = max_dt;
   edge.max_future = ap::kMaxFuture;
+  edge.aiding.mag_bias << 0.0, 0.0, -ap::kMaxMagBias;
   EXPECT_EQ(refusal([&edge] { ap::checkEngineConfig(edge); }), "");
   NullSink sink;
   ap::AttitudeEngine engine(engine_fixtures::kinematicConfig(), sink);

@@ -317,6 +317,7 @@ TEST(Parameters, AidingValuesReachTheEngineUnchanged) {
   p.declination = -0.125;
   p.use_accel_covariance = false;
   p.use_mag_covariance = false;
+  p.mag_bias = {2e-6, -3e-6, 5e-7};
   const ap::Parameters defaults;
   ASSERT_TRUE(defaults.initial_orientation.empty());  // none given by default
   ASSERT_NE(p.accel_stddev, defaults.accel_stddev);
@@ -329,6 +330,7 @@ TEST(Parameters, AidingValuesReachTheEngineUnchanged) {
   EXPECT_EQ(a.declination, -0.125);
   EXPECT_FALSE(a.use_accel_covariance);
   EXPECT_FALSE(a.use_mag_covariance);
+  EXPECT_EQ(a.mag_bias, Eigen::Vector3d(2e-6, -3e-6, 5e-7));  // x, y, z in that order
   EXPECT_TRUE(a.align);
   p.initial_orientation = {0.0, 0.0, 0.0, 1.0};  // given: the attitude starts there
   EXPECT_FALSE(ap::engineConfig(ap::validateParameters(p)).aiding.align);
@@ -343,6 +345,7 @@ TEST(Parameters, AidingValuesReachTheEngineUnchanged) {
   EXPECT_EQ(off.declination, 0.0);
   EXPECT_TRUE(off.use_accel_covariance);  // a message's covariance is taken at its word
   EXPECT_TRUE(off.use_mag_covariance);
+  EXPECT_EQ(off.mag_bias, Eigen::Vector3d::Zero());
 }
 
 // No initial_orientation: the identity, in every world_frame (its axes' own identity).
@@ -379,12 +382,17 @@ TEST(Parameters, AidingRefusedWhereItCannotWork) {
   expectRefused(with([](auto& p) { p.mag_stddev = NAN; }), "mag_stddev");
   expectRefused(with([](auto& p) { p.mag_stddev = 0.02; }), "mag_stddev");
   expectRefused(with([](auto& p) { p.declination = 3.2; }), "declination");
+  expectRefused(with([](auto& p) { p.mag_bias = {0.0, 1e-6}; }), "mag_bias");
+  expectRefused(with([](auto& p) { p.mag_bias = {0.0, NAN, 0.0}; }), "mag_bias");
+  // Its size bounded, not each axis: 0.006 on two axes is 8.5 mT, 0.008 on two 11.3 mT.
+  expectRefused(with([](auto& p) { p.mag_bias = {0.008, -0.008, 0.0}; }), "mag_bias");
   EXPECT_NO_THROW(ap::validateParameters(with([](auto& p) {
     p.rate_input = "twist";
     p.use_mag = true;  // a field needs no accelerometer message
     p.accel_stddev = 100.0;
     p.mag_stddev = 1e-2;
     p.declination = -M_PI;
+    p.mag_bias = {0.006, -0.006, 0.0};
   })));
 }
 

@@ -83,6 +83,7 @@ struct Parameters {
   double mag_stddev = 1e-6;
   bool use_mag_covariance = true;
   double declination = 0.0;
+  std::vector<double> mag_bias{0.0, 0.0, 0.0};
 };
 
 /// The `integrator` parameter's description, from the integrator table: the methods of each
@@ -216,6 +217,9 @@ void forEachParameter(P& p, F&& f) {
     "ignored, `mag_stddev` always (a driver whose covariance is wrong, e.g. in another unit)");
   f("declination", p.declination, "rad",
     "`use_mag`: magnetic north east of true north positive; in [-π, π]");
+  f("mag_bias", p.mag_bias, "T",
+    "`use_mag`: the magnetometer's own field (hard iron, from a calibration), subtracted from "
+    "every field sample, [x, y, z] in the body frame; size at most 0.01");
 }
 
 /// All parameter names, for rejecting unknown ones.

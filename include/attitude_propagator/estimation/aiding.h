@@ -26,6 +26,9 @@ struct AidingConfig {
   /// A sample's own covariance is used when it gives one; false: ignored (mag_stddev always).
   bool use_mag_covariance = true;
   double declination = 0.0;  ///< rad, magnetic north east of true north positive
+  /// T, body frame: the magnetometer's own field (hard iron, a calibration's offset), subtracted
+  /// from every field sample before it is used or judged; |mag_bias| at most kMaxMagBias.
+  Eigen::Vector3d mag_bias = Eigen::Vector3d::Zero();
   /// The attitude starts from the first gravity sample (tilt; the heading unknown until a
   /// field sample or a fix): no initial_orientation given.
   bool align = false;

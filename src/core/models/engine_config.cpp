@@ -67,6 +67,9 @@ void checkAidingConfig(const EngineConfig& c) {
   require(std::isfinite(a.declination) && std::abs(a.declination) <= M_PI,
           "declination: accepted: -pi to pi rad (east of north positive), got " +
               std::to_string(a.declination));
+  require(a.mag_bias.allFinite() && a.mag_bias.norm() <= kMaxMagBias,
+          "mag_bias: accepted: [x, y, z] finite, of size at most 0.01 T, got size " +
+              std::to_string(a.mag_bias.norm()));
   require(std::isfinite(a.linear_window) && a.linear_window >= 0.0 && a.linear_window <= 3600.0,
           "linear_window: accepted: 0 (none) to 3600 s, got " + std::to_string(a.linear_window));
   require(std::isfinite(a.accel_gate) && a.accel_gate > 0.0 && std::isfinite(a.mag_gate) &&
