@@ -6,6 +6,7 @@
 #include <string>
 
 #include "attitude_propagator/engine.h"
+#include "attitude_propagator/estimation/hard_iron_fit.h"
 
 namespace attitude_propagator {
 namespace tools {
@@ -18,6 +19,11 @@ std::string aidingCountersText(const EngineCounters& c, const std::string& prefi
 /// (`accel_read`: Imu messages with an acceleration, `mag_read`: field messages).
 void printAidingSummary(std::FILE* out, const EngineCounters& c, bool use_accel, bool use_mag,
                         unsigned long long accel_read, unsigned long long mag_read);
+
+/// Prints "  mag_bias from the reads: [x, y, z] T ..." with the sphere the field reads lie on
+/// (HardIronFit): its centre is the `mag_bias` to give, said to be determined or not, or that
+/// the reads fix no sphere.
+void printFieldFit(std::FILE* out, const HardIronFit& fit);
 
 }  // namespace tools
 }  // namespace attitude_propagator

@@ -1,0 +1,115 @@
+// The magnetometer's own field from its reads (hard_iron_fit.h, numerics.md §7.2): the sphere
+// against reads placed on a known one, the centre's standard deviation against its closed form
+// for reads spread evenly over the sphere, 3 sigma^2 / n per axis, and the reads that fix no
+// sphere (too few, one circle, a body turned about one axis) said to be so.
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "attitude_propagator/estimation/hard_iron_fit.h"
+
+namespace {
+
+namespace ap = attitude_propagator;
+
+// n directions spread evenly over the sphere (a Fibonacci lattice).
+std::vector<Eigen::Vector3d> evenDirections(int n) {
+  std::vector<Eigen::Vector3d> u;
+  const double golden = M_PI * (3.0 - std::sqrt(5.0));
+  for (int i = 0; i < n; ++i) {
+    const double z = 1.0 - (2.0 * i + 1.0) / n;
+    const double rho = std::sqrt(1.0 - z * z);
+    u.emplace_back(rho * std::cos(golden * i), rho * std::sin(golden * i), z);
+  }
+  return u;
+}
+
+// A centre on no axis, the size of a board's own field, and the earth's field at mid latitude.
+const Eigen::Vector3d kCentre(12e-6, -31e-6, 7e-6);
+constexpr double kRadius = 48e-6;
+
+ap::HardIronFit fitOf(const std::vector<Eigen::Vector3d>& reads) {
+  ap::HardIronFit fit;
+  for (const Eigen::Vector3d& m : reads) fit.add(m);
+  return fit;
+}
+
+std::vector<Eigen::Vector3d> onTheSphere(const std::vector<Eigen::Vector3d>& directions) {
+  std::vector<Eigen::Vector3d> reads;
+  for (const Eigen::Vector3d& u : directions) reads.push_back(kCentre + kRadius * u);
+  return reads;
+}
+
+TEST(HardIronFit, ReadsOnASphereGiveItsCentreAndRadius) {
+  const auto sphere = fitOf(onTheSphere(evenDirections(200))).solve();
+  ASSERT_TRUE(sphere);
+  EXPECT_LE((sphere->centre - kCentre).norm(), 1e-9 * kRadius);
+  EXPECT_NEAR(sphere->radius, kRadius, 1e-9 * kRadius);
+  // The scatter is formed from sums of |m|^4: rounding leaves about 1e-8 of the radius.
+  EXPECT_LE(sphere->off_rms, 1e-7 * kRadius);
+  EXPECT_EQ(sphere->reads, 200u);
+  // Evenly spread: the reads' covariance is r^2 / 3 on every axis.
+  EXPECT_NEAR(sphere->least_spread, kRadius / std::sqrt(3.0), 0.02 * kRadius);
+  EXPECT_TRUE(sphere->determined());
+}
+
+// Noise sigma per axis: a read is off the sphere by its radial part, sigma; the centre's
+// variance per axis is sigma^2 (sum u u^T)^-1 = 3 sigma^2 / n, the estimate within its stddev.
+TEST(HardIronFit, TheCentresStddevIsTheScatterOverTheReadsSeen) {
+  const double sigma = 0.5e-6;
+  const int n = 4000;
+  std::mt19937 random(11);
+  std::normal_distribution<double> noise(0.0, sigma);
+  std::vector<Eigen::Vector3d> reads = onTheSphere(evenDirections(n));
+  for (Eigen::Vector3d& m : reads) m += Eigen::Vector3d(noise(random), noise(random), noise(random));
+  const auto sphere = fitOf(reads).solve();
+  ASSERT_TRUE(sphere);
+  const double expected = sigma * std::sqrt(3.0 / n);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(sphere->centre_stddev(i), expected, 0.1 * expected) << i;
+    EXPECT_LE(std::abs(sphere->centre(i) - kCentre(i)), 4.0 * expected) << i;
+  }
+  EXPECT_NEAR(sphere->off_rms, sigma, 0.1 * sigma);
+  EXPECT_TRUE(sphere->determined());
+}
+
+// Four unknowns and a scatter: four reads are none, five (on no circle) a sphere.
+TEST(HardIronFit, FiveReadsAtLeast) {
+  const std::vector<Eigen::Vector3d> reads = onTheSphere(evenDirections(5));
+  ap::HardIronFit fit;
+  for (int i = 0; i < 4; ++i) fit.add(reads[i]);
+  EXPECT_FALSE(fit.solve());
+  fit.add(reads[4]);
+  const auto sphere = fit.solve();
+  ASSERT_TRUE(sphere);
+  EXPECT_LE((sphere->centre - kCentre).norm(), 1e-9 * kRadius);
+  fit.add(Eigen::Vector3d(NAN, 0.0, 0.0));  // not taken
+  EXPECT_EQ(fit.count(), 5u);
+}
+
+// A body turned about its z axis alone (a vehicle on level ground): the earth's field goes
+// round a circle, which many spheres pass through. Exact: no sphere; with the sensor's noise the
+// horizontal centre is known, the vertical one is not, and the fit says it is not determined.
+TEST(HardIronFit, ABodyTurnedAboutOneAxisFixesNoSphere) {
+  const double horizontal = 20e-6, vertical = -44e-6;  // a dip of 65 degrees
+  std::vector<Eigen::Vector3d> circle;
+  for (int i = 0; i < 3000; ++i) {
+    const double yaw = 2.0 * M_PI * i / 3000;
+    circle.emplace_back(kCentre + Eigen::Vector3d(horizontal * std::cos(yaw),
+                                                  horizontal * std::sin(yaw), vertical));
+  }
+  EXPECT_FALSE(fitOf(circle).solve());
+  std::mt19937 random(5);
+  std::normal_distribution<double> noise(0.0, 0.3e-6);
+  for (Eigen::Vector3d& m : circle) m += Eigen::Vector3d(noise(random), noise(random), noise(random));
+  const auto sphere = fitOf(circle).solve();
+  ASSERT_TRUE(sphere);  // the noise alone spreads the reads off the circle
+  EXPECT_LE(std::abs(sphere->centre.x() - kCentre.x()), 1e-7);
+  EXPECT_LE(std::abs(sphere->centre.y() - kCentre.y()), 1e-7);
+  EXPECT_LT(sphere->least_spread, ap::kHardIronSpread * sphere->off_rms);
+  EXPECT_FALSE(sphere->determined());
+}
+
+}  // namespace
