@@ -132,7 +132,9 @@ TEST(BagAiding, SummaryGivesTheSphereTheFieldReadsLieOn) {
           own + 48e-6 * Eigen::Vector3d(rho * std::cos(golden * k), rho * std::sin(golden * k), z);
       sensor_msgs::MagneticField field;
       field.header.stamp = rosTime(stamp);
-      field.magnetic_field.x = m.x(), field.magnetic_field.y = m.y(), field.magnetic_field.z = m.z();
+      field.magnetic_field.x = m.x();
+      field.magnetic_field.y = m.y();
+      field.magnetic_field.z = m.z();
       bag.write("/imu/mag", rosTime(stamp + 1000), field);
     }
   }

@@ -63,7 +63,8 @@ TEST(HardIronFit, TheCentresStddevIsTheScatterOverTheReadsSeen) {
   std::mt19937 random(11);
   std::normal_distribution<double> noise(0.0, sigma);
   std::vector<Eigen::Vector3d> reads = onTheSphere(evenDirections(n));
-  for (Eigen::Vector3d& m : reads) m += Eigen::Vector3d(noise(random), noise(random), noise(random));
+  for (Eigen::Vector3d& m : reads)
+    m += Eigen::Vector3d(noise(random), noise(random), noise(random));
   const auto sphere = fitOf(reads).solve();
   ASSERT_TRUE(sphere);
   const double expected = sigma * std::sqrt(3.0 / n);
@@ -73,6 +74,25 @@ TEST(HardIronFit, TheCentresStddevIsTheScatterOverTheReadsSeen) {
   }
   EXPECT_NEAR(sphere->off_rms, sigma, 0.1 * sigma);
   EXPECT_TRUE(sphere->determined());
+}
+
+// The stddev's side of determined(): reads off the sphere by 2 uT (radially, alternating in
+// sign) spread every way; few of them leave each axis' stddev above 1 uT (about 2 uT sqrt(3 / n)
+// sqrt(n / (n - 4)): 1.6 uT at 8 reads), more bring it under (0.58 uT at 40), the spread being
+// wide enough throughout.
+TEST(HardIronFit, DeterminedOnceEveryAxisIsKnownWithinAMicrotesla) {
+  for (const int n : {8, 40}) {
+    std::vector<Eigen::Vector3d> reads;
+    const std::vector<Eigen::Vector3d> u = evenDirections(n);
+    for (int i = 0; i < n; ++i)
+      reads.push_back(kCentre + (kRadius + (i % 2 ? 2e-6 : -2e-6)) * u[i]);
+    const auto sphere = fitOf(reads).solve();
+    ASSERT_TRUE(sphere) << n;
+    EXPECT_GE(sphere->least_spread, ap::kHardIronSpread * sphere->off_rms) << n;
+    const bool known = sphere->centre_stddev.maxCoeff() <= ap::kHardIronDetermined;
+    EXPECT_EQ(known, n == 40) << n << ": " << sphere->centre_stddev.transpose();
+    EXPECT_EQ(sphere->determined(), n == 40) << n;
+  }
 }
 
 // Four unknowns and a scatter: four reads are none, five (on no circle) a sphere.
@@ -103,7 +123,8 @@ TEST(HardIronFit, ABodyTurnedAboutOneAxisFixesNoSphere) {
   EXPECT_FALSE(fitOf(circle).solve());
   std::mt19937 random(5);
   std::normal_distribution<double> noise(0.0, 0.3e-6);
-  for (Eigen::Vector3d& m : circle) m += Eigen::Vector3d(noise(random), noise(random), noise(random));
+  for (Eigen::Vector3d& m : circle)
+    m += Eigen::Vector3d(noise(random), noise(random), noise(random));
   const auto sphere = fitOf(circle).solve();
   ASSERT_TRUE(sphere);  // the noise alone spreads the reads off the circle
   EXPECT_LE(std::abs(sphere->centre.x() - kCentre.x()), 1e-7);

@@ -32,8 +32,8 @@ struct HardIronSphere {
   /// T per axis: the centre's standard deviation from the reads' scatter about the sphere; large
   /// along an axis the body was not turned about enough to see (a vehicle's vertical).
   Eigen::Vector3d centre_stddev = Eigen::Vector3d::Zero();
-  double radius = 0.0;    ///< T: the earth's field
-  double off_rms = 0.0;   ///< T: how far the reads are from the sphere, root mean square
+  double radius = 0.0;   ///< T: the earth's field
+  double off_rms = 0.0;  ///< T: how far the reads are from the sphere, root mean square
   /// T: the reads' spread along the direction they spread least (the square root of their
   /// covariance's smallest eigenvalue).
   double least_spread = 0.0;

@@ -59,7 +59,8 @@ std::optional<HardIronSphere> HardIronFit::solve() const {
   // The reads' covariance from the same sums: N's top-left block is 4 sum m m^T, its last
   // column 2 sum m.
   const Eigen::Vector3d mean = normal_.block<3, 1>(0, 3) / (2.0 * n);
-  const Eigen::Matrix3d spread = normal_.topLeftCorner<3, 3>() / (4.0 * n) - mean * mean.transpose();
+  const Eigen::Matrix3d spread =
+      normal_.topLeftCorner<3, 3>() / (4.0 * n) - mean * mean.transpose();
   const double least = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(spread).eigenvalues()(0);
   s.least_spread = std::sqrt(std::max(0.0, least)) / kMicro;
   s.reads = n_;
