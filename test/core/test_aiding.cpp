@@ -1207,6 +1207,26 @@ struct CovarianceRun {
   ap::AidingCounters accel, mag;
 };
 
+// A tumble of `seconds` read by a gyro, an accelerometer and a magnetometer (own_B added to every
+// field read) through an engine configured with `c`; the sensor's covariances as given.
+CovarianceRun runFieldTumble(const ap::EngineConfig& c, double seconds,
+                             const Eigen::Matrix3d& accel_R, const Eigen::Matrix3d& mag_R,
+                             const Eigen::Vector3d& own_B = Eigen::Vector3d::Zero()) {
+  simulated_imu::Sensor sensor;
+  sensor.gyro_noise = 0.002;
+  sensor.accel_noise = 0.05;
+  sensor.mag_noise = 0.3e-6;
+  const auto samples = simulated_imu::simulate(tumble(), sensor, seconds);
+  Recorder sink;
+  ap::AttitudeEngine engine(c, sink);
+  for (const auto& x : samples) {
+    engine.submit(imu(at(x.t), x.w_B));
+    engine.submitAcceleration(at(x.t), x.f_B, accel_R);
+    engine.submitMagneticField(at(x.t), x.m_B + own_B, mag_R);
+  }
+  return {engine.state(), engine.counters().accel, engine.counters().mag};
+}
+
 CovarianceRun runWithCovariances(bool use_message_covariance, const Eigen::Matrix3d& accel_R,
                                  const Eigen::Matrix3d& mag_R) {
   ap::EngineConfig c = aidedConfig();
@@ -1215,19 +1235,7 @@ CovarianceRun runWithCovariances(bool use_message_covariance, const Eigen::Matri
   c.aiding.mag_stddev = 0.3e-6;
   c.aiding.use_accel_covariance = use_message_covariance;
   c.aiding.use_mag_covariance = use_message_covariance;
-  simulated_imu::Sensor sensor;
-  sensor.gyro_noise = 0.002;
-  sensor.accel_noise = 0.05;
-  sensor.mag_noise = 0.3e-6;
-  const auto samples = simulated_imu::simulate(tumble(), sensor, 2.0);
-  Recorder sink;
-  ap::AttitudeEngine engine(c, sink);
-  for (const auto& x : samples) {
-    engine.submit(imu(at(x.t), x.w_B));
-    engine.submitAcceleration(at(x.t), x.f_B, accel_R);
-    engine.submitMagneticField(at(x.t), x.m_B, mag_R);
-  }
-  return {engine.state(), engine.counters().accel, engine.counters().mag};
+  return runFieldTumble(c, 2.0, accel_R, mag_R);
 }
 
 TEST(MessageCovariance, IgnoredWhenTheSettingsSaySoTheStddevsStand) {
@@ -1262,20 +1270,8 @@ CovarianceRun runWithOwnField(const Eigen::Vector3d& own_B, const Eigen::Vector3
   c.aiding.use_mag = true;
   c.aiding.mag_stddev = 0.3e-6;
   c.aiding.mag_bias = mag_bias;
-  simulated_imu::Sensor sensor;
-  sensor.gyro_noise = 0.002;
-  sensor.accel_noise = 0.05;
-  sensor.mag_noise = 0.3e-6;
-  const auto samples = simulated_imu::simulate(tumble(), sensor, 4.0);
-  Recorder sink;
-  ap::AttitudeEngine engine(c, sink);
   const Eigen::Matrix3d none = Eigen::Matrix3d::Zero();
-  for (const auto& x : samples) {
-    engine.submit(imu(at(x.t), x.w_B));
-    engine.submitAcceleration(at(x.t), x.f_B, none);
-    engine.submitMagneticField(at(x.t), x.m_B + own_B, none);
-  }
-  return {engine.state(), engine.counters().accel, engine.counters().mag};
+  return runFieldTumble(c, 4.0, none, none, own_B);
 }
 
 TEST(MagBias, TheMagnetometersOwnFieldIsTakenOffEverySample) {
