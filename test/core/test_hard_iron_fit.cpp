@@ -105,8 +105,10 @@ TEST(HardIronFit, FiveReadsAtLeast) {
   const auto sphere = fit.solve();
   ASSERT_TRUE(sphere);
   EXPECT_LE((sphere->centre - kCentre).norm(), 1e-9 * kRadius);
-  fit.add(Eigen::Vector3d(NAN, 0.0, 0.0));  // not taken
+  fit.add(Eigen::Vector3d(NAN, 0.0, 0.0));  // no read: not taken
+  fit.add(Eigen::Vector3d::Zero());
   EXPECT_EQ(fit.count(), 5u);
+  EXPECT_EQ(fit.solve()->centre, sphere->centre);
 }
 
 // A body turned about its z axis alone (a vehicle on level ground): the earth's field goes

@@ -45,7 +45,7 @@ struct HardIronSphere {
 
 class HardIronFit {
  public:
-  /// A field read m_B (T, body frame); a non-finite one is not taken.
+  /// A field read m_B (T, body frame); a non-finite or all-zero one (no read) is not taken.
   void add(const Eigen::Vector3d& m_B);
   std::uint64_t count() const { return n_; }
   /// The sphere, or none: fewer than 5 reads (4 unknowns and a scatter), or reads that fix no
