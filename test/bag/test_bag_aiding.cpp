@@ -110,7 +110,8 @@ TEST(BagAiding, MagTopicIsReadAndCounted) {
   EXPECT_NE(missing.status, 0) << missing.output;
 }
 
-// The summary's mag_bias: the centre of the sphere the field reads lie on (HardIronFit), here
+// The summary's mag_bias (printFieldFit): the centre of the sphere the field reads lie on
+// (HardIronFit), here
 // 600 reads of a 48 uT field turned evenly every way about a generic own field. It is fitted to
 // the reads as read, so the line is the same whatever mag_bias is given, and it says the
 // sphere is determined.

@@ -3,6 +3,7 @@
 // for reads spread evenly over the sphere, 3 sigma^2 / n per axis, and the reads that fix no
 // sphere (too few, one circle, a body turned about one axis) said to be so.
 #include <cmath>
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -43,7 +44,7 @@ std::vector<Eigen::Vector3d> onTheSphere(const std::vector<Eigen::Vector3d>& dir
 }
 
 TEST(HardIronFit, ReadsOnASphereGiveItsCentreAndRadius) {
-  const auto sphere = fitOf(onTheSphere(evenDirections(200))).solve();
+  const std::optional<ap::HardIronSphere> sphere = fitOf(onTheSphere(evenDirections(200))).solve();
   ASSERT_TRUE(sphere);
   EXPECT_LE((sphere->centre - kCentre).norm(), 1e-9 * kRadius);
   EXPECT_NEAR(sphere->radius, kRadius, 1e-9 * kRadius);
