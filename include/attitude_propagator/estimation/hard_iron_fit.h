@@ -29,8 +29,9 @@ constexpr double kHardIronSpread = 10.0;
 /// The sphere the reads lie on.
 struct HardIronSphere {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();  ///< T, body frame: the own field
-  /// T per axis: the centre's standard deviation from the reads' scatter about the sphere; large
-  /// along an axis the body was not turned about enough to see (a vehicle's vertical).
+  /// T per axis: the centre's standard deviation from the reads' scatter about the sphere. It
+  /// takes the reads as exact where they lie, so along a direction they hardly spread (a body
+  /// turned about one axis) it can be small for a centre the noise made up: least_spread tells.
   Eigen::Vector3d centre_stddev = Eigen::Vector3d::Zero();
   double radius = 0.0;   ///< T: the earth's field
   double off_rms = 0.0;  ///< T: how far the reads are from the sphere, root mean square
