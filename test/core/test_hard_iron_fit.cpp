@@ -108,6 +108,8 @@ TEST(HardIronFit, FiveReadsAtLeast) {
   EXPECT_LE((sphere->centre - kCentre).norm(), 1e-9 * kRadius);
   fit.add(Eigen::Vector3d(NAN, 0.0, 0.0));  // no read: not taken
   fit.add(Eigen::Vector3d::Zero());
+  fit.add(Eigen::Vector3d(0.0, 0.0, 1e6));  // a driver's error: it would outweigh the rest
+  fit.add(Eigen::Vector3d(0.0, 0.0, -ap::kMaxFieldRead * 1.001));
   EXPECT_EQ(fit.count(), 5u);
   EXPECT_EQ(fit.solve()->centre, sphere->centre);
 }

@@ -26,6 +26,11 @@ constexpr double kHardIronDetermined = 1e-6;
 /// its reads along that axis by their noise alone, however many there are.
 constexpr double kHardIronSpread = 10.0;
 
+/// T: the largest read taken, twice the largest own field the engine accepts (kMaxMagBias, 10
+/// mT) and more than any earth's field with it; a larger one is a driver's error, and its |m|^4
+/// would outweigh every other read in the sums.
+constexpr double kMaxFieldRead = 2e-2;
+
 /// The sphere the reads lie on.
 struct HardIronSphere {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();  ///< T, body frame: the own field
@@ -46,7 +51,8 @@ struct HardIronSphere {
 
 class HardIronFit {
  public:
-  /// A field read m_B (T, body frame); a non-finite or all-zero one (no read) is not taken.
+  /// A field read m_B (T, body frame); a non-finite or all-zero one (no read), or one larger
+  /// than kMaxFieldRead, is not taken.
   void add(const Eigen::Vector3d& m_B);
   std::uint64_t count() const { return n_; }
   /// The sphere, or none: fewer than 5 reads (4 unknowns and a scatter), or reads that fix no

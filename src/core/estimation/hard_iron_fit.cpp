@@ -24,6 +24,7 @@ bool HardIronSphere::determined() const {
 
 void HardIronFit::add(const Eigen::Vector3d& m_B) {
   if (!m_B.allFinite() || m_B.isZero(0.0)) return;  // no read (a driver's NaN or zeros)
+  if (m_B.norm() > kMaxFieldRead) return;           // no field: one would outweigh the rest
   const Eigen::Vector3d m = kMicro * m_B;
   Eigen::Vector4d a;
   a << 2.0 * m, 1.0;
