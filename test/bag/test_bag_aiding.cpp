@@ -12,6 +12,7 @@
 #include <rosbag/view.h>
 #include <sensor_msgs/Imu.h>
 #include <sensor_msgs/MagneticField.h>
+#include <tf2_msgs/TFMessage.h>
 
 #include "attitude_propagator/AttitudeState.h"
 #include "scene_bags.h"
@@ -64,6 +65,73 @@ void writeStaticTilt(const std::string& path, int n, bool mag) {
   bag.close();
 }
 
+/// The earth's field (north and down) in the body with the static tilt.
+Eigen::Vector3d earthFieldInBody() {
+  return tilt().conjugate() * Eigen::Vector3d(0.0, 2e-5, -4e-5);
+}
+
+/// The magnetometer's frame mag_link on base_link, a generic mount q_BM (on /tf_static).
+const Eigen::Quaterniond kMagMount(Eigen::AngleAxisd(2.1, Eigen::Vector3d(-1, 3, 2).normalized()));
+
+void writeMagMount(rosbag::Bag& bag) {
+  tf2_msgs::TFMessage mount;
+  mount.transforms.resize(1);
+  auto& t = mount.transforms[0];
+  t.header.stamp = rosTime(kStart);
+  t.header.frame_id = "base_link";
+  t.child_frame_id = "mag_link";
+  t.transform.rotation.x = kMagMount.x();
+  t.transform.rotation.y = kMagMount.y();
+  t.transform.rotation.z = kMagMount.z();
+  t.transform.rotation.w = kMagMount.w();
+  bag.write("/tf_static", rosTime(kStart), mount);
+}
+
+/// `n` rate messages (zero rates; with `tilted`, the static tilt's gravity) on /imu/data_raw in
+/// the body's frame and as many field reads on /imu/mag in `frame` ("mag_link": through
+/// kMagMount), read_k = field(k) in that frame.
+template <class Field>
+void writeFieldReads(const std::string& path, int n, bool tilted, const std::string& frame,
+                     Field field) {
+  rosbag::Bag bag(path, rosbag::bagmode::Write);
+  if (frame == "mag_link") writeMagMount(bag);
+  const Eigen::Vector3d f_B = tilt().conjugate() * Eigen::Vector3d(0.0, 0.0, kG);
+  for (int k = 0; k < n; ++k) {
+    const Stamp stamp = kStart + k * kPeriod;
+    sensor_msgs::Imu imu;
+    imu.header.stamp = rosTime(stamp);
+    if (tilted) {
+      imu.linear_acceleration.x = f_B.x(), imu.linear_acceleration.y = f_B.y();
+      imu.linear_acceleration.z = f_B.z();
+    }
+    imu.orientation_covariance[0] = -1.0;
+    bag.write("/imu/data_raw", rosTime(stamp), imu);
+    const Eigen::Vector3d m = field(k);
+    sensor_msgs::MagneticField read;
+    read.header.stamp = rosTime(stamp);
+    read.header.frame_id = frame;
+    read.magnetic_field.x = m.x(), read.magnetic_field.y = m.y(), read.magnetic_field.z = m.z();
+    bag.write("/imu/mag", rosTime(stamp + 1000), read);
+  }
+}
+
+/// The k-th of n directions spread evenly over the sphere (a Fibonacci lattice).
+Eigen::Vector3d evenDirection(int k, int n) {
+  const double golden = M_PI * (3.0 - std::sqrt(5.0));
+  const double z = 1.0 - (2.0 * k + 1.0) / n, rho = std::sqrt(1.0 - z * z);
+  return {rho * std::cos(golden * k), rho * std::sin(golden * k), z};
+}
+
+/// ZYX yaw of q.
+double yaw(const Eigen::Quaterniond& q) {
+  return std::atan2(2.0 * (q.w() * q.z() + q.x() * q.y()),
+                    1.0 - 2.0 * (q.y() * q.y() + q.z() * q.z()));
+}
+
+// The own field the summary gives and the one mag_bias takes, in the body frame.
+const Eigen::Vector3d kOwnB(12e-6, -31e-6, 7e-6);
+const std::string kOwnBList = "[1.2e-05, -3.1e-05, 7.0e-06]";
+
 }  // namespace
 
 // No initial_orientation: the tilt starts from the first accelerometer sample; the last state's
@@ -111,36 +179,15 @@ TEST(BagAiding, MagTopicIsReadAndCounted) {
 }
 
 // The summary's mag_bias (printFieldFit): the centre of the sphere the field reads lie on
-// (HardIronFit), here
-// 600 reads of a 48 uT field turned evenly every way about a generic own field. It is fitted to
-// the reads as read, so the line is the same whatever mag_bias is given, and it says the
-// sphere is determined.
+// (HardIronFit), here 600 reads of a 48 uT field turned evenly every way about a generic own
+// field. It is fitted to the reads as read, so the line is the same whatever mag_bias is given,
+// and it says the sphere is determined.
 TEST(BagAiding, SummaryGivesTheSphereTheFieldReadsLieOn) {
   TempDir dir;
-  {
-    rosbag::Bag bag(dir.file("in.bag"), rosbag::bagmode::Write);
-    const Eigen::Vector3d own(12e-6, -31e-6, 7e-6);
-    const int n = 600;
-    const double golden = M_PI * (3.0 - std::sqrt(5.0));
-    for (int k = 0; k < n; ++k) {
-      const Stamp stamp = kStart + k * kPeriod;
-      sensor_msgs::Imu imu;
-      imu.header.stamp = rosTime(stamp);
-      imu.orientation_covariance[0] = -1.0;
-      bag.write("/imu/data_raw", rosTime(stamp), imu);
-      const double z = 1.0 - (2.0 * k + 1.0) / n, rho = std::sqrt(1.0 - z * z);
-      const Eigen::Vector3d m =
-          own + 48e-6 * Eigen::Vector3d(rho * std::cos(golden * k), rho * std::sin(golden * k), z);
-      sensor_msgs::MagneticField field;
-      field.header.stamp = rosTime(stamp);
-      field.magnetic_field.x = m.x();
-      field.magnetic_field.y = m.y();
-      field.magnetic_field.z = m.z();
-      bag.write("/imu/mag", rosTime(stamp + 1000), field);
-    }
-  }
+  writeFieldReads(dir.file("in.bag"), 600, false, "",
+                  [](int k) -> Eigen::Vector3d { return kOwnB + 48e-6 * evenDirection(k, 600); });
   const std::string line = "mag_bias from the reads: [1.2e-05, -3.1e-05, 7e-06] T, stddev [";
-  for (const std::string bias : {"", " --set 'mag_bias=[1.2e-05, -3.1e-05, 7.0e-06]'"}) {
+  for (const std::string bias : {std::string(), " --set 'mag_bias=" + kOwnBList + "'"}) {
     const RunResult r = run(kPropagate + " " + dir.file("in.bag") + " --set use_mag=true" + bias +
                             " -o " + dir.file("out.bag") + " --no-progress");
     ASSERT_EQ(r.status, 0) << r.output;
@@ -148,6 +195,41 @@ TEST(BagAiding, SummaryGivesTheSphereTheFieldReadsLieOn) {
     EXPECT_NE(r.output.find("field 4.8e-05 T"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find(": determined (give it as mag_bias)"), std::string::npos) << r.output;
   }
+}
+
+// A magnetometer on its own mount (mag_link, generic q_BM): its own field is fixed in its frame,
+// own_M = q_BM^-1 own_B. The summary fits the reads as the engine gets them, in the body, so it
+// gives own_B, not own_M's numbers; and mag_bias is taken off in the body: given own_B, a
+// static tilted body keeps the heading the earth's field gives (yaw 0, the field north), given
+// own_M's numbers (the sensor frame's) it does not.
+TEST(BagAiding, MountedMagnetometersOwnFieldIsGivenAndTakenInTheBodyFrame) {
+  TempDir dir;
+  const Eigen::Vector3d own_M = kMagMount.conjugate() * kOwnB;
+  writeFieldReads(dir.file("sphere.bag"), 600, false, "mag_link",
+                  [&](int k) -> Eigen::Vector3d { return own_M + 48e-6 * evenDirection(k, 600); });
+  const RunResult fit = run(kPropagate + " " + dir.file("sphere.bag") + " --set use_mag=true -o " +
+                            dir.file("sphere_out.bag") + " --no-progress");
+  ASSERT_EQ(fit.status, 0) << fit.output;
+  EXPECT_NE(fit.output.find("mag_bias from the reads: [1.2e-05, -3.1e-05, 7e-06] T, stddev ["),
+            std::string::npos)
+      << fit.output;
+
+  writeFieldReads(dir.file("tilt.bag"), 300, true, "mag_link", [&](int) -> Eigen::Vector3d {
+    return own_M + kMagMount.conjugate() * earthFieldInBody();
+  });
+  auto finalYaw = [&](const std::string& bias) {
+    const RunResult r = run(kPropagate + " " + dir.file("tilt.bag") +
+                            " --set use_accel=true --set use_mag=true --set 'mag_bias=" + bias +
+                            "' -o " + dir.file("tilt_out.bag") + " --no-progress");
+    EXPECT_EQ(r.status, 0) << r.output;
+    const auto states = readOutputBag(dir.file("tilt_out.bag")).states;
+    return states.empty() ? NAN : yaw(toEigen(states.back().orientation));
+  };
+  EXPECT_NEAR(finalYaw(kOwnBList), 0.0, 1e-3);
+  char sensor_frame[96];
+  std::snprintf(sensor_frame, sizeof sensor_frame, "[%.9g, %.9g, %.9g]", own_M.x(), own_M.y(),
+                own_M.z());
+  EXPECT_GT(std::abs(finalYaw(sensor_frame)), 0.05);
 }
 
 // evaluate_bag takes the same settings: with use_accel each method's engine gets the rate
