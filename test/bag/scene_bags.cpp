@@ -173,6 +173,19 @@ class Butterworth2 {
 double butterworthDelay(double fraction) { return M_SQRT2 / (2.0 * std::tan(M_PI * fraction)); }
 
 Stamp stampAt(double t) { return kStart + static_cast<Stamp>(std::llround(t * 1e9)); }
+geometry_msgs::TransformStamped mountTransform(const std::string& parent, const std::string& child,
+                                               const Eigen::Quaterniond& q_PC, Stamp stamp) {
+  geometry_msgs::TransformStamped t;
+  t.header.stamp = rosTime(stamp);
+  t.header.frame_id = parent;
+  t.child_frame_id = child;
+  t.transform.rotation.x = q_PC.x();
+  t.transform.rotation.y = q_PC.y();
+  t.transform.rotation.z = q_PC.z();
+  t.transform.rotation.w = q_PC.w();
+  return t;
+}
+
 double secondsOf(Stamp stamp) { return static_cast<double>(stamp - kStart) * 1e-9; }
 
 Motion coning(double beta, double omega) {

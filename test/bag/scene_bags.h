@@ -29,6 +29,11 @@ Stamp stampAt(double t);         ///< kStart + t seconds, rounded to the nanosec
 ros::Time rosTime(Stamp stamp);  ///< the same instant as a ros::Time
 double secondsOf(Stamp stamp);   ///< (stamp - kStart) in seconds
 
+/// A transform parent -> child with the rotation q_PC (no translation), stamped `stamp`: a
+/// mount as a /tf_static message carries it.
+geometry_msgs::TransformStamped mountTransform(const std::string& parent, const std::string& child,
+                                               const Eigen::Quaterniond& q_PC, Stamp stamp);
+
 /// A motion: the sensor's attitude q_WS(t) and the body rate w_S(t) that generates it.
 struct Motion {
   std::function<Eigen::Quaterniond(double)> attitude;

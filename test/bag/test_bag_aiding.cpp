@@ -75,15 +75,7 @@ const Eigen::Quaterniond kMagMount(Eigen::AngleAxisd(2.1, Eigen::Vector3d(-1, 3,
 
 void writeMagMount(rosbag::Bag& bag) {
   tf2_msgs::TFMessage mount;
-  mount.transforms.resize(1);
-  auto& t = mount.transforms[0];
-  t.header.stamp = rosTime(kStart);
-  t.header.frame_id = "base_link";
-  t.child_frame_id = "mag_link";
-  t.transform.rotation.x = kMagMount.x();
-  t.transform.rotation.y = kMagMount.y();
-  t.transform.rotation.z = kMagMount.z();
-  t.transform.rotation.w = kMagMount.w();
+  mount.transforms = {mountTransform("base_link", "mag_link", kMagMount, kStart)};
   bag.write("/tf_static", rosTime(kStart), mount);
 }
 

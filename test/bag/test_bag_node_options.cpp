@@ -110,15 +110,7 @@ TEST(NodeOptions, ImuOutputCarriesTheMountedFramesOrientation) {
   {
     rosbag::Bag bag(dir.file("in.bag"), rosbag::bagmode::Write);
     tf2_msgs::TFMessage mount;
-    mount.transforms.resize(1);
-    auto& t = mount.transforms[0];
-    t.header.stamp = rosTime(stampAt(0.0));
-    t.header.frame_id = "base_link";
-    t.child_frame_id = "imu_link";
-    t.transform.rotation.x = q_BI.x();
-    t.transform.rotation.y = q_BI.y();
-    t.transform.rotation.z = q_BI.z();
-    t.transform.rotation.w = q_BI.w();
+    mount.transforms = {mountTransform("base_link", "imu_link", q_BI, stampAt(0.0))};
     bag.write("/tf_static", rosTime(stampAt(0.0)), mount);
     for (long k = 0; k <= 400; ++k) {
       const double time = k / 200.0;
