@@ -22,6 +22,7 @@
 #include "attitude_propagator/estimation/aiding.h"
 #include "attitude_propagator/estimation/error_state.h"
 #include "attitude_propagator/estimation/fix_replay.h"
+#include "attitude_propagator/estimation/hard_iron_fit.h"
 #include "attitude_propagator/estimation/magnetic_heading.h"
 #include "attitude_propagator/estimation/measurement.h"
 #include "attitude_propagator/models/dynamic_propagator.h"
@@ -110,6 +111,11 @@ class AttitudeEngine : private StepCovariance {
   /// heading alone, counted in counters().mag. Off (ignored) without use_mag. Never throws.
   AidingOutcome submitMagneticField(Stamp stamp, const Eigen::Vector3d& read_B,
                                     const Eigen::Matrix3d& covariance_B);
+  /// use_mag: the sphere the field reads submitted lie on (HardIronFit), fitted to them as
+  /// read (mag_bias not taken off: its centre is the mag_bias to give), whatever became of
+  /// them after; every read since the engine was built, through resets and reconfigures (a
+  /// read of the sensor's own field does not age with the clock).
+  const HardIronFit& fieldFit() const { return field_fit_; }
   /// Gravity and field samples waiting for the rates to reach their stamps.
   std::size_t pendingMeasurements() const { return pending_measurements_.size(); }
   /// Whether the tilt is known: always, but with align before the first gravity sample.
@@ -305,6 +311,7 @@ class AttitudeEngine : private StepCovariance {
   RejectionRun accel_run_;                  // the gate's rejections in a row, per kind
   RejectionRun mag_run_;
   MagneticReference mag_reference_;     // the field's magnitude and dip, learned
+  HardIronFit field_fit_;               // the sphere the reads lie on (fieldFit())
   std::optional<Stamp> mag_off_since_;  // the field off its reference since
 };
 

@@ -74,6 +74,7 @@ AidingOutcome AttitudeEngine::submitAcceleration(Stamp stamp, const Eigen::Vecto
 AidingOutcome AttitudeEngine::submitMagneticField(Stamp stamp, const Eigen::Vector3d& read_B,
                                                   const Eigen::Matrix3d& message_covariance_B) {
   if (!config_.aiding.use_mag) return AidingOutcome::Off;
+  field_fit_.add(read_B);  // as read; the fit takes no non-finite, zero or absurd read
   // The sensor's own field (hard iron) is no part of the earth's: taken off before anything.
   const Eigen::Vector3d m_B = read_B - config_.aiding.mag_bias;
   const Eigen::Matrix3d covariance_B =

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <optional>
 
 namespace attitude_propagator {
 
@@ -36,6 +37,22 @@ void summarize(diagnostic_updater::DiagnosticStatusWrapper& status, bool expects
   } else {
     status.summary(diagnostic_msgs::DiagnosticStatus::OK, "propagating");
   }
+}
+
+void addFieldFit(diagnostic_updater::DiagnosticStatusWrapper& status, const HardIronFit& fit) {
+  status.add("mag_bias_fit_reads", fit.count());
+  const std::optional<HardIronSphere> sphere = fit.solve();
+  if (!sphere) {
+    status.add("mag_bias_fit", "none");
+    status.add("mag_bias_fit_stddev", "none");
+    status.add("mag_bias_fit_determined", false);
+    return;
+  }
+  const Eigen::Vector3d& c = sphere->centre;
+  const Eigen::Vector3d& s = sphere->centre_stddev;
+  status.addf("mag_bias_fit", "[%.3g, %.3g, %.3g]", c.x(), c.y(), c.z());
+  status.addf("mag_bias_fit_stddev", "[%.2g, %.2g, %.2g]", s.x(), s.y(), s.z());
+  status.add("mag_bias_fit_determined", sphere->determined());
 }
 
 void NodeDiagnostics::diagnose(const ros::WallTime& now, const NodeConfig& config,
@@ -97,6 +114,7 @@ void NodeDiagnostics::diagnose(const ros::WallTime& now, const NodeConfig& confi
   status.addf("gyro_bias", "[%g, %g, %g]", b.x(), b.y(), b.z());
   fixes.diagnose(status, engine);
   status.add("tilt_known", engine.tiltKnown());
+  if (config.parameters.use_mag) addFieldFit(status, engine.fieldFit());
   if (const KinematicPropagator* k = kinematic) {
     status.add("rate_samples", config.parameters.rate_samples);
     status.add("filled_samples", k->filledSamples());

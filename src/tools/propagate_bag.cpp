@@ -42,7 +42,6 @@
 #include "aiding_summary.h"
 #include "attitude_propagator/AttitudeState.h"
 #include "attitude_propagator/engine.h"
-#include "attitude_propagator/estimation/hard_iron_fit.h"
 #include "attitude_propagator/messages/conversions.h"
 #include "attitude_propagator/messages/fix_decoder.h"
 #include "attitude_propagator/messages/frame_source.h"
@@ -554,7 +553,6 @@ class BagPropagator : public EngineSink {
   ImuPayload imu_{imu_msg_};
   geometry_msgs::Vector3Stamped bias_msg_;
   sensor_msgs::MagneticField mag_msg_;
-  HardIronFit field_fit_;  // use_mag: the sphere the field reads lie on (the summary's mag_bias)
   std::uint64_t accel_read_ = 0;  // Imu messages whose acceleration was submitted
   tf2_msgs::TFMessage tf_msg_;
   std::uint64_t tf_read_ = 0;  // /tf messages heard (not inputs: not in the summary's count)
@@ -743,7 +741,6 @@ void BagPropagator::onMag(const rosbag::MessageInstance& m) {
   warnFrames();
   if (!field) return countRefusal(*engine_, field.refusal->why);
   if (o_.io_floor) return;
-  field_fit_.add(field->value_B);  // as read, mag_bias not taken off: the value to give
   engine_->submitMagneticField(field->stamp, field->value_B, field->covariance_B);
 }
 
@@ -971,7 +968,7 @@ void BagPropagator::summary(std::FILE* out, bool written) const {
   for (const auto& [topic, count] : read_) mag_read += sameTopic(topic, mag_) ? count : 0;
   printAidingSummary(out, c, config_.parameters.use_accel, config_.parameters.use_mag, accel_read_,
                      mag_read);
-  if (config_.parameters.use_mag) printFieldFit(out, field_fit_);
+  if (config_.parameters.use_mag) printFieldFit(out, engine_->fieldFit());
 }
 
 // What the kinematic model did to the rates' stamps: the stamp filter's moves and fallbacks,

@@ -14,6 +14,7 @@
 #include <sensor_msgs/MagneticField.h>
 #include <tf2_msgs/TFMessage.h>
 
+#include "../core/sampling.h"
 #include "attitude_propagator/AttitudeState.h"
 #include "scene_bags.h"
 
@@ -105,13 +106,6 @@ void writeFieldReads(const std::string& path, int n, bool tilted, const std::str
     read.magnetic_field.x = m.x(), read.magnetic_field.y = m.y(), read.magnetic_field.z = m.z();
     bag.write("/imu/mag", rosTime(stamp + 1000), read);
   }
-}
-
-/// The k-th of n directions spread evenly over the sphere (a Fibonacci lattice).
-Eigen::Vector3d evenDirection(int k, int n) {
-  const double golden = M_PI * (3.0 - std::sqrt(5.0));
-  const double z = 1.0 - (2.0 * k + 1.0) / n, rho = std::sqrt(1.0 - z * z);
-  return {rho * std::cos(golden * k), rho * std::sin(golden * k), z};
 }
 
 /// ZYX yaw of q.

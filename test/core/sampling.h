@@ -1,5 +1,6 @@
-// What the tests sample: reproducible random numbers (the same on every standard library) and
-// the exact mean of a rate over a sample interval (what an interval-averaging gyro delivers).
+// What the tests sample: reproducible random numbers (the same on every standard library), the
+// exact mean of a rate over a sample interval (what an interval-averaging gyro delivers), and
+// directions spread evenly over the sphere.
 #pragma once
 
 #include <cmath>
@@ -40,4 +41,13 @@ Eigen::Vector3d intervalMean(F f, double a, double b) {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   for (int i = 0; i < 5; ++i) sum += w[i] * f(0.5 * (a + b) + 0.5 * (b - a) * x[i]);
   return 0.5 * sum;
+}
+
+/// The k-th of n unit directions spread evenly over the sphere (a Fibonacci lattice: heights
+/// 1 - (2k + 1) / n, turned by the golden angle pi (3 - sqrt 5) from one to the next).
+inline Eigen::Vector3d evenDirection(int k, int n) {
+  const double golden = M_PI * (3.0 - std::sqrt(5.0));
+  const double z = 1.0 - (2.0 * k + 1.0) / n;
+  const double rho = std::sqrt(1.0 - z * z);
+  return {rho * std::cos(golden * k), rho * std::sin(golden * k), z};
 }

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -20,6 +21,7 @@
 #include "attitude_propagator/estimation/orientation_covariance.h"
 #include "attitude_propagator/numerics/quaternion.h"
 #include "engine_fixtures.h"
+#include "sampling.h"
 #include "simulated_imu.h"
 
 namespace {
@@ -1291,6 +1293,41 @@ TEST(MagBias, TheMagnetometersOwnFieldIsTakenOffEverySample) {
     EXPECT_TRUE(other_samples || ap::rotationAngle(kept.state.q_WB, clean.state.q_WB) > 1e-3)
         << wrong.transpose();
   }
+}
+
+// The engine's sphere fit (fieldFit, HardIronFit) takes every field read as read: its centre
+// is the own field the reads carry whatever mag_bias is given (the value to give, not what is
+// left of it), whether or not the read is then used (here none is: no rate has come, so the
+// tilt is not known), and it outlasts a reset. A read the fit refuses (NaN) is not counted;
+// without use_mag nothing is read.
+TEST(MagBias, TheEnginesSphereFitTakesTheReadsAsRead) {
+  const Eigen::Vector3d own_B(12e-6, -31e-6, 7e-6);
+  const int n = 200;
+  for (const Eigen::Vector3d& given :
+       {Eigen::Vector3d::Zero().eval(), own_B, Eigen::Vector3d(-own_B)}) {
+    ap::EngineConfig c = aidedConfig();
+    c.aiding.use_mag = true;
+    c.aiding.mag_bias = given;
+    Recorder sink;
+    ap::AttitudeEngine engine(c, sink);
+    for (int k = 0; k < n; ++k) {
+      if (k == n / 2) engine.reset();
+      engine.submitMagneticField(at(0.01 * k), own_B + 48e-6 * evenDirection(k, n),
+                                 Eigen::Matrix3d::Zero());
+    }
+    engine.submitMagneticField(at(2.0), Eigen::Vector3d::Constant(NAN), Eigen::Matrix3d::Zero());
+    EXPECT_EQ(engine.fieldFit().count(), static_cast<std::uint64_t>(n));
+    EXPECT_EQ(engine.counters().mag.accepted, 0u);
+    const std::optional<ap::HardIronSphere> sphere = engine.fieldFit().solve();
+    ASSERT_TRUE(sphere.has_value());
+    EXPECT_LE((sphere->centre - own_B).norm(), 1e-12) << given.transpose();
+    EXPECT_NEAR(sphere->radius, 48e-6, 1e-12);
+  }
+  ap::EngineConfig off = aidedConfig();
+  Recorder sink;
+  ap::AttitudeEngine engine(off, sink);
+  engine.submitMagneticField(at(0.0), own_B, Eigen::Matrix3d::Zero());
+  EXPECT_EQ(engine.fieldFit().count(), 0u);
 }
 
 // With absolute fixes at the same time: a late gravity sample is applied before the fixes

@@ -12,20 +12,16 @@
 #include <Eigen/Geometry>
 
 #include "attitude_propagator/estimation/hard_iron_fit.h"
+#include "sampling.h"
 
 namespace {
 
 namespace ap = attitude_propagator;
 
-// n directions spread evenly over the sphere (a Fibonacci lattice).
+// n directions spread evenly over the sphere (sampling.h).
 std::vector<Eigen::Vector3d> evenDirections(int n) {
   std::vector<Eigen::Vector3d> u;
-  const double golden = M_PI * (3.0 - std::sqrt(5.0));
-  for (int i = 0; i < n; ++i) {
-    const double z = 1.0 - (2.0 * i + 1.0) / n;
-    const double rho = std::sqrt(1.0 - z * z);
-    u.emplace_back(rho * std::cos(golden * i), rho * std::sin(golden * i), z);
-  }
+  for (int i = 0; i < n; ++i) u.push_back(evenDirection(i, n));
   return u;
 }
 

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "../core/engine_fixtures.h"
+#include "../core/sampling.h"
 #include "attitude_propagator/ros/node_diagnostics.h"
 
 namespace ap = attitude_propagator;
@@ -280,4 +281,50 @@ TEST(NodeDiagnostics, EveryEngineCounterOnceUnderItsTableName) {
   EXPECT_EQ(value(status, "received"), "3");
   EXPECT_EQ(value(status, "accepted"), "2");
   EXPECT_EQ(value(status, "dropped_stale"), "1");
+}
+
+// use_mag: the engine's sphere fit, live (addFieldFit): "none" while the reads fix no sphere
+// (4 reads: 4 unknowns and no scatter), then its centre, the mag_bias to give, and whether it is
+// determined (HardIronSphere::determined: 600 exact reads spread every way are); without
+// use_mag no key.
+TEST(NodeDiagnostics, TheFieldFitWithUseMag) {
+  ap::Parameters p;
+  p.use_mag = true;
+  const ap::NodeConfig config = ap::validateParameters(p);
+  engine_fixtures::DiscardingSink sink;
+  ap::AttitudeEngine engine(ap::engineConfig(config), sink);
+  ap::InstanceLog log;
+  ap::FixInput fixes(config, log);
+  ap::TfConflictWatch tf;
+  ap::NodeDiagnostics diagnostics(at(0));
+  const Eigen::Vector3d own(12e-6, -31e-6, 7e-6);
+  const int n = 600;
+  auto diagnosed = [&] {
+    diagnostic_updater::DiagnosticStatusWrapper status;
+    diagnostics.diagnose(at(1), config, engine, fixes, tf, 0, status);
+    return status;
+  };
+  for (int k = 0; k < 4; ++k) {
+    engine.submitMagneticField(1000000000LL * 100 + k, own + 48e-6 * evenDirection(k, n),
+                               Eigen::Matrix3d::Zero());
+  }
+  const auto few = diagnosed();
+  EXPECT_EQ(value(few, "mag_bias_fit_reads"), "4");
+  EXPECT_EQ(value(few, "mag_bias_fit"), "none");
+  EXPECT_EQ(value(few, "mag_bias_fit_stddev"), "none");
+  EXPECT_EQ(value(few, "mag_bias_fit_determined"), "False");
+  for (int k = 4; k < n; ++k) {
+    engine.submitMagneticField(1000000000LL * 100 + k, own + 48e-6 * evenDirection(k, n),
+                               Eigen::Matrix3d::Zero());
+  }
+  const auto all = diagnosed();
+  EXPECT_EQ(value(all, "mag_bias_fit_reads"), "600");
+  EXPECT_EQ(value(all, "mag_bias_fit"), "[1.2e-05, -3.1e-05, 7e-06]");
+  EXPECT_EQ(value(all, "mag_bias_fit_determined"), "True");
+
+  const ap::NodeConfig without = ap::validateParameters({});
+  diagnostic_updater::DiagnosticStatusWrapper status;
+  diagnostics.diagnose(at(2), without, engine, fixes, tf, 0, status);
+  for (const auto& kv : status.values)
+    EXPECT_EQ(kv.key.rfind("mag_bias_fit", 0), std::string::npos);
 }

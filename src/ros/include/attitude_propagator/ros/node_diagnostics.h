@@ -38,6 +38,12 @@ void summarize(diagnostic_updater::DiagnosticStatusWrapper& status, bool expects
                double silence, const std::string& window_problem, FixInput& fixes,
                const EngineCounters& c, std::optional<double> lag, const std::string& refused = "");
 
+/// use_mag: the sphere the field reads lie on (AttitudeEngine::fieldFit), live while the sensor
+/// is turned for a calibration: mag_bias_fit_reads; mag_bias_fit, its centre (T, body frame: the
+/// mag_bias to give) and mag_bias_fit_stddev per axis, or "none" while the reads fix no sphere;
+/// mag_bias_fit_determined, HardIronSphere::determined().
+void addFieldFit(diagnostic_updater::DiagnosticStatusWrapper& status, const HardIronFit& fit);
+
 class NodeDiagnostics {
  public:
   /// Diagnostics from wall time `now` on (the input rate's first interval starts there).
