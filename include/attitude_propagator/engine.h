@@ -307,6 +307,7 @@ class AttitudeEngine : private StepCovariance {
   bool tilt_known_ = true;                  // false with align until the first gravity sample
   LinearAcceleration linear_acceleration_;  // seen lately in the gravity samples
   LinearVariance linear_variance_;          // its variances per axis (m^2/s^4), the newest
+  TiltDisagreement tilt_disagreement_;      // the published tilt covariance's lasting share
   std::optional<Stamp> last_imu_stamp_;     // as received, of the last IMU rate the model took
   RejectionRun accel_run_;                  // the gate's rejections in a row, per kind
   RejectionRun mag_run_;

@@ -161,6 +161,11 @@ constexpr double kMagRecovery = 30.0;
 /// exponential window): a turn or a braking lasts seconds, and while it lasts the gravity
 /// direction is trusted less. Chosen from that, not fitted to a stream.
 constexpr double kLinearAccelerationWindow = 1.0;
+/// Seconds over which the disagreement between the gravity direction measured and the
+/// estimate's vertical is averaged for the published tilt covariance (TiltDisagreement): longer
+/// than a hand's or a swell's back and forth (periods of 4-12 s), so what averages out there
+/// does not count, and a turn or a braking, which lasts, does. Chosen from that, not fitted.
+constexpr double kTiltDisagreementWindow = 10.0;
 /// Gravity and field samples stamped ahead of the newest rate wait for the rates to reach them,
 /// at most this many; past it the one stamped furthest ahead is dropped (*_queue_full).
 constexpr std::size_t kMaxPendingMeasurements = 64;

@@ -7,6 +7,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "attitude_propagator/estimation/gravity_direction.h"
 #include "attitude_propagator/estimation/orientation_covariance.h"
 #include "attitude_propagator/limits.h"
 #include "attitude_propagator/models/sample_door.h"
@@ -340,6 +341,15 @@ void AttitudeEngine::countOutcome(StampOutcome outcome, std::optional<Source> so
 EngineState AttitudeEngine::state() const {
   EngineState s = propagator_->state();
   s.P_B = error_.P_B;
+  if (config_.aiding.use_accel && tilt_known_) {
+    // What the filter cannot tell from its own tilt error: the lasting disagreement with the
+    // gravity direction, in the tilt plane (the heading's variance is not the direction's).
+    const Eigen::Vector3d u = bodyUp(s.q_WB);
+    const Eigen::Matrix3d plane = Eigen::Matrix3d::Identity() - u * u.transpose();
+    const double own = 0.5 * (plane * s.P_B * plane).trace();
+    const double beyond = std::max(0.0, tilt_disagreement_.variance() - own);
+    s.P_B = clampOrientationCovariance(s.P_B + beyond * plane);
+  }
   if (config_.fixes.estimate_gyro_bias) {
     s.gyro_bias_estimate_B = error_.bias_B;
     s.gyro_bias_stddev_B = gyroBiasStddev();
@@ -412,6 +422,7 @@ void AttitudeEngine::resetState(bool forget_time) {
   tilt_known_ = !config_.aiding.align;  // the initial state again
   last_imu_stamp_.reset();
   linear_acceleration_.reset();
+  tilt_disagreement_.reset();
   linear_variance_ = {};
   accel_run_.clear();
   mag_run_.clear();

@@ -56,6 +56,11 @@ AidingOutcome AttitudeEngine::submitAcceleration(Stamp stamp, const Eigen::Vecto
       stamp, f_B - kStandardGravity * bodyUp(propagator_->state().q_WB), R.trace(),
       config_.aiding.linear_window, f_B.norm());
   linear_variance_ = tilt_known_ ? seen : LinearVariance{};
+  // The linear acceleration's published share too, taken like its noise where the sample
+  // arrives; off with it (linear_window 0: the acceleration taken as not there).
+  if (tilt_known_ && config_.aiding.linear_window > 0.0) {
+    tilt_disagreement_.observe(stamp, propagator_->state().q_WB * f_B.normalized());
+  }
   const GravityDirection measurement(f_B, R, config_.aiding.accel_gate, linear_variance_.direction);
   if (last_imu_stamp_ && stamp == *last_imu_stamp_) {
     // With its own rate (the same message): where that rate took effect. Nothing to keep unless

@@ -721,6 +721,81 @@ TEST(LinearAcceleration, ALastingAccelerationIsAveragedOverTheWindowASingleOneIs
   EXPECT_EQ(v.spread, 0.0);
 }
 
+// The lasting disagreement (TiltDisagreement): the horizontal part of the measured up in the
+// world, the first sample whole, the plain mean of the samples until the window weighs less
+// (+h then -h: none), then an exponential window over the stamps (a disagreement that stops
+// fades by e^-1 a window later); reset forgets it.
+TEST(TiltDisagreement, TheFirstSampleCountsWholeThenTheMeanThenTheWindow) {
+  const Eigen::Vector3d h(0.06, -0.08, 0.0);  // |h| = 0.1
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  auto measured = [&](const Eigen::Vector3d& horizontal) {
+    return (up + horizontal).normalized();  // a unit up leaning by the horizontal part
+  };
+  ap::TiltDisagreement d;
+  d.observe(at(0.0), measured(h));
+  EXPECT_NEAR(d.variance(), measured(h).head<2>().squaredNorm(), 1e-15);
+  d.observe(at(0.01), measured(-h));
+  EXPECT_NEAR(d.variance(), 0.0, 1e-15);
+  ap::TiltDisagreement lasting;
+  int k = 0;
+  for (; k <= 100 * 60; ++k) lasting.observe(at(0.01 * k), measured(h));
+  const double lean = measured(h).head<2>().squaredNorm();
+  EXPECT_NEAR(lasting.variance(), lean, 1e-6 * lean);
+  const double window = ap::kTiltDisagreementWindow;
+  const int n = static_cast<int>(std::lround(window / 0.01));
+  for (int j = 1; j <= n; ++j) lasting.observe(at(0.01 * (k - 1 + j)), up);
+  EXPECT_NEAR(lasting.variance(), lean * std::exp(-2.0), 1e-6 * lean);
+  lasting.reset();
+  EXPECT_EQ(lasting.variance(), 0.0);
+}
+
+// The published tilt covariance takes the disagreement beyond what the filter's own allows
+// (AttitudeEngine::state): a body at rest, its attitude given, whose accelerometer reads a
+// lasting horizontal acceleration of 1 m/s^2 (a turn) and is trusted so little (accel_stddev
+// 100, the most accepted) that the estimate all but stays: the measured up leans by theta = atan(1
+// / g) from the estimate's, so the published tilt variance per axis becomes sin^2 theta, far beyond
+// the filter's own; the heading's variance is the same as without the acceleration.
+TEST(TiltDisagreement, APublishedTiltVarianceIsTheLastingLean) {
+  ap::EngineConfig c = aidedConfig();
+  c.aiding.align = false;
+  c.aiding.accel_stddev = 100.0;
+  c.kinematic.initial_q_WB = rpy(0.2, -0.1, 0.7);
+  c.initial_orientation_stddev = 0.001;
+  // 10 s of the force the acceleration a_W gives at rest; with `reset`, then a reset (the
+  // initial state again) and 1 s of gravity alone.
+  auto publish = [&](const Eigen::Vector3d& a_W, bool reset = false) {
+    Recorder sink;
+    ap::AttitudeEngine engine(c, sink);
+    const Eigen::Quaterniond& q = c.kinematic.initial_q_WB;
+    auto feed = [&](const Eigen::Vector3d& f_W, int from, int to) {
+      for (int k = from; k <= to; ++k) {
+        engine.submit(imu(at(0.01 * k), Eigen::Vector3d::Zero()));
+        engine.submitAcceleration(at(0.01 * k), q.conjugate() * f_W, Eigen::Matrix3d::Zero());
+      }
+    };
+    feed(a_W + Eigen::Vector3d(0, 0, g), 0, 1000);
+    if (reset) {
+      engine.reset();
+      feed(Eigen::Vector3d(0, 0, g), 1001, 1100);
+    }
+    return engine.state();
+  };
+  const ap::EngineState turning = publish(Eigen::Vector3d(0.6, 0.8, 0.0));
+  const ap::EngineState still = publish(Eigen::Vector3d::Zero());
+  const Eigen::Vector3d u = ap::bodyUp(turning.q_WB);
+  const Eigen::Matrix3d plane = Eigen::Matrix3d::Identity() - u * u.transpose();
+  const double sin_theta = 1.0 / std::sqrt(1.0 + g * g);
+  EXPECT_NEAR(0.5 * (plane * turning.P_B * plane).trace(), sin_theta * sin_theta,
+              1e-4 * sin_theta * sin_theta);
+  EXPECT_LT(0.5 * (plane * still.P_B * plane).trace(), 1e-3 * sin_theta * sin_theta);
+  // A reset forgets the lean: what it published before is no part of the state after.
+  const ap::EngineState after_reset = publish(Eigen::Vector3d(0.6, 0.8, 0.0), true);
+  EXPECT_LT(0.5 * (plane * after_reset.P_B * plane).trace(), 1e-3 * sin_theta * sin_theta);
+  EXPECT_NEAR(u.dot(turning.P_B * u), u.dot(still.P_B * u), 1e-6 * u.dot(still.P_B * u));
+  EXPECT_LE((turning.P_B * u - u * u.dot(turning.P_B * u)).norm(),
+            1e-6);  // no tilt-heading term added
+}
+
 // The force's magnitude shows a linear acceleration whatever the estimate explains:
 // |f|^2 - g^2 = |a|^2 + 2 g a_up, so for one at right angles to gravity (a turn) |a|^2, from the
 // first sample on, with a residual of zero (the tilt has followed the force); its size counts,

@@ -149,6 +149,35 @@ class LinearAcceleration {
   std::optional<Stamp> last_;
 };
 
+/// The published tilt covariance's share of what the filter cannot tell apart: a linear
+/// acceleration that lasts and an error of its own tilt both keep the measured gravity
+/// direction off the estimate's vertical, and the filter, taking the acceleration for noise,
+/// follows either only slowly. The horizontal part of the measured up turned into the world by
+/// the estimate, f_W / |f| = q_WB f_B / |f| (small: the sine of the angle between the two ups),
+/// averaged over kTiltDisagreementWindow seconds, is how far the two have stayed apart; its
+/// squared size is added to the published covariance's tilt plane (AttitudeEngine::state), not
+/// to the filter's own (docs/numerics.md §7.2). What averages out (vibration, a hand's shake,
+/// a swell) adds nothing; a turn adds its lean for as long as it lasts.
+class TiltDisagreement {
+ public:
+  /// The sample at `stamp` whose measured up, in the world by the estimate, is `up_W` (unit).
+  /// Until the window has passed, the mean of the samples so far (the first counts whole);
+  /// then an exponential window over the stamps, a = 1 - exp(-dt / window).
+  void observe(Stamp stamp, const Eigen::Vector3d& up_W, double window = kTiltDisagreementWindow);
+  /// rad^2 per axis of the tilt plane: the averaged horizontal part's squared size.
+  double variance() const { return mean_.squaredNorm(); }
+  void reset() {
+    mean_.setZero();
+    count_ = 0;
+    last_.reset();
+  }
+
+ private:
+  Eigen::Vector2d mean_ = Eigen::Vector2d::Zero();
+  std::uint64_t count_ = 0;
+  std::optional<Stamp> last_;
+};
+
 /// The run of gate rejections of one kind: once it has lasted `seconds`, the next rejected
 /// sample is applied as a reset and the run starts again.
 class RejectionRun {

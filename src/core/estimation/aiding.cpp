@@ -137,6 +137,16 @@ LinearVariance LinearAcceleration::observe(Stamp stamp, const Eigen::Vector3d& r
   return v;
 }
 
+void TiltDisagreement::observe(Stamp stamp, const Eigen::Vector3d& up_W, double window) {
+  const double dt = last_ ? std::max(0.0, static_cast<double>(stamp - *last_) * 1e-9) : 0.0;
+  ++count_;
+  // The plain mean of the first samples, the exponential window once it weighs less.
+  const double fading = window > 0.0 ? 1.0 - std::exp(-dt / window) : 1.0;
+  const double a = std::max(1.0 / static_cast<double>(count_), fading);
+  mean_ += a * (up_W.head<2>() - mean_);
+  if (!last_ || stamp > *last_) last_ = stamp;
+}
+
 bool RejectionRun::rejected(Stamp stamp, double seconds) {
   if (!since_ || stamp < *since_) since_ = stamp;
   if (static_cast<double>(stamp - *since_) * 1e-9 < seconds) return false;
