@@ -295,36 +295,34 @@ TEST(NodeDiagnostics, TheFieldFitWithUseMag) {
   ap::AttitudeEngine engine(ap::engineConfig(config), sink);
   ap::InstanceLog log;
   ap::FixInput fixes(config, log);
-  ap::TfConflictWatch tf;
   ap::NodeDiagnostics diagnostics(at(0));
   const Eigen::Vector3d own(12e-6, -31e-6, 7e-6);
   const int n = 600;
   auto diagnosed = [&] {
     diagnostic_updater::DiagnosticStatusWrapper status;
-    diagnostics.diagnose(at(1), config, engine, fixes, tf, 0, status);
+    diagnostics.diagnose(at(1), config, engine, fixes, ap::TfConflictWatch(), 0, status);
     return status;
   };
-  for (int k = 0; k < 4; ++k) {
-    engine.submitMagneticField(1000000000LL * 100 + k, own + 48e-6 * evenDirection(k, n),
-                               Eigen::Matrix3d::Zero());
-  }
-  const auto few = diagnosed();
+  auto read = [&](int from, int to) {  // the reads from..to-1 of n spread evenly
+    for (int k = from; k < to; ++k) {
+      engine.submitMagneticField(1000000000LL * 100 + k, own + 48e-6 * evenDirection(k, n),
+                                 Eigen::Matrix3d::Zero());
+    }
+    return diagnosed();
+  };
+  const auto few = read(0, 4);
   EXPECT_EQ(value(few, "mag_bias_fit_reads"), "4");
   EXPECT_EQ(value(few, "mag_bias_fit"), "none");
   EXPECT_EQ(value(few, "mag_bias_fit_stddev"), "none");
   EXPECT_EQ(value(few, "mag_bias_fit_determined"), "False");
-  for (int k = 4; k < n; ++k) {
-    engine.submitMagneticField(1000000000LL * 100 + k, own + 48e-6 * evenDirection(k, n),
-                               Eigen::Matrix3d::Zero());
-  }
-  const auto all = diagnosed();
+  const auto all = read(4, n);
   EXPECT_EQ(value(all, "mag_bias_fit_reads"), "600");
   EXPECT_EQ(value(all, "mag_bias_fit"), "[1.2e-05, -3.1e-05, 7e-06]");
   EXPECT_EQ(value(all, "mag_bias_fit_determined"), "True");
 
   const ap::NodeConfig without = ap::validateParameters({});
   diagnostic_updater::DiagnosticStatusWrapper status;
-  diagnostics.diagnose(at(2), without, engine, fixes, tf, 0, status);
+  diagnostics.diagnose(at(2), without, engine, fixes, ap::TfConflictWatch(), 0, status);
   for (const auto& kv : status.values)
     EXPECT_EQ(kv.key.rfind("mag_bias_fit", 0), std::string::npos);
 }
